@@ -1,0 +1,31 @@
+//! Command-line definition (clap derive). Each subcommand's arguments live beside its
+//! implementation in `commands/`.
+
+use crate::commands;
+use clap::{Parser, Subcommand};
+
+/// Fit physical light-scattering models (Kirchhoff–Beckmann–Spizzichino, Lambertian,
+/// specular) to gonioreflectometer measurements.
+#[derive(Debug, Parser)]
+#[command(name = "goniofit", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Evaluate a model at the angles of a CSV file; prints the rows with `L_model` appended.
+    Eval(commands::eval::EvalArgs),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+}

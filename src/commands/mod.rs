@@ -1,0 +1,30 @@
+//! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
+
+pub mod eval;
+
+use crate::cli::{Cli, Command};
+
+/// Run the parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<u8> {
+    match cli.command {
+        Command::Eval(a) => eval::run(a),
+    }
+}
+
+/// Exit code for an error: 2 for the user's input or usage, 1 for internal failures.
+pub fn exit_code_of(e: &anyhow::Error) -> u8 {
+    match e.downcast_ref::<goniofit::Error>() {
+        Some(ge) if !ge.is_user_error() => 1,
+        Some(_) => 2,
+        None => {
+            if e.chain().any(|c| {
+                c.downcast_ref::<goniofit::Error>()
+                    .is_some_and(|g| g.is_user_error())
+            }) {
+                2
+            } else {
+                1
+            }
+        }
+    }
+}

@@ -1,0 +1,51 @@
+//! The one error type of the library. Every variant says what failed, shows the offending
+//! value, and where it came from (file, line, column) when it came from a file.
+
+use std::path::PathBuf;
+
+/// Errors from reading input, building models and running fits.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A value in an input file could not be used.
+    #[error("{path}:{line}: column {column}: {message}")]
+    Input {
+        path: PathBuf,
+        /// 1-based line number in the file.
+        line: usize,
+        column: String,
+        message: String,
+    },
+    /// A whole input file is unusable (empty, header only, missing column, ...).
+    #[error("{path}: {message}")]
+    File { path: PathBuf, message: String },
+    /// An I/O failure while reading or writing a file.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A model name that goniofit does not know.
+    #[error("unknown model '{0}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular)")]
+    UnknownModel(String),
+    /// A parameter name the model does not have, or a value outside its domain.
+    #[error("parameter {name}: {message}")]
+    Param { name: String, message: String },
+    /// A usage error: inconsistent options or arguments.
+    #[error("{0}")]
+    Usage(String),
+    /// A numerical failure inside the library (a bug, or a domain violation that slipped through).
+    #[error("numerical failure: {0}")]
+    Numerical(String),
+}
+
+impl Error {
+    /// Whether the error is the user's input or usage (CLI exit code 2) rather than an
+    /// internal failure (exit code 1).
+    pub fn is_user_error(&self) -> bool {
+        !matches!(self, Error::Numerical(_))
+    }
+}
+
+/// Result with [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,282 @@
+//! Geometry of a measurement (Peters 2000, eq. 1–8) and the per-sample quantities the
+//! models need, computed once per dataset.
+//!
+//! Conventions (MODEL.md): θi, θr from the surface normal, θi ∈ [0, π/2), θr ∈ [0, π/2];
+//! φr from the plane of incidence, **φr = 0 is the forward (specular) side**. All angles
+//! here are radians. Lengths (σ, T, X, Y, λ) share one unit; only ratios to λ enter.
+
+use crate::error::{Error, Result};
+use nalgebra::Vector3;
+
+/// One measurement direction pair, in radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    pub theta_i: f64,
+    pub theta_r: f64,
+    pub phi_r: f64,
+}
+
+impl Sample {
+    /// A sample from angles in degrees.
+    pub fn from_degrees(theta_i: f64, theta_r: f64, phi_r: f64) -> Self {
+        Sample {
+            theta_i: theta_i.to_radians(),
+            theta_r: theta_r.to_radians(),
+            phi_r: phi_r.to_radians(),
+        }
+    }
+
+    /// Local angles from global unit vectors (eq. 2–8): `source` ŝ points from the surface
+    /// to the light, `normal` n̂ is the surface normal, `view` k̂2 points from the surface to
+    /// the viewer. At normal incidence û_x is undefined and φr is reported relative to an
+    /// arbitrary perpendicular (the models do not depend on φr there). Inputs need not be
+    /// normalised; zero vectors give NaN.
+    pub fn from_vectors(source: &Vector3<f64>, normal: &Vector3<f64>, view: &Vector3<f64>) -> Self {
+        let s = source.normalize();
+        let n = normal.normalize();
+        let k2 = view.normalize();
+        let k1 = -s;
+        let cos_i = s.dot(&n).clamp(-1.0, 1.0);
+        let cos_r = k2.dot(&n).clamp(-1.0, 1.0);
+        let in_plane = k1 - n * n.dot(&k1);
+        let u_x = if in_plane.norm() > 1e-12 {
+            in_plane.normalize()
+        } else {
+            // Normal incidence: any perpendicular serves.
+            let trial = if n.x.abs() < 0.9 {
+                Vector3::x()
+            } else {
+                Vector3::y()
+            };
+            (trial - n * n.dot(&trial)).normalize()
+        };
+        let u_y = n.cross(&u_x);
+        let phi_r = k2.dot(&u_y).atan2(k2.dot(&u_x));
+        Sample {
+            theta_i: cos_i.acos(),
+            theta_r: cos_r.acos(),
+            phi_r,
+        }
+    }
+
+    /// Check the valid domain: θi ∈ [0, 90°), θr ∈ [0, 90°], |φr| ≤ 360°, all finite.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        if !(self.theta_i.is_finite() && self.theta_r.is_finite() && self.phi_r.is_finite()) {
+            return Err("angles must be finite".into());
+        }
+        if !(0.0..half_pi).contains(&self.theta_i) {
+            return Err(format!(
+                "theta_i = {}° is outside [0°, 90°)",
+                self.theta_i.to_degrees()
+            ));
+        }
+        if !(0.0..=half_pi).contains(&self.theta_r) {
+            return Err(format!(
+                "theta_r = {}° is outside [0°, 90°]",
+                self.theta_r.to_degrees()
+            ));
+        }
+        if self.phi_r.abs() > 2.0 * std::f64::consts::PI + 1e-12 {
+            return Err(format!(
+                "phi_r = {}° is outside [-360°, 360°]",
+                self.phi_r.to_degrees()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Quantity {
+    #[default]
+    Radiance,
+    Brdf,
+}
+
+/// Per-sample quantities for a batch of samples, computed once per dataset. Vectors are
+/// indexed by sample. Quantities written `/k` are the wave-vector components divided by
+/// k = 2π/λ, so they depend on angles only.
+#[derive(Debug, Clone)]
+pub struct Geometry {
+    pub theta_i: Vec<f64>,
+    pub theta_r: Vec<f64>,
+    /// φr wrapped to (−π, π].
+    pub phi_r: Vec<f64>,
+    pub cos_i: Vec<f64>,
+    pub cos_r: Vec<f64>,
+    /// Wavelength of each sample (unit of σ, T).
+    pub wavelength: Vec<f64>,
+    /// c = cos θi + cos θr = |v_z|/k.
+    pub c: Vec<f64>,
+    /// h = |v|²/(2k²) = 1 + cos θi cos θr − sin θi sin θr cos φr, computed without
+    /// cancellation (≥ 0).
+    pub h: Vec<f64>,
+    /// v_x/k = sin θi − sin θr cos φr.
+    pub vx: Vec<f64>,
+    /// v_y/k = −sin θr sin φr.
+    pub vy: Vec<f64>,
+    /// v_xy²/k², computed without cancellation near the mirror direction.
+    pub vxy2: Vec<f64>,
+    /// Factor that turns a radiance into the measured quantity: 1 for radiance, 1/cos θi
+    /// for a BRDF.
+    pub out_factor: Vec<f64>,
+    pub quantity: Quantity,
+}
+
+/// Wrap an angle in radians to (−π, π].
+pub fn wrap_phi(phi: f64) -> f64 {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let mut p = phi % two_pi;
+    if p <= -std::f64::consts::PI {
+        p += two_pi;
+    } else if p > std::f64::consts::PI {
+        p -= two_pi;
+    }
+    p
+}
+
+impl Geometry {
+    /// Prepare a batch. `wavelength` has one entry (used for every sample) or one per
+    /// sample; it must be finite and positive. Samples must satisfy [`Sample::validate`].
+    pub fn new(samples: &[Sample], wavelength: &[f64], quantity: Quantity) -> Result<Self> {
+        if wavelength.len() != 1 && wavelength.len() != samples.len() {
+            return Err(Error::Usage(format!(
+                "{} wavelengths for {} samples",
+                wavelength.len(),
+                samples.len()
+            )));
+        }
+        if let Some(bad) = wavelength.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
+            return Err(Error::Usage(format!(
+                "wavelength {bad} must be finite and positive"
+            )));
+        }
+        for (i, s) in samples.iter().enumerate() {
+            s.validate()
+                .map_err(|m| Error::Usage(format!("sample {}: {m}", i + 1)))?;
+        }
+        let n = samples.len();
+        let mut g = Geometry {
+            theta_i: Vec::with_capacity(n),
+            theta_r: Vec::with_capacity(n),
+            phi_r: Vec::with_capacity(n),
+            cos_i: Vec::with_capacity(n),
+            cos_r: Vec::with_capacity(n),
+            wavelength: Vec::with_capacity(n),
+            c: Vec::with_capacity(n),
+            h: Vec::with_capacity(n),
+            vx: Vec::with_capacity(n),
+            vy: Vec::with_capacity(n),
+            vxy2: Vec::with_capacity(n),
+            out_factor: Vec::with_capacity(n),
+            quantity,
+        };
+        for (i, s) in samples.iter().enumerate() {
+            let phi = wrap_phi(s.phi_r);
+            let (sin_i, cos_i) = s.theta_i.sin_cos();
+            let (sin_r, cos_r) = s.theta_r.sin_cos();
+            let (sin_p, cos_p) = phi.sin_cos();
+            let half_sin2 = (0.5 * phi).sin().powi(2);
+            let half_sum_cos = (0.5 * (s.theta_i + s.theta_r)).cos();
+            g.theta_i.push(s.theta_i);
+            g.theta_r.push(s.theta_r);
+            g.phi_r.push(phi);
+            g.cos_i.push(cos_i);
+            g.cos_r.push(cos_r);
+            g.wavelength.push(if wavelength.len() == 1 {
+                wavelength[0]
+            } else {
+                wavelength[i]
+            });
+            g.c.push(cos_i + cos_r);
+            // 1 + cos(θi+θr) + 2 sinθi sinθr sin²(φ/2), both terms ≥ 0.
+            g.h.push(2.0 * half_sum_cos * half_sum_cos + 2.0 * sin_i * sin_r * half_sin2);
+            g.vx.push(sin_i - sin_r * cos_p);
+            g.vy.push(-sin_r * sin_p);
+            // (sinθi − sinθr)² + 4 sinθi sinθr sin²(φ/2): exact zero at the mirror.
+            g.vxy2
+                .push((sin_i - sin_r).powi(2) + 4.0 * sin_i * sin_r * half_sin2);
+            g.out_factor.push(match quantity {
+                Quantity::Radiance => 1.0,
+                Quantity::Brdf => 1.0 / cos_i,
+            });
+        }
+        Ok(g)
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.theta_i.len()
+    }
+
+    /// Whether the batch is empty.
+    pub fn is_empty(&self) -> bool {
+        self.theta_i.is_empty()
+    }
+
+    /// The sub-batch of the given sample indices (used for per-channel fits).
+    pub fn subset(&self, idx: &[usize]) -> Geometry {
+        let pick = |v: &Vec<f64>| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        Geometry {
+            theta_i: pick(&self.theta_i),
+            theta_r: pick(&self.theta_r),
+            phi_r: pick(&self.phi_r),
+            cos_i: pick(&self.cos_i),
+            cos_r: pick(&self.cos_r),
+            wavelength: pick(&self.wavelength),
+            c: pick(&self.c),
+            h: pick(&self.h),
+            vx: pick(&self.vx),
+            vy: pick(&self.vy),
+            vxy2: pick(&self.vxy2),
+            out_factor: pick(&self.out_factor),
+            quantity: self.quantity,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vectors_round_trip_to_angles() {
+        // Source in the xz-plane at 30° on the −x side... ŝ points to the light.
+        let ti = 30f64.to_radians();
+        let s = Vector3::new(-ti.sin(), 0.0, ti.cos());
+        let n = Vector3::z();
+        // Mirror direction: k̂2 = reflection of k̂1 = −ŝ about n.
+        let mirror = Vector3::new(ti.sin(), 0.0, ti.cos());
+        let smp = Sample::from_vectors(&s, &n, &mirror);
+        assert!((smp.theta_i - ti).abs() < 1e-14);
+        assert!((smp.theta_r - ti).abs() < 1e-14);
+        assert!(smp.phi_r.abs() < 1e-14, "mirror is at phi_r = 0");
+        // Backscatter: view = source, phi_r = ±180°.
+        let back = Sample::from_vectors(&s, &n, &s);
+        assert!((back.phi_r.abs() - std::f64::consts::PI).abs() < 1e-14);
+        // Normal incidence is defined.
+        let ni = Sample::from_vectors(&n, &n, &mirror);
+        assert!(ni.theta_i.abs() < 1e-7 && ni.phi_r.is_finite());
+    }
+
+    #[test]
+    fn stable_forms_match_the_definitions() {
+        let samples: Vec<Sample> = [(10.0, 20.0, 30.0), (45.0, 45.0, 0.0), (80.0, 5.0, 170.0)]
+            .iter()
+            .map(|&(a, b, c)| Sample::from_degrees(a, b, c))
+            .collect();
+        let g = Geometry::new(&samples, &[1.0], Quantity::Radiance).unwrap();
+        for (i, s) in samples.iter().enumerate() {
+            let (si, ci) = s.theta_i.sin_cos();
+            let (sr, cr) = s.theta_r.sin_cos();
+            let h = 1.0 + ci * cr - si * sr * s.phi_r.cos();
+            assert!((g.h[i] - h).abs() < 1e-14);
+            let vxy2 = g.vx[i].powi(2) + g.vy[i].powi(2);
+            assert!((g.vxy2[i] - vxy2).abs() < 1e-14);
+        }
+        assert_eq!(g.vxy2[1], 0.0, "exact zero at the mirror");
+    }
+}

@@ -1,0 +1,11 @@
+//! goniofit: fit physical light-scattering models to gonioreflectometer measurements.
+//!
+//! Layers: [`geometry`] (angles and per-sample quantities), [`model`] (one file per model),
+//! [`fit`] (Levenberg–Marquardt as an argmin solver, statistics), [`io`] (readers and
+//! writers), [`report`] and [`plot`].
+
+pub mod error;
+pub mod geometry;
+pub mod model;
+
+pub use error::{Error, Result};
