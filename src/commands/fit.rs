@@ -1,0 +1,392 @@
+//! `goniofit fit`: a measurement file in, a fit report out.
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
+use goniofit::fit::lm::LmConfig;
+use goniofit::fit::problem::ResidualKind;
+use goniofit::geometry::{Geometry, Quantity};
+use goniofit::io::{self, Dataset, ReadOptions};
+use goniofit::model::{parse_assignments, EvalMode, ModelOptions};
+use goniofit::report::{self, RunInfo};
+use goniofit::Error;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Candidate models for `--model auto`, compared by BIC.
+pub const AUTO_CANDIDATES: [&str; 4] = ["lambert", "lambert-specular", "kbs", "kbs+lambert"];
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum QuantityArg {
+    Radiance,
+    Brdf,
+}
+
+impl From<QuantityArg> for Quantity {
+    fn from(q: QuantityArg) -> Self {
+        match q {
+            QuantityArg::Radiance => Quantity::Radiance,
+            QuantityArg::Brdf => Quantity::Brdf,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ModeArg {
+    Auto,
+    Series,
+    Smooth,
+    Rough,
+}
+
+impl From<ModeArg> for EvalMode {
+    fn from(m: ModeArg) -> Self {
+        match m {
+            ModeArg::Auto => EvalMode::Auto,
+            ModeArg::Series => EvalMode::Series,
+            ModeArg::Smooth => EvalMode::Smooth,
+            ModeArg::Rough => EvalMode::Rough,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ResidualArg {
+    Absolute,
+    Relative,
+    Log,
+}
+
+impl From<ResidualArg> for ResidualKind {
+    fn from(r: ResidualArg) -> Self {
+        match r {
+            ResidualArg::Absolute => ResidualKind::Absolute,
+            ResidualArg::Relative => ResidualKind::Relative,
+            ResidualArg::Log => ResidualKind::Log,
+        }
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
+    /// (fits lambert, lambert-specular, kbs, kbs+lambert and keeps the lowest BIC).
+    #[arg(long, default_value = "kbs")]
+    pub model: String,
+    /// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi). A
+    /// reflectance factor is a BRDF × π.
+    #[arg(long, value_enum, default_value = "radiance")]
+    pub quantity: QuantityArg,
+    /// Wavelength (the unit of σ and T in the report); required for KBS models unless a
+    /// `wavelength` column or an ASTM channel name gives it.
+    #[arg(long)]
+    pub wavelength: Option<f64>,
+    /// ASTM E1392 channel to fit (e.g. 550nm), or `all` for a joint fit over every channel
+    /// with shared σ, T and per-channel scales.
+    #[arg(long)]
+    pub channel: Option<String>,
+    /// CSV angles are in radians (default degrees).
+    #[arg(long)]
+    pub radians: bool,
+    /// In-plane CSV with signed θr: θr < 0 means the back side (φr = 180°).
+    #[arg(long)]
+    pub signed_theta_r: bool,
+    /// Map column roles to other header names: theta_i=ti,L=brdf,...
+    #[arg(long)]
+    pub columns: Option<String>,
+    /// Residual: absolute f − y, relative (f − y)/|y|, or log ln f − ln y (values below
+    /// the floor are raised to it).
+    #[arg(long, value_enum, default_value = "absolute")]
+    pub residual: ResidualArg,
+    /// Floor for relative/log residuals (default 1e-6 × max |L|).
+    #[arg(long)]
+    pub floor: Option<f64>,
+    /// Starting values, name=value,... (overrides the automatic ones).
+    #[arg(long)]
+    pub init: Option<String>,
+    /// Parameters held fixed, name=value,...
+    #[arg(long)]
+    pub fix: Option<String>,
+    /// KBS evaluation: auto picks per sample the cheapest evaluation meeting --tol.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub mode: ModeArg,
+    /// Relative accuracy target of the KBS evaluation.
+    #[arg(long, default_value_t = 1e-10)]
+    pub tol: f64,
+    /// Patch half-sizes X,Y (unit of λ): include the coherent term.
+    #[arg(long)]
+    pub patch: Option<String>,
+    /// Do not reduce the fit when the data determines only parameter combinations.
+    #[arg(long)]
+    pub no_reduce: bool,
+    /// Maximum solver iterations.
+    #[arg(long, default_value_t = 500)]
+    pub max_iter: u64,
+    /// Stop the solver after this many seconds.
+    #[arg(long)]
+    pub timeout: Option<f64>,
+    /// Show a progress line while fitting.
+    #[arg(long)]
+    pub progress: bool,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the input rows with L_fit, residual, std_residual, mode.
+    #[arg(long)]
+    pub residuals: Option<PathBuf>,
+    /// The measurement file (CSV or ASTM E1392).
+    pub file: PathBuf,
+}
+
+/// Parse `X,Y`.
+pub fn parse_patch(text: &str) -> anyhow::Result<(f64, f64)> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let bad = || Error::Usage(format!("--patch '{text}': expected X,Y (two positive numbers)"));
+    if parts.len() != 2 {
+        return Err(bad().into());
+    }
+    let x: f64 = parts[0].parse().map_err(|_| bad())?;
+    let y: f64 = parts[1].parse().map_err(|_| bad())?;
+    if !(x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()) {
+        return Err(bad().into());
+    }
+    Ok((x, y))
+}
+
+/// Parse `role=name,...`.
+pub fn parse_columns(text: Option<&str>) -> anyhow::Result<Vec<(String, String)>> {
+    let mut out = Vec::new();
+    for part in text.unwrap_or("").split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let (k, v) = part.split_once('=').ok_or_else(|| {
+            Error::Usage(format!("--columns '{part}': expected role=name"))
+        })?;
+        out.push((k.trim().to_string(), v.trim().to_string()));
+    }
+    Ok(out)
+}
+
+/// The fit's data from a dataset: geometry, values, weights, channels.
+pub fn fit_input(
+    ds: &Dataset,
+    quantity: Quantity,
+    wavelength: Option<f64>,
+    needs_wavelength: bool,
+) -> anyhow::Result<FitInput> {
+    let n = ds.samples.len();
+    let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
+        (_, Some(l)) => vec![l],
+        (Some(w), None) => w.clone(),
+        (None, None) if needs_wavelength => {
+            return Err(Error::Usage(format!(
+                "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
+                ds.path.display()
+            ))
+            .into())
+        }
+        (None, None) => vec![1.0],
+    };
+    let geo = Geometry::new(&ds.samples, &lambda, quantity)?;
+    let y = ds
+        .value
+        .clone()
+        .ok_or_else(|| Error::File {
+            path: ds.path.clone(),
+            message: "no measured value column (L)".into(),
+        })?;
+    let weight = ds.weight.clone().unwrap_or_else(|| vec![1.0; n]);
+    let (channel, channel_names) = match &ds.channel {
+        Some(labels) => {
+            let mut names: Vec<String> = Vec::new();
+            let idx = labels
+                .iter()
+                .map(|l| match names.iter().position(|x| x == l) {
+                    Some(i) => i,
+                    None => {
+                        names.push(l.clone());
+                        names.len() - 1
+                    }
+                })
+                .collect();
+            (idx, names)
+        }
+        None => (vec![0; n], vec![String::new()]),
+    };
+    Ok(FitInput {
+        geo,
+        y,
+        weight,
+        channel,
+        channel_names,
+    })
+}
+
+/// The fit configuration from the arguments, for a given model name.
+pub fn fit_config(args: &FitArgs, model: &str, weights_are_uncertainties: bool) -> anyhow::Result<FitConfig> {
+    let lm = LmConfig {
+        max_iters: args.max_iter,
+        timeout: args.timeout.map(std::time::Duration::from_secs_f64),
+        progress: args.progress,
+        ..LmConfig::default()
+    };
+    Ok(FitConfig {
+        model: model.to_string(),
+        model_opts: ModelOptions {
+            mode: args.mode.into(),
+            tol: args.tol,
+            patch: args.patch.as_deref().map(parse_patch).transpose()?,
+        },
+        residual: args.residual.into(),
+        floor: args.floor,
+        init: parse_assignments(args.init.as_deref().unwrap_or(""))?,
+        fix: parse_assignments(args.fix.as_deref().unwrap_or(""))?,
+        lm,
+        weights_are_uncertainties,
+        reduce: !args.no_reduce,
+    })
+}
+
+/// The command line as typed, for the report.
+fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
+}
+
+pub fn run(args: FitArgs) -> anyhow::Result<u8> {
+    let opts = ReadOptions {
+        radians: args.radians,
+        signed_theta_r: args.signed_theta_r,
+        columns: parse_columns(args.columns.as_deref())?,
+        require_value: true,
+        channel: args.channel.clone(),
+    };
+    let ds = io::read_dataset(&args.file, &opts)?;
+    let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
+        AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect()
+    } else {
+        goniofit::model::by_name(&args.model, &ModelOptions::default())?;
+        vec![args.model.to_ascii_lowercase()]
+    };
+    let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
+    let input = fit_input(&ds, args.quantity.into(), args.wavelength, needs_wavelength)?;
+    let uncertainties = ds.sigma_l.is_some();
+
+    let mut results: Vec<FitResult> = Vec::new();
+    for m in &candidates {
+        let config = fit_config(&args, m, uncertainties)?;
+        results.push(driver::fit(&input, &config).with_context(|| format!("fitting model {m}"))?);
+    }
+    let best = results
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
+        .map(|(i, _)| i)
+        .expect("at least one candidate");
+    let mut result = results[best].clone();
+    if input.channel_names.len() > 1 {
+        if let Some(note) = joint_narrowing(&args, &ds, &result)? {
+            result.notes.push(note);
+        }
+    }
+    let info = RunInfo {
+        input: args.file.display().to_string(),
+        command: command_line(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+    };
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        let mut v = report::json::to_json(&result, &info);
+        if results.len() > 1 {
+            v["comparison"] = serde_json::json!(results
+                .iter()
+                .map(|r| serde_json::json!({"model": r.model, "bic": r.bic, "aic": r.aic, "cost": r.cost, "converged": r.converged()}))
+                .collect::<Vec<_>>());
+        }
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+    } else {
+        if results.len() > 1 {
+            writeln!(out, "[[Model comparison]] (lowest BIC wins)")?;
+            for r in &results {
+                writeln!(
+                    out,
+                    "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}{}",
+                    r.model,
+                    r.bic,
+                    r.aic,
+                    r.cost,
+                    if r.model == result.model { "  <- chosen" } else { "" }
+                )?;
+            }
+        }
+        write!(out, "{}", report::text::render(&result, &info))?;
+    }
+    if let Some(path) = &args.residuals {
+        write_residuals(path, &ds, &result)?;
+    }
+    Ok(if result.converged() { 0 } else { 3 })
+}
+
+/// For a joint fit: how much narrower σ and T are than from the middle channel alone.
+fn joint_narrowing(args: &FitArgs, ds: &Dataset, joint: &FitResult) -> anyhow::Result<Option<String>> {
+    let Some(labels) = &ds.channel else {
+        return Ok(None);
+    };
+    let names = &joint.layout.channel_names;
+    let mid = &names[names.len() / 2];
+    let idx: Vec<usize> = (0..labels.len()).filter(|&i| &labels[i] == mid).collect();
+    let single = Dataset {
+        path: ds.path.clone(),
+        headers: ds.headers.clone(),
+        rows: idx.iter().map(|&i| ds.rows[i].clone()).collect(),
+        lines: idx.iter().map(|&i| ds.lines[i]).collect(),
+        samples: idx.iter().map(|&i| ds.samples[i]).collect(),
+        value: ds.value.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
+        weight: ds.weight.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
+        sigma_l: ds.sigma_l.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
+        wavelength: ds.wavelength.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
+        channel: None,
+    };
+    let input = fit_input(&single, args.quantity.into(), args.wavelength, true)?;
+    let mut config = fit_config(args, &joint.model, ds.sigma_l.is_some())?;
+    config.lm.progress = false;
+    let alone = driver::fit(&input, &config)?;
+    let mut parts = Vec::new();
+    for name in ["sigma", "T"] {
+        let se = |r: &FitResult| {
+            r.params
+                .iter()
+                .find(|p| p.name == name)
+                .and_then(|p| p.stderr)
+        };
+        match (se(joint), se(&alone)) {
+            (Some(j), Some(a)) => parts.push(format!(
+                "{name}: ±{j:.3e} joint vs ±{a:.3e} from {mid} alone ({:.1}× narrower)",
+                a / j
+            )),
+            (Some(j), None) => parts.push(format!(
+                "{name}: ±{j:.3e} joint, not determined from {mid} alone"
+            )),
+            _ => {}
+        }
+    }
+    Ok((!parts.is_empty()).then(|| format!("joint fit over {} channels: {}", names.len(), parts.join("; "))))
+}
+
+/// Write the input rows with L_fit, residual, std_residual and mode (atomically).
+fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<()> {
+    let mut headers = ds.headers.clone();
+    headers.extend(["L_fit", "residual", "std_residual", "mode"].map(String::from));
+    let rows: Vec<Vec<String>> = ds
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(i, row)| {
+            let mut row = row.clone();
+            row.push(format!("{:e}", r.fitted[i]));
+            row.push(format!("{:e}", r.residuals[i]));
+            row.push(format!("{:e}", r.std_residuals[i]));
+            row.push(r.sample_modes[i].name().to_string());
+            row
+        })
+        .collect();
+    io::write_csv(path, &headers, &rows)?;
+    Ok(())
+}

@@ -1,0 +1,172 @@
+//! Starting values found from the data: a coarse grid over the nonlinear parameters
+//! (σ/λ and T/λ for KBS, the lobe width w for the specular lobe), with the linear
+//! parameters (scales, lobe strength) solved exactly by linear least squares at every grid
+//! point (variable projection). The grid runs on an evenly spaced subsample of at most
+//! [`GRID_SAMPLES`] samples, so its cost does not grow with the dataset.
+
+use super::problem::{FitProblem, ParamLayout, ResidualKind};
+use crate::geometry::Geometry;
+use nalgebra::{DMatrix, DVector};
+
+/// Largest number of samples the coarse grid is evaluated on.
+pub const GRID_SAMPLES: usize = 768;
+
+/// Parameters that enter the model linearly (solved exactly at each grid point).
+pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
+
+/// Grid values for a nonlinear parameter, in the unit of the reference wavelength `lambda`.
+fn grid_for(name: &str, lambda: f64) -> Vec<f64> {
+    let logspace = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
+        (0..n)
+            .map(|k| lo * (hi / lo).powf(k as f64 / (n - 1) as f64))
+            .collect()
+    };
+    match name {
+        "sigma" => logspace(0.002, 4.0, 14)
+            .into_iter()
+            .map(|v| v * lambda)
+            .collect(),
+        "T" => logspace(0.02, 400.0, 16)
+            .into_iter()
+            .map(|v| v * lambda)
+            .collect(),
+        "w" => logspace(0.003, 1.2, 18),
+        _ => vec![1.0],
+    }
+}
+
+/// Whether a layout parameter is linear.
+pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::ParamSpec]) -> bool {
+    LINEAR.contains(&model_specs[layout.params[k].spec].name)
+}
+
+/// Starting values for every layout parameter. `given[k]` holds a user's `--init` or
+/// `--fix` value (used as is, and not searched over). Returns full parameter values and the
+/// grid's best cost.
+pub fn initial_values(
+    problem: &FitProblem,
+    geo: &Geometry,
+    channel: &[usize],
+    given: &[Option<f64>],
+) -> (Vec<f64>, f64) {
+    let layout = &problem.layout;
+    let specs = problem.model.params();
+    let n = problem.len();
+    // Evenly spaced subsample.
+    let stride = n.div_ceil(GRID_SAMPLES).max(1);
+    let idx: Vec<usize> = (0..n).step_by(stride).collect();
+    let sub_geo = geo.subset(&idx);
+    let sub_channel: Vec<usize> = idx.iter().map(|&i| channel[i]).collect();
+    let sub_y: Vec<f64> = idx.iter().map(|&i| problem.y()[i]).collect();
+    let sub_w: Vec<f64> = idx
+        .iter()
+        .map(|&i| problem.sqrt_weight()[i].powi(2))
+        .collect();
+    let sub = FitProblem::new(
+        problem.model,
+        layout.clone(),
+        &sub_geo,
+        &sub_channel,
+        &sub_y,
+        &sub_w,
+        problem.kind(),
+        problem.floor,
+    )
+    .expect("subsample is consistent");
+    let lambda = median(&geo.wavelength);
+
+    // The nonlinear parameters to search over and their candidate values.
+    let nonlinear: Vec<usize> = (0..layout.len())
+        .filter(|&k| !is_linear(layout, k, specs))
+        .collect();
+    let axes: Vec<Vec<f64>> = nonlinear
+        .iter()
+        .map(|&k| match given[k] {
+            Some(v) => vec![v],
+            None => grid_for(specs[layout.params[k].spec].name, lambda),
+        })
+        .collect();
+    let linear: Vec<usize> = (0..layout.len())
+        .filter(|&k| is_linear(layout, k, specs) && given[k].is_none())
+        .collect();
+
+    let mut best = (f64::INFINITY, vec![1.0; layout.len()]);
+    let total: usize = axes.iter().map(Vec::len).product();
+    for flat in 0..total {
+        let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
+        let mut rem = flat;
+        for (axis, &k) in axes.iter().zip(&nonlinear) {
+            p[k] = axis[rem % axis.len()];
+            rem /= axis.len();
+        }
+        if let Some(cost) = solve_linear(&sub, &mut p, &linear) {
+            if cost < best.0 {
+                best = (cost, p);
+            }
+        }
+    }
+    let (cost, p) = best;
+    (p, cost)
+}
+
+/// Solve the linear parameters `linear` of `p` by least squares (with the other parameters
+/// held), clamping them to stay positive; returns the resulting cost, or None when the
+/// model gives non-finite values.
+pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Option<f64> {
+    if !linear.is_empty() {
+        for &k in linear {
+            p[k] = 1.0;
+        }
+        let (f, jac) = problem.model_values(p, true);
+        let jac = jac.expect("requested");
+        let n = problem.len();
+        let y = problem.y();
+        let sw = problem.sqrt_weight();
+        // Residual weights: linearise relative/log residuals around the data.
+        let d: Vec<f64> = (0..n)
+            .map(|i| {
+                let scale = match problem.kind() {
+                    ResidualKind::Absolute => 1.0,
+                    _ => 1.0 / y[i].abs().max(problem.floor),
+                };
+                sw[i] * scale
+            })
+            .collect();
+        // The part of f that does not come from the linear parameters.
+        let mut rest: Vec<f64> = f.clone();
+        for &k in linear {
+            for i in 0..n {
+                rest[i] -= jac[(i, k)];
+            }
+        }
+        let a = DMatrix::from_fn(n, linear.len(), |i, c| d[i] * jac[(i, linear[c])]);
+        let b = DVector::from_fn(n, |i, _| d[i] * (y[i] - rest[i]));
+        if !a.iter().chain(b.iter()).all(|v| v.is_finite()) {
+            return None;
+        }
+        let svd = a.svd(true, true);
+        let coef = svd.solve(&b, 1e-12 * svd.singular_values.max()).ok()?;
+        let largest = coef.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let floor = if largest > 0.0 { 1e-6 * largest } else { 1e-12 };
+        for (c, &k) in linear.iter().enumerate() {
+            p[k] = if coef[c].is_finite() && coef[c] > floor {
+                coef[c]
+            } else {
+                floor
+            };
+        }
+    }
+    let r = problem.weighted_residuals(p);
+    let cost = 0.5 * r.norm_squared();
+    cost.is_finite().then_some(cost)
+}
+
+/// Median of a non-empty slice (NaN-free).
+pub fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    if s.is_empty() {
+        return f64::NAN;
+    }
+    s[s.len() / 2]
+}

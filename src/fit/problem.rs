@@ -1,0 +1,374 @@
+//! The least-squares problem of a reflectance fit: a model, a dataset split into blocks
+//! (per channel, and in chunks for parallel evaluation), residuals of a chosen kind, and
+//! the mapping between the model's parameters and the solver's free variables.
+//!
+//! Free variables: every parameter that is not fixed; positive parameters enter as their
+//! logarithm (x = ln p), so the solver can never step to σ ≤ 0. Residuals are weighted,
+//! r̃ᵢ = √wᵢ rᵢ, so the solver's cost ½‖r̃‖² is the fit cost ½ Σ wᵢ rᵢ².
+//!
+//! Joint multi-channel fits share every parameter except the linear scales (`scale`,
+//! `scale_d`), which get one copy per channel (named `scale[550nm]`, ...).
+
+use super::lm::LeastSquaresProblem;
+use crate::error::{Error, Result};
+use crate::geometry::Geometry;
+use crate::model::{Mode, Model};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// Parameters that are per channel in a joint fit.
+pub const PER_CHANNEL: [&str; 2] = ["scale", "scale_d"];
+
+/// Samples per evaluation block: large enough to amortise scheduling, small enough to
+/// spread a 10k-sample fit over both cores.
+const BLOCK: usize = 1024;
+
+/// What a residual measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ResidualKind {
+    /// rᵢ = fᵢ − yᵢ.
+    #[default]
+    Absolute,
+    /// rᵢ = (fᵢ − yᵢ)/max(|yᵢ|, floor).
+    Relative,
+    /// rᵢ = ln max(fᵢ, floor) − ln max(yᵢ, floor).
+    Log,
+}
+
+/// One parameter of the (possibly joint) fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitParam {
+    /// Report name: the model's name, with `[channel]` for per-channel copies.
+    pub name: String,
+    /// Index of the model parameter it feeds.
+    pub spec: usize,
+    /// Channel index for per-channel copies, None when shared.
+    pub channel: Option<usize>,
+    /// Fitted in log space.
+    pub positive: bool,
+    /// Held at this value, not fitted.
+    pub fixed: Option<f64>,
+}
+
+/// The full parameter list of a fit and the channel → model-parameter mapping.
+#[derive(Debug, Clone)]
+pub struct ParamLayout {
+    pub params: Vec<FitParam>,
+    /// `index[c][j]`: the fit parameter that feeds model parameter j on channel c.
+    pub index: Vec<Vec<usize>>,
+    pub channel_names: Vec<String>,
+}
+
+impl ParamLayout {
+    /// The layout for `model` over the given channels (one unnamed channel for a plain fit).
+    pub fn new(model: &dyn Model, channel_names: &[String]) -> Self {
+        let specs = model.params();
+        let n_ch = channel_names.len().max(1);
+        let joint = channel_names.len() > 1;
+        let mut params = Vec::new();
+        let mut index = vec![vec![0; specs.len()]; n_ch];
+        for (j, spec) in specs.iter().enumerate() {
+            if joint && PER_CHANNEL.contains(&spec.name) {
+                for (c, name) in channel_names.iter().enumerate() {
+                    index[c][j] = params.len();
+                    params.push(FitParam {
+                        name: format!("{}[{name}]", spec.name),
+                        spec: j,
+                        channel: Some(c),
+                        positive: spec.positive,
+                        fixed: None,
+                    });
+                }
+            } else {
+                for row in index.iter_mut() {
+                    row[j] = params.len();
+                }
+                params.push(FitParam {
+                    name: spec.name.to_string(),
+                    spec: j,
+                    channel: None,
+                    positive: spec.positive,
+                    fixed: None,
+                });
+            }
+        }
+        ParamLayout {
+            params,
+            index,
+            channel_names: channel_names.to_vec(),
+        }
+    }
+
+    /// Number of fit parameters (free and fixed).
+    pub fn len(&self) -> usize {
+        self.params.len()
+    }
+
+    /// Whether there are no parameters.
+    pub fn is_empty(&self) -> bool {
+        self.params.is_empty()
+    }
+
+    /// Indices of the free parameters.
+    pub fn free(&self) -> Vec<usize> {
+        (0..self.params.len())
+            .filter(|&k| self.params[k].fixed.is_none())
+            .collect()
+    }
+
+    /// Indices of fit parameters whose model name (without channel) is `name`.
+    pub fn find(&self, name: &str) -> Vec<usize> {
+        self.params
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| {
+                p.name.eq_ignore_ascii_case(name)
+                    || p.name
+                        .split('[')
+                        .next()
+                        .is_some_and(|base| base.eq_ignore_ascii_case(name))
+            })
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    /// Solver variables from full parameter values (free parameters only, log for positive).
+    pub fn to_x(&self, p: &[f64]) -> DVector<f64> {
+        let free = self.free();
+        DVector::from_iterator(
+            free.len(),
+            free.iter().map(|&k| {
+                if self.params[k].positive {
+                    p[k].ln()
+                } else {
+                    p[k]
+                }
+            }),
+        )
+    }
+
+    /// Full parameter values from solver variables (fixed parameters from the layout).
+    pub fn from_x(&self, x: &DVector<f64>) -> Vec<f64> {
+        let mut it = x.iter();
+        self.params
+            .iter()
+            .map(|fp| match fp.fixed {
+                Some(v) => v,
+                None => {
+                    let xi = *it.next().expect("x has one entry per free parameter");
+                    if fp.positive {
+                        xi.exp()
+                    } else {
+                        xi
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// Model parameters for channel `c` from full parameter values.
+    pub fn model_params(&self, p: &[f64], c: usize) -> Vec<f64> {
+        self.index[c].iter().map(|&k| p[k]).collect()
+    }
+}
+
+/// A contiguous block of samples of one channel, with its prepared geometry.
+#[derive(Debug, Clone)]
+struct Block {
+    geo: Geometry,
+    /// Global sample indices.
+    idx: Vec<usize>,
+    channel: usize,
+}
+
+/// The fit's least-squares problem.
+pub struct FitProblem<'a> {
+    pub model: &'a dyn Model,
+    pub layout: ParamLayout,
+    blocks: Vec<Block>,
+    y: Vec<f64>,
+    sqrt_w: Vec<f64>,
+    kind: ResidualKind,
+    /// Floor for relative and log residuals (in the unit of y).
+    pub floor: f64,
+    n: usize,
+}
+
+impl<'a> FitProblem<'a> {
+    /// Build the problem. `channel[i]` is sample i's channel index into `layout.channel_names`
+    /// (all 0 for a plain fit). `weight` are the wᵢ > 0. `floor` is used by relative and log
+    /// residuals.
+    pub fn new(
+        model: &'a dyn Model,
+        layout: ParamLayout,
+        geo: &Geometry,
+        channel: &[usize],
+        y: &[f64],
+        weight: &[f64],
+        kind: ResidualKind,
+        floor: f64,
+    ) -> Result<Self> {
+        let n = geo.len();
+        if y.len() != n || weight.len() != n || channel.len() != n {
+            return Err(Error::Numerical("inconsistent fit data lengths".into()));
+        }
+        let n_ch = layout.index.len();
+        let mut blocks = Vec::new();
+        for c in 0..n_ch {
+            let idx: Vec<usize> = (0..n).filter(|&i| channel[i] == c).collect();
+            for chunk in idx.chunks(BLOCK) {
+                blocks.push(Block {
+                    geo: geo.subset(chunk),
+                    idx: chunk.to_vec(),
+                    channel: c,
+                });
+            }
+        }
+        Ok(FitProblem {
+            model,
+            layout,
+            blocks,
+            y: y.to_vec(),
+            sqrt_w: weight.iter().map(|w| w.sqrt()).collect(),
+            kind,
+            floor,
+            n,
+        })
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
+    pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
+        let n_spec = self.model.params().len();
+        let parts: Vec<(Vec<f64>, Vec<f64>)> = self
+            .blocks
+            .par_iter()
+            .map(|b| {
+                let mp = self.layout.model_params(p, b.channel);
+                let m = b.geo.len();
+                let mut out = vec![0.0; m];
+                let mut jac = if want_jac { vec![0.0; m * n_spec] } else { Vec::new() };
+                self.model.eval(
+                    &b.geo,
+                    &mp,
+                    &mut out,
+                    if want_jac { Some(&mut jac) } else { None },
+                );
+                (out, jac)
+            })
+            .collect();
+        let mut f = vec![0.0; self.n];
+        let mut jac = want_jac.then(|| DMatrix::zeros(self.n, self.layout.len()));
+        for (b, (out, bj)) in self.blocks.iter().zip(parts) {
+            let m = b.idx.len();
+            for (r, &i) in b.idx.iter().enumerate() {
+                f[i] = out[r];
+            }
+            if let Some(j) = jac.as_mut() {
+                for s in 0..n_spec {
+                    let col = self.layout.index[b.channel][s];
+                    for (r, &i) in b.idx.iter().enumerate() {
+                        j[(i, col)] = bj[s * m + r];
+                    }
+                }
+            }
+        }
+        (f, jac)
+    }
+
+    /// Per-sample evaluation modes at full parameters `p`.
+    pub fn modes(&self, p: &[f64]) -> Vec<Mode> {
+        let mut modes = vec![Mode::Closed; self.n];
+        for b in &self.blocks {
+            let mp = self.layout.model_params(p, b.channel);
+            for (m, &i) in self.model.modes(&b.geo, &mp).into_iter().zip(&b.idx) {
+                modes[i] = m;
+            }
+        }
+        modes
+    }
+
+    /// Unweighted residuals rᵢ of the chosen kind for model values f.
+    pub fn raw_residuals(&self, f: &[f64]) -> Vec<f64> {
+        f.iter()
+            .zip(&self.y)
+            .map(|(&fi, &yi)| match self.kind {
+                ResidualKind::Absolute => fi - yi,
+                ResidualKind::Relative => (fi - yi) / yi.abs().max(self.floor),
+                ResidualKind::Log => fi.max(self.floor).ln() - yi.max(self.floor).ln(),
+            })
+            .collect()
+    }
+
+    /// ∂rᵢ/∂fᵢ for the chosen residual kind.
+    fn dr_df(&self, i: usize, fi: f64) -> f64 {
+        match self.kind {
+            ResidualKind::Absolute => 1.0,
+            ResidualKind::Relative => 1.0 / self.y[i].abs().max(self.floor),
+            ResidualKind::Log => {
+                if fi > self.floor {
+                    1.0 / fi
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
+    /// Weighted residuals at full parameters.
+    pub fn weighted_residuals(&self, p: &[f64]) -> DVector<f64> {
+        let (f, _) = self.model_values(p, false);
+        let r = self.raw_residuals(&f);
+        DVector::from_iterator(self.n, r.iter().zip(&self.sqrt_w).map(|(r, s)| r * s))
+    }
+
+    /// Measured values.
+    pub fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// √wᵢ.
+    pub fn sqrt_weight(&self) -> &[f64] {
+        &self.sqrt_w
+    }
+
+    /// Residual kind.
+    pub fn kind(&self) -> ResidualKind {
+        self.kind
+    }
+}
+
+impl LeastSquaresProblem for FitProblem<'_> {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        self.weighted_residuals(&self.layout.from_x(x))
+    }
+
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        let p = self.layout.from_x(x);
+        let (f, jac) = self.model_values(&p, true);
+        let jac = jac.expect("requested");
+        let free = self.layout.free();
+        let mut out = DMatrix::zeros(self.n, free.len());
+        for (col, &k) in free.iter().enumerate() {
+            let chain = if self.layout.params[k].positive {
+                p[k]
+            } else {
+                1.0
+            };
+            for i in 0..self.n {
+                out[(i, col)] = self.sqrt_w[i] * self.dr_df(i, f[i]) * jac[(i, k)] * chain;
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,74 @@
+//! The fit report as one JSON object.
+
+use super::RunInfo;
+use crate::fit::driver::FitResult;
+use serde_json::{json, Map, Value};
+
+/// Finite numbers as numbers, the rest as null (JSON has no NaN).
+fn num(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+/// The report as a JSON value.
+pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
+    let mut params = Map::new();
+    for p in &r.params {
+        params.insert(
+            p.name.clone(),
+            json!({
+                "value": num(p.value),
+                "stderr": p.stderr.map(num),
+                "determined": p.determined,
+                "fixed": p.fixed,
+                "unit": p.unit,
+            }),
+        );
+    }
+    let mut derived = Map::new();
+    for d in &r.derived {
+        derived.insert(
+            d.name.clone(),
+            json!({"value": num(d.value), "stderr": d.stderr.map(num), "determined": d.determined, "doc": d.doc}),
+        );
+    }
+    let k = r.corr_names.len();
+    let correlation: Vec<Vec<Value>> = (0..k)
+        .map(|i| (0..k).map(|j| num(r.correlation[(i, j)])).collect())
+        .collect();
+    json!({
+        "model": r.model,
+        "params": params,
+        "derived": derived,
+        "verdict": r.verdict,
+        "notes": r.notes,
+        "correlation": {"names": r.corr_names, "matrix": correlation},
+        "singular_values": r.singular_values.iter().map(|v| num(*v)).collect::<Vec<_>>(),
+        "condition": num(r.condition),
+        "cost": num(r.cost),
+        "chi2": num(r.chi2),
+        "reduced_chi2": num(r.reduced_chi2),
+        "rms": num(r.rms),
+        "max_abs_residual": num(r.max_abs_residual),
+        "r2": num(r.r2),
+        "aic": num(r.aic),
+        "bic": num(r.bic),
+        "n": r.n,
+        "n_free": r.n_free,
+        "termination": format!("{:?}", r.termination).to_lowercase(),
+        "converged": r.converged(),
+        "iterations": r.iterations,
+        "evaluations": r.evaluations,
+        "jacobian_evaluations": r.jacobian_evaluations,
+        "seconds": r.seconds,
+        "init_seconds": r.init_seconds,
+        "modes": r.modes,
+        "g_range": r.g_range.map(|(a, b)| vec![num(a), num(b)]),
+        "input": info.input,
+        "command": info.command,
+        "version": info.version,
+    })
+}
