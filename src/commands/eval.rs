@@ -1,7 +1,64 @@
-//! `goniofit eval`: a model's values at the angles of a CSV file.
+//! `goniofit eval`: a model's values at the angles of a CSV (or ASTM) file.
+//!
+//! Prints the input rows — every original column, original header names — with a column
+//! `L_model` appended. Values are written with full precision: the shortest decimal that
+//! parses back to the same `f64`, in scientific notation (`1.2345678901234567e-3`).
+//!
+//! Wavelength: the KBS models need one. `--wavelength` sets it for every sample (and then
+//! overrides a wavelength column or ASTM channel wavelengths); without it the file's
+//! per-sample wavelengths are used; with neither, a KBS model is an error. Lambertian and
+//! specular models do not depend on λ.
 
-use clap::Args;
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use goniofit::geometry::{Geometry, Quantity};
+use goniofit::io::{self, ReadOptions};
+use goniofit::model::{self, EvalMode, ModelOptions};
 use std::path::PathBuf;
+
+/// The measured quantity, as chosen on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum QuantityArg {
+    /// Radiance L = s cos²θi ⟨|ρ|²⟩ (eq. 28).
+    #[default]
+    Radiance,
+    /// BRDF = L / cos θi.
+    Brdf,
+}
+
+impl From<QuantityArg> for Quantity {
+    fn from(q: QuantityArg) -> Self {
+        match q {
+            QuantityArg::Radiance => Quantity::Radiance,
+            QuantityArg::Brdf => Quantity::Brdf,
+        }
+    }
+}
+
+/// The KBS evaluation mode, as chosen on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum ModeArg {
+    /// Per sample, the cheapest evaluation that meets the tolerance.
+    #[default]
+    Auto,
+    /// Always the series.
+    Series,
+    /// Always the smooth approximation (eq. 42).
+    Smooth,
+    /// Always the rough approximation (eq. 43).
+    Rough,
+}
+
+impl From<ModeArg> for EvalMode {
+    fn from(m: ModeArg) -> Self {
+        match m {
+            ModeArg::Auto => EvalMode::Auto,
+            ModeArg::Series => EvalMode::Series,
+            ModeArg::Smooth => EvalMode::Smooth,
+            ModeArg::Rough => EvalMode::Rough,
+        }
+    }
+}
 
 #[derive(Debug, Args)]
 pub struct EvalArgs {
@@ -11,10 +68,122 @@ pub struct EvalArgs {
     /// Parameters as name=value pairs, e.g. sigma=0.3,T=2,scale=1.
     #[arg(long)]
     pub params: String,
-    /// Input CSV with columns theta_i, theta_r, phi_r (others are passed through).
+    /// Wavelength for every sample (the unit of sigma and T); overrides the file's.
+    #[arg(long)]
+    pub wavelength: Option<f64>,
+    /// Output quantity.
+    #[arg(long, value_enum, default_value_t = QuantityArg::Radiance)]
+    pub quantity: QuantityArg,
+    /// Patch half-sizes X,Y (unit of λ): adds the coherent term ρ0² with A = 4XY.
+    #[arg(long, value_name = "X,Y")]
+    pub patch: Option<String>,
+    /// KBS evaluation mode.
+    #[arg(long, value_enum, default_value_t = ModeArg::Auto)]
+    pub mode: ModeArg,
+    /// Relative accuracy target of the KBS sum.
+    #[arg(long, default_value_t = 1e-10)]
+    pub tol: f64,
+    /// Angles are in radians (CSV; ASTM files are always radians).
+    #[arg(long)]
+    pub radians: bool,
+    /// θr < 0 means θr = |θr| at φr + 180° (signed in-plane view angles).
+    #[arg(long)]
+    pub signed_theta_r: bool,
+    /// Column mappings role=name,... (roles: theta_i, theta_r, phi_r, L, weight, sigma_L,
+    /// wavelength, group).
+    #[arg(long, value_name = "ROLE=NAME,...")]
+    pub columns: Vec<String>,
+    /// ASTM files: the channel to read (e.g. 550nm), or `all`.
+    #[arg(long)]
+    pub channel: Option<String>,
+    /// Write the table to this file (atomically) instead of stdout.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Input CSV with columns theta_i, theta_r, phi_r (others are passed through), or an
+    /// ASTM E1392 file.
     pub file: PathBuf,
 }
 
-pub fn run(_args: EvalArgs) -> anyhow::Result<u8> {
-    anyhow::bail!("goniofit eval: not built yet")
+/// Parse `X,Y` patch half-sizes.
+pub fn parse_patch(text: &str) -> goniofit::Result<(f64, f64)> {
+    let bad = || {
+        goniofit::Error::Usage(format!(
+            "--patch '{text}': expected two positive numbers X,Y"
+        ))
+    };
+    let (x, y) = text.split_once(',').ok_or_else(bad)?;
+    let x: f64 = x.trim().parse().map_err(|_| bad())?;
+    let y: f64 = y.trim().parse().map_err(|_| bad())?;
+    if !(x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0) {
+        return Err(bad());
+    }
+    Ok((x, y))
+}
+
+pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
+    let mut columns = Vec::new();
+    for c in &args.columns {
+        columns.extend(io::csv::parse_columns(c)?);
+    }
+    let opts = ReadOptions {
+        radians: args.radians,
+        signed_theta_r: args.signed_theta_r,
+        columns,
+        require_value: false,
+        channel: args.channel.clone(),
+    };
+    let mopts = ModelOptions {
+        mode: args.mode.into(),
+        tol: args.tol,
+        patch: args.patch.as_deref().map(parse_patch).transpose()?,
+    };
+    let model = model::by_name(&args.model, &mopts)?;
+    let params = model::parse_params(model.as_ref(), &args.params)?;
+
+    let ds = io::read_dataset(&args.file, &opts)?;
+
+    let needs_wavelength =
+        model.name().starts_with("kbs") || args.model.to_ascii_lowercase().starts_with("kbs");
+    let wavelength: Vec<f64> = match (args.wavelength, &ds.wavelength) {
+        (Some(l), _) => {
+            if !(l.is_finite() && l > 0.0) {
+                return Err(goniofit::Error::Usage(format!(
+                    "--wavelength {l} must be finite and positive"
+                ))
+                .into());
+            }
+            vec![l]
+        }
+        (None, Some(w)) => w.clone(),
+        (None, None) if needs_wavelength => {
+            return Err(goniofit::Error::Usage(format!(
+                "model {} needs a wavelength: give --wavelength L (the unit of sigma and T) or a wavelength column in {}",
+                args.model,
+                args.file.display()
+            ))
+            .into())
+        }
+        (None, None) => vec![1.0],
+    };
+
+    let geo = Geometry::new(&ds.samples, &wavelength, args.quantity.into())
+        .with_context(|| format!("preparing the samples of {}", args.file.display()))?;
+    let mut values = vec![0.0; geo.len()];
+    model.eval(&geo, &params, &mut values, None);
+
+    let mut headers = ds.headers.clone();
+    headers.push("L_model".into());
+    let rows: Vec<Vec<String>> = ds
+        .rows
+        .iter()
+        .zip(&values)
+        .map(|(r, v)| {
+            let mut r = r.clone();
+            r.push(io::format_value(*v));
+            r
+        })
+        .collect();
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    io::write_csv(&out, &headers, &rows)?;
+    Ok(0)
 }

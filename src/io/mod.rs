@@ -1,0 +1,319 @@
+//! Reading measurements and writing tables.
+//!
+//! [`read_dataset`] reads either a CSV table ([`csv`]) or an ASTM E1392 file ([`astm`]) into
+//! a [`Dataset`]: validated angles in our convention (MODEL.md: radians, θi ∈ [0, π/2),
+//! θr ∈ [0, π/2], φr from the plane of incidence, φr = 0 the forward/specular side), the
+//! measured values, and the raw rows for pass-through output.
+//!
+//! Format detection: a file is ASTM E1392 when its extension is `.astm` (any case), or when
+//! its first non-blank line starts with an upper-case `KEY` token (e.g. `LAB_NAME ...`) and
+//! some line starts with `VARS`. Everything else is CSV.
+//!
+//! Writing: [`write_atomic`] writes through a temporary file in the target directory and
+//! renames it into place, so a failed write leaves nothing behind; [`write_csv`] writes a
+//! table that way, or to stdout for the path `-`.
+//!
+//! Every reading error is an [`Error::Input`] (file, 1-based line, column, offending value),
+//! an [`Error::File`] (the whole file: empty, no data rows, missing column) or an
+//! [`Error::Io`]; no input makes the readers panic (proptest in `tests/io.rs`).
+
+pub mod astm;
+pub mod csv;
+
+use crate::error::{Error, Result};
+use crate::geometry::Sample;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// How to read a file.
+#[derive(Debug, Clone, Default)]
+pub struct ReadOptions {
+    /// Angles in radians (CSV); ASTM files are always radians.
+    pub radians: bool,
+    /// θr < 0 means θr = |θr| on the opposite side (φr + 180°); at φr = 0 that is φr = 180°.
+    pub signed_theta_r: bool,
+    /// `--columns role=name` mappings; roles: theta_i, theta_r, phi_r, L, weight, sigma_L,
+    /// wavelength, group (case-insensitive; `value` is accepted for `L`).
+    pub columns: Vec<(String, String)>,
+    /// Whether column L (the measured value) must exist (fit: yes; eval: no).
+    pub require_value: bool,
+    /// ASTM: one channel name such as `550nm`, or `all`.
+    pub channel: Option<String>,
+}
+
+/// A dataset as read: angles validated, values parsed, raw rows kept for pass-through.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    pub path: PathBuf,
+    /// Column names of `rows` (as in the file, surrounding whitespace removed).
+    pub headers: Vec<String>,
+    /// Raw fields per sample, for pass-through output.
+    pub rows: Vec<Vec<String>>,
+    /// 1-based source line of each sample.
+    pub lines: Vec<usize>,
+    /// Sample angles in radians, in the convention of MODEL.md.
+    pub samples: Vec<Sample>,
+    /// Measured L (or BRDF).
+    pub value: Option<Vec<f64>>,
+    /// Per-sample weight w (from `weight`, or 1/sigma_L²).
+    pub weight: Option<Vec<f64>>,
+    /// Standard uncertainty of the value, if given.
+    pub sigma_l: Option<Vec<f64>>,
+    /// Per-sample wavelength (a `wavelength` column in the file's unit, or from an ASTM
+    /// channel name: `550nm` → 550, in nm).
+    pub wavelength: Option<Vec<f64>>,
+    /// Per-sample channel/group label (ASTM channel, or a `group` column).
+    pub channel: Option<Vec<String>>,
+}
+
+impl Dataset {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Whether there are no samples (never true for a dataset returned by [`read_dataset`]).
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// The distinct channel labels in first-appearance order (empty without channels).
+    pub fn channel_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        if let Some(ch) = &self.channel {
+            for c in ch {
+                if !out.iter().any(|o| o == c) {
+                    out.push(c.clone());
+                }
+            }
+        }
+        out
+    }
+
+    /// Indices of the samples with channel label `name`.
+    pub fn channel_indices(&self, name: &str) -> Vec<usize> {
+        match &self.channel {
+            Some(ch) => (0..ch.len()).filter(|&i| ch[i] == name).collect(),
+            None => Vec::new(),
+        }
+    }
+}
+
+/// Read a dataset, choosing the format by extension or content (see the module docs).
+pub fn read_dataset(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    read_bytes(path, &bytes, opts)
+}
+
+/// Read a dataset from bytes already in memory; `path` names it in messages and decides
+/// the format by extension as [`read_dataset`] does.
+pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
+    let text = decode_utf8(path, bytes)?;
+    if is_astm(path, text) {
+        astm::parse(path, text, opts)
+    } else {
+        csv::parse(path, text, opts)
+    }
+}
+
+/// UTF-8 text without a leading byte-order mark; invalid UTF-8 is an error naming the line.
+fn decode_utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| {
+        let good = &bytes[..e.valid_up_to()];
+        let line = 1 + good.iter().filter(|&&b| b == b'\n').count();
+        Error::Input {
+            path: path.to_path_buf(),
+            line,
+            column: "(text)".into(),
+            message: format!(
+                "invalid UTF-8 at byte {} (save the file as UTF-8 text)",
+                e.valid_up_to()
+            ),
+        }
+    })
+}
+
+/// Whether the file is ASTM E1392 (by extension or content).
+pub fn is_astm(path: &Path, text: &str) -> bool {
+    if path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("astm"))
+    {
+        return true;
+    }
+    let first = text.lines().map(str::trim).find(|l| !l.is_empty());
+    let Some(first) = first else { return false };
+    let key = first.split_whitespace().next().unwrap_or("");
+    astm::is_key(key)
+        && first.len() > key.len()
+        && text
+            .lines()
+            .any(|l| l.split_whitespace().next() == Some("VARS"))
+}
+
+/// Write a file atomically: a temporary file in the same directory, then a rename; on any
+/// error nothing is left behind (neither a partial file nor the temporary).
+pub fn write_atomic(
+    path: &Path,
+    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
+    let io_err = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let tmp = tempfile::Builder::new()
+        .prefix(".goniofit-")
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .map_err(io_err)?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file());
+        f(&mut w).map_err(io_err)?;
+        w.flush().map_err(io_err)?;
+    }
+    tmp.as_file().sync_all().map_err(io_err)?;
+    tmp.persist(path).map_err(|e| io_err(e.error))?;
+    Ok(())
+}
+
+/// Write a CSV table (headers + rows) atomically, or to stdout when `path` is `-`. Fields
+/// are quoted where CSV needs it.
+pub fn write_csv(path: &Path, headers: &[String], rows: &[Vec<String>]) -> Result<()> {
+    let write = |w: &mut dyn Write| -> std::io::Result<()> {
+        let mut cw = ::csv::WriterBuilder::new().flexible(true).from_writer(w);
+        cw.write_record(headers)?;
+        for r in rows {
+            cw.write_record(r)?;
+        }
+        cw.flush()?;
+        Ok(())
+    };
+    if path.as_os_str() == "-" {
+        let stdout = std::io::stdout();
+        let mut lock = stdout.lock();
+        match write(&mut lock) {
+            // A closed pipe (`goniofit eval ... | head`) is the reader's choice, not a failure.
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+            r => r.map_err(|source| Error::Io {
+                path: PathBuf::from("<stdout>"),
+                source,
+            }),
+        }
+    } else {
+        write_atomic(path, write)
+    }
+}
+
+/// Format a value with full precision: the shortest decimal that parses back to the same
+/// `f64`, in scientific notation (`1.2345e-3`, `5e-1`, `NaN`, `inf`).
+pub fn format_value(v: f64) -> String {
+    format!("{v:e}")
+}
+
+/// Parse a decimal field as a finite number; the message shows the value.
+pub(crate) fn parse_finite(field: &str) -> std::result::Result<f64, String> {
+    let t = field.trim();
+    if t.is_empty() {
+        return Err("empty field (a number is needed)".into());
+    }
+    match t.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(format!("'{t}' is not a finite number")),
+        Err(_) => Err(format!("'{t}' is not a number")),
+    }
+}
+
+/// Validate one sample's angles (in the file's unit) and convert them to radians in our
+/// convention. `signed`: a negative polar angle means the opposite azimuth. Errors name
+/// the column and show the value.
+pub(crate) fn check_angles(
+    theta_i: f64,
+    theta_r: f64,
+    phi_r: f64,
+    radians: bool,
+    signed: bool,
+) -> std::result::Result<Sample, (&'static str, String)> {
+    let (unit, right, full) = if radians {
+        (
+            " rad",
+            std::f64::consts::FRAC_PI_2,
+            2.0 * std::f64::consts::PI,
+        )
+    } else {
+        ("°", 90.0, 360.0)
+    };
+    if !(0.0..right).contains(&theta_i) {
+        return Err((
+            "theta_i",
+            format!(
+                "theta_i = {theta_i}{unit} is outside [0, {right}{unit}){}",
+                if theta_i < 0.0 && theta_i > -right {
+                    " (incidence angles are measured from the normal and are never negative)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
+    if theta_r.abs() > right || (theta_r < 0.0 && !signed) {
+        return Err((
+            "theta_r",
+            format!(
+                "theta_r = {theta_r}{unit} is outside [0, {right}{unit}]{}",
+                if theta_r < 0.0 && theta_r >= -right {
+                    " (for signed in-plane view angles use --signed-theta-r)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
+    if phi_r.abs() > full * (1.0 + 1e-12) {
+        return Err((
+            "phi_r",
+            format!("phi_r = {phi_r}{unit} is outside [-{full}{unit}, {full}{unit}]"),
+        ));
+    }
+    let to_rad = |x: f64| if radians { x } else { x.to_radians() };
+    let mut s = Sample {
+        theta_i: to_rad(theta_i),
+        theta_r: to_rad(theta_r.abs()),
+        phi_r: to_rad(phi_r),
+    };
+    if theta_r < 0.0 {
+        s.phi_r = crate::geometry::wrap_phi(s.phi_r + std::f64::consts::PI);
+    }
+    // Degrees → radians can round 90° − ε up to π/2 (never at or above it for θi < 90).
+    s.theta_r = s.theta_r.min(std::f64::consts::FRAC_PI_2);
+    if s.theta_i >= std::f64::consts::FRAC_PI_2 {
+        s.theta_i = f64::from_bits(std::f64::consts::FRAC_PI_2.to_bits() - 1);
+    }
+    Ok(s)
+}
+
+/// A wavelength from a channel name such as `550nm`, `550 nm`, `0.55um`, `0.55µm` or a bare
+/// number (taken as nm); the result is in nm. `None` when the name is not a wavelength.
+pub fn wavelength_nm_of_channel(name: &str) -> Option<f64> {
+    let t = name.trim().to_ascii_lowercase();
+    let (num, scale) = if let Some(n) = t.strip_suffix("nm") {
+        (n, 1.0)
+    } else if let Some(n) = t.strip_suffix("um") {
+        (n, 1000.0)
+    } else if let Some(n) = t.strip_suffix("µm") {
+        (n, 1000.0)
+    } else {
+        (t.as_str(), 1.0)
+    };
+    let v: f64 = num.trim().parse().ok()?;
+    let v = v * scale;
+    (v.is_finite() && v > 0.0).then_some(v)
+}
