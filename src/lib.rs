@@ -7,5 +7,6 @@
 pub mod error;
 pub mod geometry;
 pub mod model;
+pub mod synth;
 
 pub use error::{Error, Result};
