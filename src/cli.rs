@@ -17,6 +17,9 @@ pub struct Cli {
 pub enum Command {
     /// Evaluate a model at the angles of a CSV file; prints the rows with `L_model` appended.
     Eval(commands::eval::EvalArgs),
+    /// Generate synthetic measurements from known parameters, with seeded noise; writes the
+    /// CSV and the truth beside it as JSON.
+    Synth(Box<commands::synth::SynthArgs>),
 }
 
 #[cfg(test)]

@@ -8,5 +8,6 @@ pub mod error;
 pub mod geometry;
 pub mod io;
 pub mod model;
+pub mod synth;
 
 pub use error::{Error, Result};

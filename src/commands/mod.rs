@@ -1,6 +1,7 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
 
 pub mod eval;
+pub mod synth;
 
 use crate::cli::{Cli, Command};
 
@@ -8,6 +9,7 @@ use crate::cli::{Cli, Command};
 pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Eval(a) => eval::run(a),
+        Command::Synth(a) => synth::run(*a),
     }
 }
 

@@ -1,0 +1,319 @@
+//! `goniofit synth`: synthetic measurements from known parameters, with seeded noise.
+//!
+//! Writes the CSV (`theta_i,theta_r,phi_r,L[,sigma_L][,wavelength]`, degrees) and, beside
+//! it, the truth as JSON (`data.csv` → `data.truth.json`). Both are written atomically
+//! (temporary file in the same folder, then renamed). Without `--out` the CSV goes to
+//! standard output and the truth only where `--truth` says.
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use goniofit::geometry::Quantity;
+use goniofit::model::{by_name, parse_params, EvalMode, ModelOptions};
+use goniofit::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct SynthArgs {
+    /// Model name: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular.
+    #[arg(long)]
+    pub model: String,
+    /// Parameters as name=value pairs, e.g. sigma=0.3,T=2,scale=1 (every parameter once).
+    #[arg(long)]
+    pub params: String,
+    /// Wavelength, in the unit of sigma and T.
+    #[arg(long, default_value_t = 1.0)]
+    pub wavelength: f64,
+    /// Layout: inplane (θi 15,30,45,60,75; signed θr −85..85 step 1), hemisphere
+    /// (θi × θr × φr grid, default 5x18x36), grazing (θi 70..89°, same grid), or the path of
+    /// a CSV with columns theta_i,theta_r,phi_r in degrees.
+    #[arg(long, default_value = "hemisphere")]
+    pub layout: String,
+    /// Grid of the hemisphere and grazing layouts: θi x θr x φr counts.
+    #[arg(long, value_name = "NIxNRxNP")]
+    pub grid: Option<String>,
+    /// Incidence angles of the inplane layout, degrees, comma-separated.
+    #[arg(long, value_name = "DEG,...")]
+    pub theta_i: Option<String>,
+    /// θr step of the inplane layout, degrees.
+    #[arg(long, value_name = "DEG")]
+    pub step: Option<f64>,
+    /// Largest |θr| of the inplane layout, degrees.
+    #[arg(long, value_name = "DEG")]
+    pub theta_r_max: Option<f64>,
+    /// Keep only N samples, spread evenly over the layout order (every θi is kept).
+    #[arg(long, value_name = "N")]
+    pub samples: Option<usize>,
+    /// Noise level ε (0 gives the exact model values).
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Noise shape: relative L(1+εz), absolute L+ε·max(L)·z, poisson L+ε·√(L·max L)·z.
+    #[arg(long, value_enum, default_value_t = NoiseKindArg::Relative)]
+    pub noise_kind: NoiseKindArg,
+    /// Seed of the noise generator (same seed, same file).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Add a sigma_L column: the standard deviation of each value's noise.
+    #[arg(long)]
+    pub write_sigma: bool,
+    /// Add a wavelength column.
+    #[arg(long)]
+    pub write_wavelength: bool,
+    /// Write φr = 180° rows as signed θr < 0 at φr = 0.
+    #[arg(long)]
+    pub signed_theta_r: bool,
+    /// KBS evaluation mode.
+    #[arg(long, value_enum, default_value_t = ModeArg::Auto)]
+    pub mode: ModeArg,
+    /// KBS relative tolerance.
+    #[arg(long, default_value_t = 1e-10)]
+    pub tol: f64,
+    /// Patch half-sizes X,Y (unit of λ): include the coherent term with A = 4XY.
+    #[arg(long, value_name = "X,Y")]
+    pub patch: Option<String>,
+    /// Measured quantity: radiance, or BRDF = radiance / cos θi.
+    #[arg(long, value_enum, default_value_t = QuantityArg::Radiance)]
+    pub quantity: QuantityArg,
+    /// Output CSV (default: standard output).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Truth JSON (default: beside --out, data.csv → data.truth.json).
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum NoiseKindArg {
+    Relative,
+    Absolute,
+    Poisson,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ModeArg {
+    Auto,
+    Series,
+    Smooth,
+    Rough,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum QuantityArg {
+    Radiance,
+    Brdf,
+}
+
+fn usage(m: String) -> anyhow::Error {
+    goniofit::Error::Usage(m).into()
+}
+
+/// `a,b` as two numbers.
+fn parse_pair(text: &str, what: &str) -> anyhow::Result<(f64, f64)> {
+    let v = parse_list(text, what)?;
+    match v[..] {
+        [x, y] => Ok((x, y)),
+        _ => Err(usage(format!("{what} '{text}': expected two numbers X,Y"))),
+    }
+}
+
+fn parse_list(text: &str, what: &str) -> anyhow::Result<Vec<f64>> {
+    text.split(',')
+        .map(|s| {
+            s.trim()
+                .parse::<f64>()
+                .map_err(|_| usage(format!("{what}: '{}' is not a number", s.trim())))
+        })
+        .collect()
+}
+
+/// `5x18x36` as three counts.
+fn parse_grid(text: &str) -> anyhow::Result<(usize, usize, usize)> {
+    let bad = || {
+        usage(format!(
+            "--grid '{text}': expected three counts NIxNRxNP, e.g. 5x18x36"
+        ))
+    };
+    let v: Vec<usize> = text
+        .split(['x', 'X'])
+        .map(|s| s.trim().parse::<usize>().map_err(|_| bad()))
+        .collect::<anyhow::Result<_>>()?;
+    match v[..] {
+        [a, b, c] => Ok((a, b, c)),
+        _ => Err(bad()),
+    }
+}
+
+/// The layout from `--layout` and its modifiers; inplane-only and grid-only flags are
+/// refused for other layouts rather than ignored.
+fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
+    let mut layout = Layout::parse(&a.layout)?;
+    if let Some(g) = &a.grid {
+        let (ni, nr, np) = parse_grid(g)?;
+        layout = layout.with_grid(ni, nr, np).map_err(|_| {
+            usage(format!(
+                "--grid applies to the hemisphere and grazing layouts, not '{}'",
+                a.layout
+            ))
+        })?;
+    }
+    let inplane_flags = a.theta_i.is_some() || a.step.is_some() || a.theta_r_max.is_some();
+    if inplane_flags {
+        match &mut layout {
+            Layout::InPlane {
+                theta_i_deg,
+                step_deg,
+                theta_r_max_deg,
+            } => {
+                if let Some(t) = &a.theta_i {
+                    *theta_i_deg = parse_list(t, "--theta-i")?;
+                }
+                if let Some(s) = a.step {
+                    *step_deg = s;
+                }
+                if let Some(m) = a.theta_r_max {
+                    *theta_r_max_deg = m;
+                }
+            }
+            _ => {
+                return Err(usage(format!(
+                    "--theta-i, --step and --theta-r-max apply to the inplane layout, not '{}'",
+                    a.layout
+                )))
+            }
+        }
+    }
+    layout.validate()?;
+    Ok(layout)
+}
+
+pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
+    let patch = a
+        .patch
+        .as_deref()
+        .map(|p| parse_pair(p, "--patch"))
+        .transpose()?;
+    let mode = match a.mode {
+        ModeArg::Auto => EvalMode::Auto,
+        ModeArg::Series => EvalMode::Series,
+        ModeArg::Smooth => EvalMode::Smooth,
+        ModeArg::Rough => EvalMode::Rough,
+    };
+    let opts = ModelOptions {
+        mode,
+        tol: a.tol,
+        patch,
+    };
+    let model = by_name(&a.model, &opts)?;
+    let params = parse_params(model.as_ref(), &a.params)?;
+    let layout = build_layout(&a)?;
+    let mut angles = layout.angles();
+    if let Some(n) = a.samples {
+        angles = synth::subsample(&angles, n)?;
+    }
+    let quantity = match a.quantity {
+        QuantityArg::Radiance => Quantity::Radiance,
+        QuantityArg::Brdf => Quantity::Brdf,
+    };
+    let noise = Noise {
+        kind: match a.noise_kind {
+            NoiseKindArg::Relative => NoiseKind::Relative,
+            NoiseKindArg::Absolute => NoiseKind::Absolute,
+            NoiseKindArg::Poisson => NoiseKind::Poisson,
+        },
+        level: a.noise,
+        seed: a.seed,
+    };
+    let data = synth::generate(
+        model.as_ref(),
+        &params,
+        &angles,
+        a.wavelength,
+        quantity,
+        &noise,
+    )?;
+    let csv_opts = CsvOptions {
+        sigma: a.write_sigma,
+        wavelength: a.write_wavelength,
+        signed_theta_r: a.signed_theta_r,
+    };
+    let mut csv_bytes = Vec::new();
+    data.write_csv(&mut csv_bytes, &csv_opts)
+        .context("formatting the CSV")?;
+
+    let truth_file = a
+        .truth
+        .clone()
+        .or_else(|| a.out.as_deref().map(synth::truth_path));
+    let truth = Truth {
+        model: model.name().to_string(),
+        params: Truth::params_by_name(model.as_ref(), &params),
+        wavelength: a.wavelength,
+        quantity,
+        mode: format!("{:?}", a.mode).to_ascii_lowercase(),
+        tol: a.tol,
+        patch,
+        layout: match &layout {
+            Layout::Angles(_) => a.layout.clone(),
+            l => l.describe(),
+        },
+        subsample: a.samples,
+        noise,
+        n: data.len(),
+        signed_theta_r: a.signed_theta_r,
+        data: a
+            .out
+            .as_deref()
+            .and_then(Path::file_name)
+            .map_or_else(|| "-".into(), |f| f.to_string_lossy().into_owned()),
+        goniofit_version: env!("CARGO_PKG_VERSION").to_string(),
+    };
+
+    match &a.out {
+        Some(path) => write_atomic(path, &csv_bytes)?,
+        None => {
+            let mut out = std::io::stdout().lock();
+            out.write_all(&csv_bytes)
+                .and_then(|_| out.flush())
+                .context("writing to standard output")?;
+        }
+    }
+    if let Some(tp) = &truth_file {
+        let mut json = serde_json::to_vec_pretty(&truth).context("formatting the truth JSON")?;
+        json.push(b'\n');
+        write_atomic(tp, &json)?;
+    }
+    if let Some(path) = &a.out {
+        eprintln!(
+            "goniofit synth: wrote {} samples to {}{}",
+            data.len(),
+            path.display(),
+            truth_file
+                .as_ref()
+                .map(|t| format!(" (truth: {})", t.display()))
+                .unwrap_or_default()
+        );
+    }
+    Ok(0)
+}
+
+/// Write `bytes` to `path` through a temporary file in the same folder, so a reader never
+/// sees a half-written file and a failure leaves any old file intact.
+fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let io = |source| -> anyhow::Error {
+        goniofit::Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+        .into()
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io)?;
+    tmp.write_all(bytes).map_err(io)?;
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
+}
