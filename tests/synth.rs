@@ -391,7 +391,8 @@ fn truth_file_round_trips_and_names_every_parameter() {
     assert_eq!(again, truth);
 
     // The truth regenerates the file through the library.
-    let layout = Layout::parse("inplane").unwrap();
+    let layout = Layout::parse(&truth.layout).unwrap();
+    assert_eq!(layout, Layout::inplane());
     let data = synth::generate(
         m.as_ref(),
         &truth.param_vector(m.as_ref()).unwrap(),
@@ -474,7 +475,10 @@ fn bad_input_exits_2_with_a_clear_message() {
         &["--model", "kbs", "--params", "sigma=-1,T=2,scale=1"],
         "parameter sigma",
     );
-    fails(&[&KBS[..], &["--grid", "5x18"]].concat(), "--grid '5x18'");
+    fails(
+        &[&KBS[..], &["--grid", "5x18"]].concat(),
+        "grid '5x18': expected three counts",
+    );
     fails(
         &[&KBS[..], &["--grid", "0x18x36"]].concat(),
         "every count must be at least 1",
@@ -493,7 +497,7 @@ fn bad_input_exits_2_with_a_clear_message() {
     );
     fails(
         &[&KBS[..], &["--layout", "nope.csv"]].concat(),
-        "layout 'nope.csv' is neither",
+        "layout 'nope.csv': neither inplane, hemisphere, grazing nor an existing CSV file",
     );
     fails(
         &[&KBS[..], &["--noise", "-0.1"]].concat(),

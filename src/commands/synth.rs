@@ -127,29 +127,12 @@ fn parse_list(text: &str, what: &str) -> anyhow::Result<Vec<f64>> {
         .collect()
 }
 
-/// `5x18x36` as three counts.
-fn parse_grid(text: &str) -> anyhow::Result<(usize, usize, usize)> {
-    let bad = || {
-        usage(format!(
-            "--grid '{text}': expected three counts NIxNRxNP, e.g. 5x18x36"
-        ))
-    };
-    let v: Vec<usize> = text
-        .split(['x', 'X'])
-        .map(|s| s.trim().parse::<usize>().map_err(|_| bad()))
-        .collect::<anyhow::Result<_>>()?;
-    match v[..] {
-        [a, b, c] => Ok((a, b, c)),
-        _ => Err(bad()),
-    }
-}
-
 /// The layout from `--layout` and its modifiers; inplane-only and grid-only flags are
 /// refused for other layouts rather than ignored.
 fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
     let mut layout = Layout::parse(&a.layout)?;
     if let Some(g) = &a.grid {
-        let (ni, nr, np) = parse_grid(g)?;
+        let (ni, nr, np) = synth::parse_grid(g)?;
         layout = layout.with_grid(ni, nr, np).map_err(|_| {
             usage(format!(
                 "--grid applies to the hemisphere and grazing layouts, not '{}'",
