@@ -41,7 +41,7 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::{wrap_phi, Geometry, Quantity, Sample};
-use crate::model::Model;
+use crate::model::{EvalMode, Model, ModelOptions};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -762,7 +762,8 @@ pub struct Truth {
     pub tol: f64,
     /// Patch half-sizes (X, Y), when the coherent term was included.
     pub patch: Option<(f64, f64)>,
-    /// [`Layout::describe`] of the layout, or the layout file's path.
+    /// [`Layout::describe`] of the layout, or the layout file's path as given: either way
+    /// [`Layout::parse`] reads it back.
     pub layout: String,
     /// `--samples`, when the layout was subsampled.
     pub subsample: Option<usize>,
@@ -807,6 +808,40 @@ impl Truth {
             .collect()
     }
 
+    /// The model options the data were made with (`mode`, `tol`, `patch`).
+    pub fn model_options(&self) -> Result<ModelOptions> {
+        Ok(ModelOptions {
+            mode: parse_eval_mode(&self.mode)?,
+            tol: self.tol,
+            patch: self.patch,
+        })
+    }
+
+    /// The directions of the data: `layout` parsed again ([`Layout::parse`]; a layout file
+    /// is looked up relative to the current folder), then subsampled as recorded.
+    pub fn angles(&self) -> Result<Vec<AnglesDeg>> {
+        let angles = Layout::parse(&self.layout)?.angles();
+        match self.subsample {
+            Some(n) => subsample(&angles, n),
+            None => Ok(angles),
+        }
+    }
+
+    /// Make the data set again from this truth: the same model, parameters, directions and
+    /// noise, so the same values bit for bit.
+    pub fn regenerate(&self) -> Result<SynthData> {
+        let model = crate::model::by_name(&self.model, &self.model_options()?)?;
+        let params = self.param_vector(model.as_ref())?;
+        generate(
+            model.as_ref(),
+            &params,
+            &self.angles()?,
+            self.wavelength,
+            self.quantity,
+            &self.noise,
+        )
+    }
+
     /// Read a truth file.
     pub fn read(path: &Path) -> Result<Truth> {
         let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
@@ -817,6 +852,29 @@ impl Truth {
             path: path.to_path_buf(),
             message: format!("not a goniofit truth file: {e}"),
         })
+    }
+}
+
+/// Lower-case name of a KBS evaluation mode, as in the truth file and `--mode`.
+pub fn eval_mode_name(mode: EvalMode) -> &'static str {
+    match mode {
+        EvalMode::Auto => "auto",
+        EvalMode::Series => "series",
+        EvalMode::Smooth => "smooth",
+        EvalMode::Rough => "rough",
+    }
+}
+
+/// Inverse of [`eval_mode_name`] (case-insensitive).
+pub fn parse_eval_mode(text: &str) -> Result<EvalMode> {
+    match text.to_ascii_lowercase().as_str() {
+        "auto" => Ok(EvalMode::Auto),
+        "series" => Ok(EvalMode::Series),
+        "smooth" => Ok(EvalMode::Smooth),
+        "rough" => Ok(EvalMode::Rough),
+        _ => Err(Error::Usage(format!(
+            "unknown evaluation mode '{text}' (known: auto, series, smooth, rough)"
+        ))),
     }
 }
 

@@ -405,6 +405,40 @@ fn truth_file_round_trips_and_names_every_parameter() {
     let mut bytes = Vec::new();
     data.write_csv(&mut bytes, &Default::default()).unwrap();
     assert_eq!(bytes, std::fs::read(&out).unwrap());
+    let again = truth.regenerate().unwrap();
+    assert_eq!(bits(&again.value), bits(&data.value));
+    assert_eq!(truth.model_options().unwrap(), ModelOptions::default());
+
+    // A subsampled grid with options regenerates too.
+    let out2 = synth(
+        dir.path(),
+        "sub.csv",
+        &[
+            "--grid",
+            "3x7x11",
+            "--samples",
+            "50",
+            "--mode",
+            "series",
+            "--patch",
+            "40,30",
+            "--quantity",
+            "brdf",
+            "--noise",
+            "0.1",
+            "--seed",
+            "4",
+        ],
+    );
+    let t2 = Truth::read(&synth::truth_path(&out2)).unwrap();
+    assert_eq!(t2.layout, "hemisphere 3x7x11");
+    assert_eq!(t2.subsample, Some(50));
+    assert_eq!(t2.mode, "series");
+    assert_eq!(t2.patch, Some((40.0, 30.0)));
+    let d2 = t2.regenerate().unwrap();
+    let mut bytes = Vec::new();
+    d2.write_csv(&mut bytes, &Default::default()).unwrap();
+    assert_eq!(bytes, std::fs::read(&out2).unwrap());
 
     // --truth puts it elsewhere; a truth missing a parameter is refused by name.
     let other = dir.path().join("t.json");

@@ -233,7 +233,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         params: Truth::params_by_name(model.as_ref(), &params),
         wavelength: a.wavelength,
         quantity,
-        mode: format!("{:?}", a.mode).to_ascii_lowercase(),
+        mode: synth::eval_mode_name(mode).to_string(),
         tol: a.tol,
         patch,
         layout: match &layout {
