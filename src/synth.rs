@@ -389,7 +389,8 @@ impl Layout {
                 let mut out = Vec::with_capacity(theta_i_deg.len() * (2 * kmax as usize + 1));
                 for &ti in theta_i_deg {
                     for k in -kmax..=kmax {
-                        let tr = k.unsigned_abs() as f64 * step_deg;
+                        // min: k·step may round one ulp past max (e.g. 900 × 0.1 > 90).
+                        let tr = (k.unsigned_abs() as f64 * step_deg).min(*theta_r_max_deg);
                         out.push(AnglesDeg {
                             theta_i: ti,
                             theta_r: tr,
@@ -1149,6 +1150,44 @@ mod tests {
         assert_eq!((a[0].theta_r, a[0].phi_r), (121.0 * 0.7, 180.0));
         assert_eq!((a[242].theta_r, a[242].phi_r), (121.0 * 0.7, 0.0));
         assert_eq!((a[121].theta_r, a[121].phi_r), (0.0, 0.0));
+        // 900 × 0.1 rounds above 90: kept at 90.
+        let a = Layout::parse("inplane theta_i=30 max=90 step=0.1")
+            .unwrap()
+            .angles();
+        assert_eq!(a.len(), 1801);
+        assert_eq!(a[1800].theta_r, 90.0);
+        assert!(a.iter().all(|x| x.sample().validate().is_ok()));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn every_generated_layout_is_valid_and_reads_back(
+            ni in 1usize..9, nr in 1usize..9, np in 1usize..9, grazing: bool,
+            step in 0.05f64..40.0, max in 0.0f64..=90.0,
+            ti in proptest::collection::vec(0.0f64..89.999, 1..4),
+        ) {
+            let grid = if grazing {
+                Layout::Grazing { n_theta_i: ni, n_theta_r: nr, n_phi_r: np }
+            } else {
+                Layout::Hemisphere { n_theta_i: ni, n_theta_r: nr, n_phi_r: np }
+            };
+            let inplane = Layout::InPlane { theta_i_deg: ti.clone(), step_deg: step, theta_r_max_deg: max };
+            for l in [grid, inplane] {
+                proptest::prop_assert!(l.validate().is_ok());
+                let a = l.angles();
+                proptest::prop_assert!(!a.is_empty());
+                for x in &a {
+                    proptest::prop_assert!(x.sample().validate().is_ok(), "{:?}", x);
+                }
+                proptest::prop_assert_eq!(Layout::parse(&l.describe()).unwrap(), l.clone());
+            }
+            proptest::prop_assert_eq!(Layout::Hemisphere { n_theta_i: ni, n_theta_r: nr, n_phi_r: np }.angles().len(), ni * nr * np);
+            let k = (max / step + 1e-9).floor() as usize;
+            proptest::prop_assert_eq!(
+                Layout::InPlane { theta_i_deg: ti.clone(), step_deg: step, theta_r_max_deg: max }.angles().len(),
+                ti.len() * (2 * k + 1)
+            );
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, after_help = AFTER_HELP)]
 pub struct SynthArgs {
     /// Model name: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular.
     #[arg(long)]
@@ -67,7 +67,7 @@ pub struct SynthArgs {
     #[arg(long, value_enum, default_value_t = ModeArg::Auto)]
     pub mode: ModeArg,
     /// KBS relative tolerance.
-    #[arg(long, default_value_t = 1e-10)]
+    #[arg(long, default_value = "1e-10")]
     pub tol: f64,
     /// Patch half-sizes X,Y (unit of λ): include the coherent term with A = 4XY.
     #[arg(long, value_name = "X,Y")]
@@ -82,6 +82,27 @@ pub struct SynthArgs {
     #[arg(long)]
     pub truth: Option<PathBuf>,
 }
+
+const AFTER_HELP: &str = "\
+Layouts (angles in degrees; the CSV stores exactly these numbers):
+  inplane     θr = k·step, |θr| ≤ max, at each θi; θr < 0 is written as |θr| at φr = 180
+              (or as signed θr at φr = 0 with --signed-theta-r)
+  hemisphere  θi: NI cell midpoints of [0, 90); θr: NR midpoints of (0, 90);
+              φr: NP points -180 + 360·l/NP in [-180, 180)
+  grazing     as hemisphere, θi evenly from 70 to 89 inclusive
+  FILE.csv    header with theta_i,theta_r,phi_r (any order, extra columns ignored)
+  --layout also takes sizes inline: 'hemisphere 10x30x60', 'inplane theta_i=30,60 max=80 step=0.5'.
+
+Noise (z ~ N(0,1) per sample, M = largest |L| of the data set; sigma_L is the std. dev.):
+  relative  L·(1 + ε·z)          sigma_L = ε·|L|
+  absolute  L + ε·M·z            sigma_L = ε·M   (ε is a fraction of the peak)
+  poisson   L + ε·√(|L|·M)·z     sigma_L = ε·√(|L|·M)
+  Values are not clipped at 0. The same seed gives the same file.
+
+Examples:
+  goniofit synth --model kbs --params sigma=0.3,T=2,scale=1 --noise 0.01 --seed 1 --out data.csv
+  goniofit synth --model lambert --params scale=1 --layout inplane --signed-theta-r --noise 0.02 \\
+      --noise-kind absolute --write-sigma --out scan.csv";
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum NoiseKindArg {
