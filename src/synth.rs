@@ -38,6 +38,22 @@
 //! real data go negative too. `level = 0` gives the exact values (and σ_L = 0).
 //! The generator is `rand`'s `StdRng` seeded with `seed`, drawing one z per sample in layout
 //! order: the same seed, layout and goniofit build give the same bits on every run.
+//!
+//! # Example
+//! ```
+//! use goniofit::geometry::Quantity;
+//! use goniofit::model::{by_name, parse_params, ModelOptions};
+//! use goniofit::synth::{generate, Layout, Noise, NoiseKind};
+//!
+//! let model = by_name("kbs", &ModelOptions::default())?;
+//! let params = parse_params(model.as_ref(), "sigma=0.3,T=2,scale=1")?;
+//! let layout = Layout::parse("hemisphere 5x18x36")?;
+//! let noise = Noise { kind: NoiseKind::Relative, level: 0.01, seed: 1 };
+//! let data = generate(model.as_ref(), &params, &layout.angles(), 1.0, Quantity::Radiance, &noise)?;
+//! assert_eq!(data.len(), 3240);
+//! assert!((data.value[0] / data.exact[0] - 1.0).abs() < 0.1);
+//! # Ok::<(), goniofit::Error>(())
+//! ```
 
 use crate::error::{Error, Result};
 use crate::geometry::{wrap_phi, Geometry, Quantity, Sample};
@@ -58,6 +74,16 @@ pub struct AnglesDeg {
 }
 
 impl AnglesDeg {
+    /// A sample's angles in degrees. `from_sample(s).sample()` may differ from `s` in the
+    /// last bit; the data set is then defined by the degrees.
+    pub fn from_sample(s: &Sample) -> Self {
+        AnglesDeg {
+            theta_i: s.theta_i.to_degrees(),
+            theta_r: s.theta_r.to_degrees(),
+            phi_r: s.phi_r.to_degrees(),
+        }
+    }
+
     /// The sample the models evaluate: [`Sample::from_degrees`] of these numbers.
     pub fn sample(&self) -> Sample {
         Sample::from_degrees(self.theta_i, self.theta_r, self.phi_r)
