@@ -17,7 +17,7 @@
 //! # Layouts ([`Layout`])
 //! | layout | θi (degrees) | θr (degrees) | φr (degrees) | default size |
 //! |---|---|---|---|---|
-//! | `inplane` | the given list (default 15, 30, 45, 60, 75) | signed, −max … max in `step` (default −85 … 85 step 1) | 0, or 180 for θr < 0 | 5 × 171 = 855 |
+//! | `inplane` | the given list (default 15, 30, 45, 60, 75) | signed, k·`step` for \|k·step\| ≤ max (default −85 … 85 step 1) | 0, or 180 for θr < 0 | 5 × 171 = 855 |
 //! | `hemisphere` | `n_theta_i` cell midpoints of [0, 90) | `n_theta_r` cell midpoints of (0, 90) | `n_phi_r` points −180 + 360 l/n in [−180, 180) | 5 × 18 × 36 = 3240 |
 //! | `grazing` | `n_theta_i` evenly from 70 to 89 inclusive (89 alone if n = 1) | as hemisphere | as hemisphere | 5 × 18 × 36 = 3240 |
 //! | a CSV file | columns `theta_i,theta_r,phi_r` in degrees (a signed θr < 0 means \|θr\| at φr + 180) | | | its rows |
@@ -38,10 +38,26 @@
 //! real data go negative too. `level = 0` gives the exact values (and σ_L = 0).
 //! The generator is `rand`'s `StdRng` seeded with `seed`, drawing one z per sample in layout
 //! order: the same seed, layout and goniofit build give the same bits on every run.
+//!
+//! # Example
+//! ```
+//! use goniofit::geometry::Quantity;
+//! use goniofit::model::{by_name, parse_params, ModelOptions};
+//! use goniofit::synth::{generate, Layout, Noise, NoiseKind};
+//!
+//! let model = by_name("kbs", &ModelOptions::default())?;
+//! let params = parse_params(model.as_ref(), "sigma=0.3,T=2,scale=1")?;
+//! let layout = Layout::parse("hemisphere 5x18x36")?;
+//! let noise = Noise { kind: NoiseKind::Relative, level: 0.01, seed: 1 };
+//! let data = generate(model.as_ref(), &params, &layout.angles(), 1.0, Quantity::Radiance, &noise)?;
+//! assert_eq!(data.len(), 3240);
+//! assert!((data.value[0] / data.exact[0] - 1.0).abs() < 0.1);
+//! # Ok::<(), goniofit::Error>(())
+//! ```
 
 use crate::error::{Error, Result};
 use crate::geometry::{wrap_phi, Geometry, Quantity, Sample};
-use crate::model::Model;
+use crate::model::{EvalMode, Model, ModelOptions};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -58,6 +74,16 @@ pub struct AnglesDeg {
 }
 
 impl AnglesDeg {
+    /// A sample's angles in degrees. `from_sample(s).sample()` may differ from `s` in the
+    /// last bit; the data set is then defined by the degrees.
+    pub fn from_sample(s: &Sample) -> Self {
+        AnglesDeg {
+            theta_i: s.theta_i.to_degrees(),
+            theta_r: s.theta_r.to_degrees(),
+            phi_r: s.phi_r.to_degrees(),
+        }
+    }
+
     /// The sample the models evaluate: [`Sample::from_degrees`] of these numbers.
     pub fn sample(&self) -> Sample {
         Sample::from_degrees(self.theta_i, self.theta_r, self.phi_r)
@@ -75,8 +101,9 @@ pub const DEFAULT_GRID: (usize, usize, usize) = (5, 18, 36);
 /// Where the synthetic instrument looks. See the module documentation for the exact angles.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Layout {
-    /// Scans in the plane of incidence: for each θi, signed θr from −`theta_r_max_deg` to
-    /// +`theta_r_max_deg` in steps of `step_deg` (θr < 0 stored as |θr| at φr = 180°).
+    /// Scans in the plane of incidence: for each θi, signed θr = k·`step_deg` for every
+    /// integer k with |k·step| ≤ `theta_r_max_deg`, ascending (θr < 0 stored as |θr| at
+    /// φr = 180°).
     InPlane {
         theta_i_deg: Vec<f64>,
         step_deg: f64,
@@ -128,23 +155,81 @@ impl Layout {
         }
     }
 
-    /// `inplane`, `hemisphere` or `grazing` (case-insensitive, default sizes), or else the
-    /// path of a CSV file of angles ([`Layout::read_csv`]).
+    /// A layout by name, with optional sizes in the form [`Layout::describe`] writes, or else
+    /// the path of a CSV file of angles ([`Layout::read_csv`]). Names are case-insensitive
+    /// and win over a file of the same name (write `./hemisphere` for the file):
+    ///
+    /// - `hemisphere`, `hemisphere 5x18x36`, `grazing`, `grazing 10x9x12` (θi × θr × φr counts);
+    /// - `inplane`, `inplane theta_i=15,45 theta_r=-80..80 step=0.5` (any subset of the keys;
+    ///   `max=80` is the same as `theta_r=-80..80`).
+    ///
+    /// So `Layout::parse(&layout.describe())` gives back `layout` for every generated layout.
     pub fn parse(text: &str) -> Result<Layout> {
-        match text.trim().to_ascii_lowercase().as_str() {
-            "inplane" | "in-plane" => Ok(Layout::inplane()),
-            "hemisphere" => Ok(Layout::hemisphere()),
-            "grazing" => Ok(Layout::grazing()),
+        let mut words = text.split_whitespace();
+        let first = words.next().unwrap_or("").to_ascii_lowercase();
+        let rest: Vec<&str> = words.collect();
+        let bad = |m: String| Err(Error::Usage(format!("layout '{}': {m}", text.trim())));
+        let mut layout = match first.as_str() {
+            "inplane" | "in-plane" => Layout::inplane(),
+            "hemisphere" => Layout::hemisphere(),
+            "grazing" => Layout::grazing(),
             _ => {
                 let path = Path::new(text);
-                if !path.exists() {
-                    return Err(Error::Usage(format!(
-                        "layout '{text}' is neither inplane, hemisphere, grazing nor an existing CSV file"
-                    )));
+                if !path.is_file() {
+                    return bad(
+                        "neither inplane, hemisphere, grazing nor an existing CSV file".into(),
+                    );
                 }
-                Layout::read_csv(path)
+                return Layout::read_csv(path);
             }
+        };
+        match &mut layout {
+            Layout::InPlane {
+                theta_i_deg,
+                step_deg,
+                theta_r_max_deg,
+            } => {
+                for w in rest {
+                    let Some((k, v)) = w.split_once('=') else {
+                        return bad(format!(
+                            "'{w}': expected key=value (theta_i, theta_r, step, max)"
+                        ));
+                    };
+                    let num = |x: &str| {
+                        x.trim().parse::<f64>().map_err(|_| {
+                            Error::Usage(format!("layout '{}': '{x}' is not a number", text.trim()))
+                        })
+                    };
+                    match k.to_ascii_lowercase().as_str() {
+                        "theta_i" => {
+                            *theta_i_deg = v.split(',').map(num).collect::<Result<Vec<f64>>>()?
+                        }
+                        "step" => *step_deg = num(v)?,
+                        "max" | "theta_r_max" => *theta_r_max_deg = num(v)?,
+                        "theta_r" => match v.rsplit_once("..") {
+                            Some((_, m)) => *theta_r_max_deg = num(m)?,
+                            None => return bad(format!("'{w}': expected theta_r=-MAX..MAX")),
+                        },
+                        _ => {
+                            return bad(format!(
+                                "unknown key '{k}' (inplane takes theta_i, theta_r, step, max)"
+                            ))
+                        }
+                    }
+                }
+            }
+            Layout::Hemisphere { .. } | Layout::Grazing { .. } => match rest[..] {
+                [] => {}
+                [g] => {
+                    let (a, b, c) = parse_grid(g)?;
+                    layout = layout.with_grid(a, b, c)?;
+                }
+                _ => return bad("expected at most one grid NIxNRxNP, e.g. 5x18x36".into()),
+            },
+            Layout::Angles(_) => unreachable!("named layouts only"),
         }
+        layout.validate()?;
+        Ok(layout)
     }
 
     /// Replace the grid sizes of a `Hemisphere` or `Grazing` layout; an error for the others.
@@ -270,7 +355,7 @@ impl Layout {
                         "in-plane theta_r max {theta_r_max_deg}° is outside [0°, 90°]"
                     ));
                 }
-                if 2.0 * theta_r_max_deg / step_deg > 1e7 {
+                if theta_r_max_deg / step_deg > 5e6 {
                     return usage(format!(
                         "in-plane step {step_deg}° is too small (over 10 million samples per scan)"
                     ));
@@ -324,24 +409,18 @@ impl Layout {
                 step_deg,
                 theta_r_max_deg,
             } => {
-                // Count the steps once so that the θr values are −max + k·step exactly.
-                let n = (2.0 * theta_r_max_deg / step_deg + 1e-9).floor() as usize + 1;
-                let mut out = Vec::with_capacity(theta_i_deg.len() * n);
+                // θr = k·step, |k| ≤ K: symmetric about 0, 0 included, and each negative
+                // value is exactly the negation of a positive one.
+                let kmax = (theta_r_max_deg / step_deg + 1e-9).floor() as i64;
+                let mut out = Vec::with_capacity(theta_i_deg.len() * (2 * kmax as usize + 1));
                 for &ti in theta_i_deg {
-                    for k in 0..n {
-                        let tr = -theta_r_max_deg + k as f64 * step_deg;
-                        out.push(if tr < 0.0 {
-                            AnglesDeg {
-                                theta_i: ti,
-                                theta_r: -tr,
-                                phi_r: 180.0,
-                            }
-                        } else {
-                            AnglesDeg {
-                                theta_i: ti,
-                                theta_r: tr,
-                                phi_r: 0.0,
-                            }
+                    for k in -kmax..=kmax {
+                        // min: k·step may round one ulp past max (e.g. 900 × 0.1 > 90).
+                        let tr = (k.unsigned_abs() as f64 * step_deg).min(*theta_r_max_deg);
+                        out.push(AnglesDeg {
+                            theta_i: ti,
+                            theta_r: tr,
+                            phi_r: if k < 0 { 180.0 } else { 0.0 },
                         });
                     }
                 }
@@ -402,6 +481,23 @@ impl Layout {
             } => format!("grazing {n_theta_i}x{n_theta_r}x{n_phi_r}"),
             Layout::Angles(a) => format!("angles ({} directions)", a.len()),
         }
+    }
+}
+
+/// `5x18x36` as (θi, θr, φr) counts.
+pub fn parse_grid(text: &str) -> Result<(usize, usize, usize)> {
+    let bad = || {
+        Error::Usage(format!(
+            "grid '{text}': expected three counts NIxNRxNP, e.g. 5x18x36"
+        ))
+    };
+    let v: Vec<usize> = text
+        .split(['x', 'X'])
+        .map(|s| s.trim().parse::<usize>().map_err(|_| bad()))
+        .collect::<Result<_>>()?;
+    match v[..] {
+        [a, b, c] => Ok((a, b, c)),
+        _ => Err(bad()),
     }
 }
 
@@ -693,7 +789,8 @@ pub struct Truth {
     pub tol: f64,
     /// Patch half-sizes (X, Y), when the coherent term was included.
     pub patch: Option<(f64, f64)>,
-    /// [`Layout::describe`] of the layout, or the layout file's path.
+    /// [`Layout::describe`] of the layout, or the layout file's path as given: either way
+    /// [`Layout::parse`] reads it back.
     pub layout: String,
     /// `--samples`, when the layout was subsampled.
     pub subsample: Option<usize>,
@@ -738,6 +835,40 @@ impl Truth {
             .collect()
     }
 
+    /// The model options the data were made with (`mode`, `tol`, `patch`).
+    pub fn model_options(&self) -> Result<ModelOptions> {
+        Ok(ModelOptions {
+            mode: parse_eval_mode(&self.mode)?,
+            tol: self.tol,
+            patch: self.patch,
+        })
+    }
+
+    /// The directions of the data: `layout` parsed again ([`Layout::parse`]; a layout file
+    /// is looked up relative to the current folder), then subsampled as recorded.
+    pub fn angles(&self) -> Result<Vec<AnglesDeg>> {
+        let angles = Layout::parse(&self.layout)?.angles();
+        match self.subsample {
+            Some(n) => subsample(&angles, n),
+            None => Ok(angles),
+        }
+    }
+
+    /// Make the data set again from this truth: the same model, parameters, directions and
+    /// noise, so the same values bit for bit.
+    pub fn regenerate(&self) -> Result<SynthData> {
+        let model = crate::model::by_name(&self.model, &self.model_options()?)?;
+        let params = self.param_vector(model.as_ref())?;
+        generate(
+            model.as_ref(),
+            &params,
+            &self.angles()?,
+            self.wavelength,
+            self.quantity,
+            &self.noise,
+        )
+    }
+
     /// Read a truth file.
     pub fn read(path: &Path) -> Result<Truth> {
         let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
@@ -748,6 +879,29 @@ impl Truth {
             path: path.to_path_buf(),
             message: format!("not a goniofit truth file: {e}"),
         })
+    }
+}
+
+/// Lower-case name of a KBS evaluation mode, as in the truth file and `--mode`.
+pub fn eval_mode_name(mode: EvalMode) -> &'static str {
+    match mode {
+        EvalMode::Auto => "auto",
+        EvalMode::Series => "series",
+        EvalMode::Smooth => "smooth",
+        EvalMode::Rough => "rough",
+    }
+}
+
+/// Inverse of [`eval_mode_name`] (case-insensitive).
+pub fn parse_eval_mode(text: &str) -> Result<EvalMode> {
+    match text.to_ascii_lowercase().as_str() {
+        "auto" => Ok(EvalMode::Auto),
+        "series" => Ok(EvalMode::Series),
+        "smooth" => Ok(EvalMode::Smooth),
+        "rough" => Ok(EvalMode::Rough),
+        _ => Err(Error::Usage(format!(
+            "unknown evaluation mode '{text}' (known: auto, series, smooth, rough)"
+        ))),
     }
 }
 
@@ -966,6 +1120,100 @@ mod tests {
             &Noise::none()
         )
         .is_err());
+    }
+
+    #[test]
+    fn parse_reads_back_describe() {
+        let layouts = [
+            Layout::inplane(),
+            Layout::hemisphere(),
+            Layout::grazing(),
+            Layout::Hemisphere {
+                n_theta_i: 2,
+                n_theta_r: 3,
+                n_phi_r: 4,
+            },
+            Layout::Grazing {
+                n_theta_i: 1,
+                n_theta_r: 30,
+                n_phi_r: 7,
+            },
+            Layout::InPlane {
+                theta_i_deg: vec![0.0, 12.5, 89.0],
+                step_deg: 0.1,
+                theta_r_max_deg: 90.0,
+            },
+        ];
+        for l in layouts {
+            assert_eq!(Layout::parse(&l.describe()).unwrap(), l, "{}", l.describe());
+        }
+        assert_eq!(
+            Layout::parse("InPlane max=10 step=5")
+                .unwrap()
+                .angles()
+                .len(),
+            5 * 5
+        );
+        for bad in [
+            "hemisphere 5x18",
+            "hemisphere 5x18x36 7",
+            "inplane theta_r=80",
+            "inplane foo=1",
+            "inplane step=x",
+            "inplane step=0",
+            "grazing 0x1x1",
+        ] {
+            assert!(Layout::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn inplane_non_dividing_step_is_symmetric() {
+        let a = Layout::parse("inplane theta_i=30 max=85 step=0.7")
+            .unwrap()
+            .angles();
+        assert_eq!(a.len(), 2 * 121 + 1);
+        assert_eq!((a[0].theta_r, a[0].phi_r), (121.0 * 0.7, 180.0));
+        assert_eq!((a[242].theta_r, a[242].phi_r), (121.0 * 0.7, 0.0));
+        assert_eq!((a[121].theta_r, a[121].phi_r), (0.0, 0.0));
+        // 900 × 0.1 rounds above 90: kept at 90.
+        let a = Layout::parse("inplane theta_i=30 max=90 step=0.1")
+            .unwrap()
+            .angles();
+        assert_eq!(a.len(), 1801);
+        assert_eq!(a[1800].theta_r, 90.0);
+        assert!(a.iter().all(|x| x.sample().validate().is_ok()));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn every_generated_layout_is_valid_and_reads_back(
+            ni in 1usize..9, nr in 1usize..9, np in 1usize..9, grazing: bool,
+            step in 0.05f64..40.0, max in 0.0f64..=90.0,
+            ti in proptest::collection::vec(0.0f64..89.999, 1..4),
+        ) {
+            let grid = if grazing {
+                Layout::Grazing { n_theta_i: ni, n_theta_r: nr, n_phi_r: np }
+            } else {
+                Layout::Hemisphere { n_theta_i: ni, n_theta_r: nr, n_phi_r: np }
+            };
+            let inplane = Layout::InPlane { theta_i_deg: ti.clone(), step_deg: step, theta_r_max_deg: max };
+            for l in [grid, inplane] {
+                proptest::prop_assert!(l.validate().is_ok());
+                let a = l.angles();
+                proptest::prop_assert!(!a.is_empty());
+                for x in &a {
+                    proptest::prop_assert!(x.sample().validate().is_ok(), "{:?}", x);
+                }
+                proptest::prop_assert_eq!(Layout::parse(&l.describe()).unwrap(), l.clone());
+            }
+            proptest::prop_assert_eq!(Layout::Hemisphere { n_theta_i: ni, n_theta_r: nr, n_phi_r: np }.angles().len(), ni * nr * np);
+            let k = (max / step + 1e-9).floor() as usize;
+            proptest::prop_assert_eq!(
+                Layout::InPlane { theta_i_deg: ti.clone(), step_deg: step, theta_r_max_deg: max }.angles().len(),
+                ti.len() * (2 * k + 1)
+            );
+        }
     }
 
     #[test]

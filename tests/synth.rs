@@ -391,7 +391,8 @@ fn truth_file_round_trips_and_names_every_parameter() {
     assert_eq!(again, truth);
 
     // The truth regenerates the file through the library.
-    let layout = Layout::parse("inplane").unwrap();
+    let layout = Layout::parse(&truth.layout).unwrap();
+    assert_eq!(layout, Layout::inplane());
     let data = synth::generate(
         m.as_ref(),
         &truth.param_vector(m.as_ref()).unwrap(),
@@ -404,6 +405,40 @@ fn truth_file_round_trips_and_names_every_parameter() {
     let mut bytes = Vec::new();
     data.write_csv(&mut bytes, &Default::default()).unwrap();
     assert_eq!(bytes, std::fs::read(&out).unwrap());
+    let again = truth.regenerate().unwrap();
+    assert_eq!(bits(&again.value), bits(&data.value));
+    assert_eq!(truth.model_options().unwrap(), ModelOptions::default());
+
+    // A subsampled grid with options regenerates too.
+    let out2 = synth(
+        dir.path(),
+        "sub.csv",
+        &[
+            "--grid",
+            "3x7x11",
+            "--samples",
+            "50",
+            "--mode",
+            "series",
+            "--patch",
+            "40,30",
+            "--quantity",
+            "brdf",
+            "--noise",
+            "0.1",
+            "--seed",
+            "4",
+        ],
+    );
+    let t2 = Truth::read(&synth::truth_path(&out2)).unwrap();
+    assert_eq!(t2.layout, "hemisphere 3x7x11");
+    assert_eq!(t2.subsample, Some(50));
+    assert_eq!(t2.mode, "series");
+    assert_eq!(t2.patch, Some((40.0, 30.0)));
+    let d2 = t2.regenerate().unwrap();
+    let mut bytes = Vec::new();
+    d2.write_csv(&mut bytes, &Default::default()).unwrap();
+    assert_eq!(bytes, std::fs::read(&out2).unwrap());
 
     // --truth puts it elsewhere; a truth missing a parameter is refused by name.
     let other = dir.path().join("t.json");
@@ -474,7 +509,10 @@ fn bad_input_exits_2_with_a_clear_message() {
         &["--model", "kbs", "--params", "sigma=-1,T=2,scale=1"],
         "parameter sigma",
     );
-    fails(&[&KBS[..], &["--grid", "5x18"]].concat(), "--grid '5x18'");
+    fails(
+        &[&KBS[..], &["--grid", "5x18"]].concat(),
+        "grid '5x18': expected three counts",
+    );
     fails(
         &[&KBS[..], &["--grid", "0x18x36"]].concat(),
         "every count must be at least 1",
@@ -493,7 +531,7 @@ fn bad_input_exits_2_with_a_clear_message() {
     );
     fails(
         &[&KBS[..], &["--layout", "nope.csv"]].concat(),
-        "layout 'nope.csv' is neither",
+        "layout 'nope.csv': neither inplane, hemisphere, grazing nor an existing CSV file",
     );
     fails(
         &[&KBS[..], &["--noise", "-0.1"]].concat(),

@@ -14,7 +14,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, after_help = AFTER_HELP)]
 pub struct SynthArgs {
     /// Model name: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular.
     #[arg(long)]
@@ -67,7 +67,7 @@ pub struct SynthArgs {
     #[arg(long, value_enum, default_value_t = ModeArg::Auto)]
     pub mode: ModeArg,
     /// KBS relative tolerance.
-    #[arg(long, default_value_t = 1e-10)]
+    #[arg(long, default_value = "1e-10")]
     pub tol: f64,
     /// Patch half-sizes X,Y (unit of λ): include the coherent term with A = 4XY.
     #[arg(long, value_name = "X,Y")]
@@ -82,6 +82,27 @@ pub struct SynthArgs {
     #[arg(long)]
     pub truth: Option<PathBuf>,
 }
+
+const AFTER_HELP: &str = "\
+Layouts (angles in degrees; the CSV stores exactly these numbers):
+  inplane     θr = k·step, |θr| ≤ max, at each θi; θr < 0 is written as |θr| at φr = 180
+              (or as signed θr at φr = 0 with --signed-theta-r)
+  hemisphere  θi: NI cell midpoints of [0, 90); θr: NR midpoints of (0, 90);
+              φr: NP points -180 + 360·l/NP in [-180, 180)
+  grazing     as hemisphere, θi evenly from 70 to 89 inclusive
+  FILE.csv    header with theta_i,theta_r,phi_r (any order, extra columns ignored)
+  --layout also takes sizes inline: 'hemisphere 10x30x60', 'inplane theta_i=30,60 max=80 step=0.5'.
+
+Noise (z ~ N(0,1) per sample, M = largest |L| of the data set; sigma_L is the std. dev.):
+  relative  L·(1 + ε·z)          sigma_L = ε·|L|
+  absolute  L + ε·M·z            sigma_L = ε·M   (ε is a fraction of the peak)
+  poisson   L + ε·√(|L|·M)·z     sigma_L = ε·√(|L|·M)
+  Values are not clipped at 0. The same seed gives the same file.
+
+Examples:
+  goniofit synth --model kbs --params sigma=0.3,T=2,scale=1 --noise 0.01 --seed 1 --out data.csv
+  goniofit synth --model lambert --params scale=1 --layout inplane --signed-theta-r --noise 0.02 \\
+      --noise-kind absolute --write-sigma --out scan.csv";
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum NoiseKindArg {
@@ -127,29 +148,12 @@ fn parse_list(text: &str, what: &str) -> anyhow::Result<Vec<f64>> {
         .collect()
 }
 
-/// `5x18x36` as three counts.
-fn parse_grid(text: &str) -> anyhow::Result<(usize, usize, usize)> {
-    let bad = || {
-        usage(format!(
-            "--grid '{text}': expected three counts NIxNRxNP, e.g. 5x18x36"
-        ))
-    };
-    let v: Vec<usize> = text
-        .split(['x', 'X'])
-        .map(|s| s.trim().parse::<usize>().map_err(|_| bad()))
-        .collect::<anyhow::Result<_>>()?;
-    match v[..] {
-        [a, b, c] => Ok((a, b, c)),
-        _ => Err(bad()),
-    }
-}
-
 /// The layout from `--layout` and its modifiers; inplane-only and grid-only flags are
 /// refused for other layouts rather than ignored.
 fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
     let mut layout = Layout::parse(&a.layout)?;
     if let Some(g) = &a.grid {
-        let (ni, nr, np) = parse_grid(g)?;
+        let (ni, nr, np) = synth::parse_grid(g)?;
         layout = layout.with_grid(ni, nr, np).map_err(|_| {
             usage(format!(
                 "--grid applies to the hemisphere and grazing layouts, not '{}'",
@@ -250,7 +254,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         params: Truth::params_by_name(model.as_ref(), &params),
         wavelength: a.wavelength,
         quantity,
-        mode: format!("{:?}", a.mode).to_ascii_lowercase(),
+        mode: synth::eval_mode_name(mode).to_string(),
         tol: a.tol,
         patch,
         layout: match &layout {
