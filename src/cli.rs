@@ -17,6 +17,9 @@ pub struct Cli {
 pub enum Command {
     /// Evaluate a model at the angles of a CSV file; prints the rows with `L_model` appended.
     Eval(commands::eval::EvalArgs),
+    /// Fit a model to a measurement file (CSV or ASTM E1392) and report parameters with
+    /// uncertainties, what the data determines, and residual statistics.
+    Fit(Box<commands::fit::FitArgs>),
     /// Generate synthetic measurements from known parameters, with seeded noise; writes the
     /// CSV and the truth beside it as JSON.
     Synth(Box<commands::synth::SynthArgs>),

@@ -5,9 +5,11 @@
 //! writers), [`report`] and [`plot`].
 
 pub mod error;
+pub mod fit;
 pub mod geometry;
 pub mod io;
 pub mod model;
+pub mod report;
 pub mod synth;
 
 pub use error::{Error, Result};

@@ -141,7 +141,11 @@ pub struct FitArgs {
 /// Parse `X,Y`.
 pub fn parse_patch(text: &str) -> anyhow::Result<(f64, f64)> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    let bad = || Error::Usage(format!("--patch '{text}': expected X,Y (two positive numbers)"));
+    let bad = || {
+        Error::Usage(format!(
+            "--patch '{text}': expected X,Y (two positive numbers)"
+        ))
+    };
     if parts.len() != 2 {
         return Err(bad().into());
     }
@@ -156,10 +160,15 @@ pub fn parse_patch(text: &str) -> anyhow::Result<(f64, f64)> {
 /// Parse `role=name,...`.
 pub fn parse_columns(text: Option<&str>) -> anyhow::Result<Vec<(String, String)>> {
     let mut out = Vec::new();
-    for part in text.unwrap_or("").split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let (k, v) = part.split_once('=').ok_or_else(|| {
-            Error::Usage(format!("--columns '{part}': expected role=name"))
-        })?;
+    for part in text
+        .unwrap_or("")
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+    {
+        let (k, v) = part
+            .split_once('=')
+            .ok_or_else(|| Error::Usage(format!("--columns '{part}': expected role=name")))?;
         out.push((k.trim().to_string(), v.trim().to_string()));
     }
     Ok(out)
@@ -186,13 +195,10 @@ pub fn fit_input(
         (None, None) => vec![1.0],
     };
     let geo = Geometry::new(&ds.samples, &lambda, quantity)?;
-    let y = ds
-        .value
-        .clone()
-        .ok_or_else(|| Error::File {
-            path: ds.path.clone(),
-            message: "no measured value column (L)".into(),
-        })?;
+    let y = ds.value.clone().ok_or_else(|| Error::File {
+        path: ds.path.clone(),
+        message: "no measured value column (L)".into(),
+    })?;
     let weight = ds.weight.clone().unwrap_or_else(|| vec![1.0; n]);
     let (channel, channel_names) = match &ds.channel {
         Some(labels) => {
@@ -221,7 +227,11 @@ pub fn fit_input(
 }
 
 /// The fit configuration from the arguments, for a given model name.
-pub fn fit_config(args: &FitArgs, model: &str, weights_are_uncertainties: bool) -> anyhow::Result<FitConfig> {
+pub fn fit_config(
+    args: &FitArgs,
+    model: &str,
+    weights_are_uncertainties: bool,
+) -> anyhow::Result<FitConfig> {
     let lm = LmConfig {
         max_iters: args.max_iter,
         timeout: args.timeout.map(std::time::Duration::from_secs_f64),
@@ -312,7 +322,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
                     r.bic,
                     r.aic,
                     r.cost,
-                    if r.model == result.model { "  <- chosen" } else { "" }
+                    if r.model == result.model {
+                        "  <- chosen"
+                    } else {
+                        ""
+                    }
                 )?;
             }
         }
@@ -325,7 +339,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
 }
 
 /// For a joint fit: how much narrower σ and T are than from the middle channel alone.
-fn joint_narrowing(args: &FitArgs, ds: &Dataset, joint: &FitResult) -> anyhow::Result<Option<String>> {
+fn joint_narrowing(
+    args: &FitArgs,
+    ds: &Dataset,
+    joint: &FitResult,
+) -> anyhow::Result<Option<String>> {
     let Some(labels) = &ds.channel else {
         return Ok(None);
     };
@@ -338,10 +356,22 @@ fn joint_narrowing(args: &FitArgs, ds: &Dataset, joint: &FitResult) -> anyhow::R
         rows: idx.iter().map(|&i| ds.rows[i].clone()).collect(),
         lines: idx.iter().map(|&i| ds.lines[i]).collect(),
         samples: idx.iter().map(|&i| ds.samples[i]).collect(),
-        value: ds.value.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
-        weight: ds.weight.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
-        sigma_l: ds.sigma_l.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
-        wavelength: ds.wavelength.as_ref().map(|v| idx.iter().map(|&i| v[i]).collect()),
+        value: ds
+            .value
+            .as_ref()
+            .map(|v| idx.iter().map(|&i| v[i]).collect()),
+        weight: ds
+            .weight
+            .as_ref()
+            .map(|v| idx.iter().map(|&i| v[i]).collect()),
+        sigma_l: ds
+            .sigma_l
+            .as_ref()
+            .map(|v| idx.iter().map(|&i| v[i]).collect()),
+        wavelength: ds
+            .wavelength
+            .as_ref()
+            .map(|v| idx.iter().map(|&i| v[i]).collect()),
         channel: None,
     };
     let input = fit_input(&single, args.quantity.into(), args.wavelength, true)?;
@@ -367,7 +397,13 @@ fn joint_narrowing(args: &FitArgs, ds: &Dataset, joint: &FitResult) -> anyhow::R
             _ => {}
         }
     }
-    Ok((!parts.is_empty()).then(|| format!("joint fit over {} channels: {}", names.len(), parts.join("; "))))
+    Ok((!parts.is_empty()).then(|| {
+        format!(
+            "joint fit over {} channels: {}",
+            names.len(),
+            parts.join("; ")
+        )
+    }))
 }
 
 /// Write the input rows with L_fit, residual, std_residual and mode (atomically).

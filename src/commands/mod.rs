@@ -1,6 +1,7 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
 
 pub mod eval;
+pub mod fit;
 pub mod synth;
 
 use crate::cli::{Cli, Command};
@@ -9,6 +10,7 @@ use crate::cli::{Cli, Command};
 pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Eval(a) => eval::run(a),
+        Command::Fit(a) => fit::run(*a),
         Command::Synth(a) => synth::run(*a),
     }
 }

@@ -12,10 +12,10 @@
 
 use super::init;
 use super::lm::{self, LmConfig, Termination};
+pub use super::problem::FitInput;
 use super::problem::{FitProblem, ParamLayout, ResidualKind};
 use super::stats;
 use crate::error::{Error, Result};
-use crate::geometry::Geometry;
 use crate::model::{self, Mode, Model, ModelOptions};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
@@ -60,18 +60,6 @@ impl Default for FitConfig {
             reduce: true,
         }
     }
-}
-
-/// The data of a fit.
-#[derive(Debug, Clone)]
-pub struct FitInput {
-    pub geo: Geometry,
-    pub y: Vec<f64>,
-    pub weight: Vec<f64>,
-    /// Channel index per sample (all 0 for a single channel).
-    pub channel: Vec<usize>,
-    /// Channel names; one entry (possibly empty) for a single channel.
-    pub channel_names: Vec<String>,
 }
 
 /// One fitted parameter.
@@ -225,19 +213,10 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     }
     let max_y = input.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let floor = config.floor.unwrap_or(1e-6 * max_y);
-    let problem = FitProblem::new(
-        model,
-        layout.clone(),
-        &input.geo,
-        &input.channel,
-        &input.y,
-        &input.weight,
-        config.residual,
-        floor,
-    )?;
+    let problem = FitProblem::new(model, layout.clone(), input, config.residual, floor)?;
     let mut given = fixed.clone();
     assign(&layout, &config.init, &mut given)?;
-    let (p0, _) = init::initial_values(&problem, &input.geo, &input.channel, &given);
+    let (p0, _) = init::initial_values(&problem, input, &given);
     let init_seconds = t0.elapsed().as_secs_f64();
 
     let first = run_lm(&problem, &p0, &config.lm);
@@ -260,16 +239,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
                 let mut reduced = problem_used.layout.clone();
                 reduced.params[sig].fixed = Some(report.values[sig]);
                 let p_start = report.values.clone();
-                let problem_red = FitProblem::new(
-                    model,
-                    reduced,
-                    &input.geo,
-                    &input.channel,
-                    &input.y,
-                    &input.weight,
-                    config.residual,
-                    floor,
-                )?;
+                let problem_red = FitProblem::new(model, reduced, input, config.residual, floor)?;
                 let red = run_lm(&problem_red, &p_start, &config.lm);
                 let (it, ev, je, sec) = (
                     report.lm.iterations,
@@ -344,7 +314,9 @@ fn kbs_verdict(layout: &ParamLayout, unc: &stats::Uncertainty, _p: &[f64]) -> Op
     // The least determined direction in (ln σ, ln T, ln s): the largest-variance
     // eigenvector of that covariance block, or the null direction when singular.
     let idx: Vec<usize> = [Some(i_s), Some(i_t), i_a].into_iter().flatten().collect();
-    let block = DMatrix::from_fn(idx.len(), idx.len(), |a, b| unc.covariance[(idx[a], idx[b])]);
+    let block = DMatrix::from_fn(idx.len(), idx.len(), |a, b| {
+        unc.covariance[(idx[a], idx[b])]
+    });
     let dir: DVector<f64> = if rank_deficient {
         let v = unc.undetermined.first()?;
         DVector::from_iterator(idx.len(), idx.iter().map(|&i| v[i]))
@@ -398,11 +370,7 @@ fn assemble(
     let (fitted, _) = problem.model_values(p, false);
     let residuals = problem.raw_residuals(&fitted);
     let sw = problem.sqrt_weight();
-    let chi2: f64 = residuals
-        .iter()
-        .zip(sw)
-        .map(|(r, s)| (r * s).powi(2))
-        .sum();
+    let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
     let cost = 0.5 * chi2;
     let s_hat = (chi2 / dof).sqrt();
     let std_residuals: Vec<f64> = residuals
@@ -434,7 +402,11 @@ fn assemble(
         .zip(sw)
         .map(|((f, v), s)| (s * (f - v)).powi(2))
         .sum();
-    let r2 = if ss_tot > 0.0 { 1.0 - ss_res / ss_tot } else { f64::NAN };
+    let r2 = if ss_tot > 0.0 {
+        1.0 - ss_res / ss_tot
+    } else {
+        f64::NAN
+    };
     let nf = n as f64;
     let chi2_safe = chi2.max(f64::MIN_POSITIVE);
     let aic = nf * (chi2_safe / nf).ln() + 2.0 * n_free as f64;
@@ -447,11 +419,9 @@ fn assemble(
         (v.is_finite() && v >= 0.0).then(|| v.sqrt())
     };
     let in_null = |k: usize| -> bool {
-        free.iter().position(|&f| f == k).is_some_and(|i| {
-            unc.undetermined
-                .iter()
-                .any(|v| v[i].abs() > 0.1 * v.norm())
-        })
+        free.iter()
+            .position(|&f| f == k)
+            .is_some_and(|i| unc.undetermined.iter().any(|v| v[i].abs() > 0.1 * v.norm()))
     };
     let sigma_held = verdict != Verdict::Full && verdict != Verdict::Partial;
     let mut params = Vec::new();
@@ -492,7 +462,10 @@ fn assemble(
                 var += c1 * c2 * unc.covariance[(i1, i2)];
             }
         }
-        (value, (var.is_finite() && var >= 0.0).then(|| var.sqrt() * value))
+        (
+            value,
+            (var.is_finite() && var >= 0.0).then(|| var.sqrt() * value),
+        )
     };
     let first = |name: &str| layout.find(name).first().copied();
     if let (Some(ks), Some(kt)) = (first("sigma"), first("T")) {
@@ -568,7 +541,10 @@ fn assemble(
             run.lm.termination.describe()
         ));
     }
-    let corr_names = free.iter().map(|&k| layout.params[k].name.clone()).collect();
+    let corr_names = free
+        .iter()
+        .map(|&k| layout.params[k].name.clone())
+        .collect();
     FitResult {
         model: model.name().to_string(),
         params,

@@ -4,8 +4,7 @@
 //! point (variable projection). The grid runs on an evenly spaced subsample of at most
 //! [`GRID_SAMPLES`] samples, so its cost does not grow with the dataset.
 
-use super::problem::{FitProblem, ParamLayout, ResidualKind};
-use crate::geometry::Geometry;
+use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
 use nalgebra::{DMatrix, DVector};
 
 /// Largest number of samples the coarse grid is evaluated on.
@@ -45,8 +44,7 @@ pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::Pa
 /// grid's best cost.
 pub fn initial_values(
     problem: &FitProblem,
-    geo: &Geometry,
-    channel: &[usize],
+    input: &FitInput,
     given: &[Option<f64>],
 ) -> (Vec<f64>, f64) {
     let layout = &problem.layout;
@@ -55,25 +53,15 @@ pub fn initial_values(
     // Evenly spaced subsample.
     let stride = n.div_ceil(GRID_SAMPLES).max(1);
     let idx: Vec<usize> = (0..n).step_by(stride).collect();
-    let sub_geo = geo.subset(&idx);
-    let sub_channel: Vec<usize> = idx.iter().map(|&i| channel[i]).collect();
-    let sub_y: Vec<f64> = idx.iter().map(|&i| problem.y()[i]).collect();
-    let sub_w: Vec<f64> = idx
-        .iter()
-        .map(|&i| problem.sqrt_weight()[i].powi(2))
-        .collect();
     let sub = FitProblem::new(
         problem.model,
         layout.clone(),
-        &sub_geo,
-        &sub_channel,
-        &sub_y,
-        &sub_w,
+        &input.subset(&idx),
         problem.kind(),
         problem.floor,
     )
     .expect("subsample is consistent");
-    let lambda = median(&geo.wavelength);
+    let lambda = median(&input.geo.wavelength);
 
     // The nonlinear parameters to search over and their candidate values.
     let nonlinear: Vec<usize> = (0..layout.len())
@@ -110,7 +98,7 @@ pub fn initial_values(
 }
 
 /// Solve the linear parameters `linear` of `p` by least squares (with the other parameters
-/// held), clamping them to stay positive; returns the resulting cost, or None when the
+/// held); returns the resulting cost, or None when the
 /// model gives non-finite values.
 pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Option<f64> {
     if !linear.is_empty() {
@@ -146,14 +134,8 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
         }
         let svd = a.svd(true, true);
         let coef = svd.solve(&b, 1e-12 * svd.singular_values.max()).ok()?;
-        let largest = coef.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let floor = if largest > 0.0 { 1e-6 * largest } else { 1e-12 };
         for (c, &k) in linear.iter().enumerate() {
-            p[k] = if coef[c].is_finite() && coef[c] > floor {
-                coef[c]
-            } else {
-                floor
-            };
+            p[k] = coef[c];
         }
     }
     let r = problem.weighted_residuals(p);

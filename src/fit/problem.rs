@@ -36,6 +36,13 @@ pub enum ResidualKind {
     Log,
 }
 
+/// Whether a parameter is fitted as its logarithm: the positive nonlinear ones (σ, T, w).
+/// Linear amplitudes (scales, lobe strength) stay linear so that a component the data does
+/// not show converges to ≈ 0 (and is reported so) instead of drifting towards ln 0.
+pub fn fitted_in_log(spec: &crate::model::ParamSpec) -> bool {
+    spec.positive && !super::init::LINEAR.contains(&spec.name)
+}
+
 /// One parameter of the (possibly joint) fit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitParam {
@@ -45,7 +52,7 @@ pub struct FitParam {
     pub spec: usize,
     /// Channel index for per-channel copies, None when shared.
     pub channel: Option<usize>,
-    /// Fitted in log space.
+    /// Fitted in log space (see [`fitted_in_log`]).
     pub positive: bool,
     /// Held at this value, not fitted.
     pub fixed: Option<f64>,
@@ -76,7 +83,7 @@ impl ParamLayout {
                         name: format!("{}[{name}]", spec.name),
                         spec: j,
                         channel: Some(c),
-                        positive: spec.positive,
+                        positive: fitted_in_log(spec),
                         fixed: None,
                     });
                 }
@@ -88,7 +95,7 @@ impl ParamLayout {
                     name: spec.name.to_string(),
                     spec: j,
                     channel: None,
-                    positive: spec.positive,
+                    positive: fitted_in_log(spec),
                     fixed: None,
                 });
             }
@@ -173,6 +180,33 @@ impl ParamLayout {
     }
 }
 
+/// The data of a fit.
+#[derive(Debug, Clone)]
+pub struct FitInput {
+    pub geo: Geometry,
+    /// Measured values.
+    pub y: Vec<f64>,
+    /// Weights wᵢ > 0.
+    pub weight: Vec<f64>,
+    /// Channel index per sample into `channel_names` (all 0 for a single channel).
+    pub channel: Vec<usize>,
+    /// Channel names; one entry (possibly empty) for a single channel.
+    pub channel_names: Vec<String>,
+}
+
+impl FitInput {
+    /// The samples at the given indices.
+    pub fn subset(&self, idx: &[usize]) -> FitInput {
+        FitInput {
+            geo: self.geo.subset(idx),
+            y: idx.iter().map(|&i| self.y[i]).collect(),
+            weight: idx.iter().map(|&i| self.weight[i]).collect(),
+            channel: idx.iter().map(|&i| self.channel[i]).collect(),
+            channel_names: self.channel_names.clone(),
+        }
+    }
+}
+
 /// A contiguous block of samples of one channel, with its prepared geometry.
 #[derive(Debug, Clone)]
 struct Block {
@@ -196,19 +230,21 @@ pub struct FitProblem<'a> {
 }
 
 impl<'a> FitProblem<'a> {
-    /// Build the problem. `channel[i]` is sample i's channel index into `layout.channel_names`
-    /// (all 0 for a plain fit). `weight` are the wᵢ > 0. `floor` is used by relative and log
-    /// residuals.
+    /// Build the problem. `floor` is used by relative and log residuals.
     pub fn new(
         model: &'a dyn Model,
         layout: ParamLayout,
-        geo: &Geometry,
-        channel: &[usize],
-        y: &[f64],
-        weight: &[f64],
+        input: &FitInput,
         kind: ResidualKind,
         floor: f64,
     ) -> Result<Self> {
+        let FitInput {
+            geo,
+            y,
+            weight,
+            channel,
+            ..
+        } = input;
         let n = geo.len();
         if y.len() != n || weight.len() != n || channel.len() != n {
             return Err(Error::Numerical("inconsistent fit data lengths".into()));
@@ -257,7 +293,11 @@ impl<'a> FitProblem<'a> {
                 let mp = self.layout.model_params(p, b.channel);
                 let m = b.geo.len();
                 let mut out = vec![0.0; m];
-                let mut jac = if want_jac { vec![0.0; m * n_spec] } else { Vec::new() };
+                let mut jac = if want_jac {
+                    vec![0.0; m * n_spec]
+                } else {
+                    Vec::new()
+                };
                 self.model.eval(
                     &b.geo,
                     &mp,

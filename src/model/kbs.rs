@@ -54,9 +54,10 @@ const PARAMS: [ParamSpec; 3] = [SIGMA, CORR_LEN, super::lambert::SCALE];
 pub(crate) struct KbsPoint {
     /// Radiance (incoherent + coherent).
     pub value: f64,
-    /// ∂L/∂σ, ∂L/∂T (∂L/∂s = value / s).
+    /// ∂L/∂σ, ∂L/∂T, ∂L/∂s.
     pub d_sigma: f64,
     pub d_corr: f64,
+    pub d_scale: f64,
     pub mode: Mode,
 }
 
@@ -101,23 +102,28 @@ impl Kbs {
             Some((x, y)) => 4.0 * x * y / (lambda * lambda),
             None => 1.0,
         };
-        let ln_l =
-            s.ln() + (PI * t * t / area).ln() + 2.0 * geo.h[i].ln() + 2.0 * k_sigma.ln() + q.ln_q;
-        let inc = ln_l.exp();
+        let ln_unit = (PI * t * t / area).ln() + 2.0 * geo.h[i].ln() + 2.0 * k_sigma.ln() + q.ln_q;
+        // s enters linearly (it may be ≤ 0 inside a fit's linear solve).
+        let unit = ln_unit.exp();
+        let inc = s * unit;
         let mut value = inc;
+        let mut d_scale = unit;
         let mut d_sigma = inc * (2.0 + 2.0 * g * q.d_g) / sigma;
         let d_corr = inc * (2.0 + 2.0 * a * q.d_a) / corr;
         if let Some((x, y)) = self.opts.patch {
             let k = 2.0 * PI / lambda;
             let rho0 = sinc(k * geo.vx[i] * x) * sinc(k * geo.vy[i] * y);
-            let coh = s * geo.cos_i[i].powi(2) * (-g).exp() * rho0 * rho0;
+            let coh_unit = geo.cos_i[i].powi(2) * (-g).exp() * rho0 * rho0;
+            let coh = s * coh_unit;
             value += coh;
+            d_scale += coh_unit;
             d_sigma -= 2.0 * g / sigma * coh;
         }
         KbsPoint {
             value,
             d_sigma,
             d_corr,
+            d_scale,
             mode: q.mode,
         }
     }
@@ -163,7 +169,7 @@ impl Model for Kbs {
                     out[i] = pt.value;
                     j_sigma[i] = pt.d_sigma;
                     j_corr[i] = pt.d_corr;
-                    j_s[i] = pt.value / s;
+                    j_s[i] = pt.d_scale;
                 }
             }
         }

@@ -26,13 +26,26 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let _ = writeln!(s, "    command         = {}", info.command);
     let _ = writeln!(s, "    model           = {}", r.model);
     let _ = writeln!(s, "[[Fit statistics]]");
-    let _ = writeln!(s, "    termination     = {} ({})", format!("{:?}", r.termination).to_lowercase(), r.termination.describe());
+    let _ = writeln!(
+        s,
+        "    termination     = {} ({})",
+        format!("{:?}", r.termination).to_lowercase(),
+        r.termination.describe()
+    );
     let _ = writeln!(s, "    converged       = {}", r.converged());
     let _ = writeln!(s, "    samples         = {}", r.n);
     let _ = writeln!(s, "    free parameters = {}", r.n_free);
     let _ = writeln!(s, "    iterations      = {}", r.iterations);
-    let _ = writeln!(s, "    evaluations     = {} (+{} Jacobians)", r.evaluations, r.jacobian_evaluations);
-    let _ = writeln!(s, "    run time        = {:.4} s (starting values {:.4} s)", r.seconds, r.init_seconds);
+    let _ = writeln!(
+        s,
+        "    evaluations     = {} (+{} Jacobians)",
+        r.evaluations, r.jacobian_evaluations
+    );
+    let _ = writeln!(
+        s,
+        "    run time        = {:.4} s (starting values {:.4} s)",
+        r.seconds, r.init_seconds
+    );
     let _ = writeln!(s, "    cost ½Σwr²      = {:.7e}", r.cost);
     let _ = writeln!(s, "    chi-square      = {:.7e}", r.chi2);
     let _ = writeln!(s, "    reduced chi-sq  = {:.7e}", r.reduced_chi2);
@@ -47,7 +60,13 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let modes: Vec<String> = r.modes.iter().map(|(k, v)| format!("{k}: {v}")).collect();
     let _ = writeln!(s, "    evaluation modes= {}", modes.join(", "));
     let _ = writeln!(s, "[[Variables]]");
-    let width = r.params.iter().map(|p| p.name.len()).max().unwrap_or(5).max(5);
+    let width = r
+        .params
+        .iter()
+        .map(|p| p.name.len())
+        .max()
+        .unwrap_or(5)
+        .max(5);
     for p in &r.params {
         let tag = if p.fixed {
             "(fixed)".to_string()
@@ -56,14 +75,31 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         } else {
             "(not determined by the data)".to_string()
         };
-        let _ = writeln!(s, "    {:<width$} = {} {}", p.name, value_se(p.value, p.stderr), tag);
+        let _ = writeln!(
+            s,
+            "    {:<width$} = {} {}",
+            p.name,
+            value_se(p.value, p.stderr),
+            tag
+        );
     }
     if !r.derived.is_empty() {
         let _ = writeln!(s, "[[Derived]]");
         let width = r.derived.iter().map(|d| d.name.len()).max().unwrap_or(5);
         for d in &r.derived {
-            let tag = if d.determined { "" } else { "(not determined by the data)" };
-            let _ = writeln!(s, "    {:<width$} = {} {} # {}", d.name, value_se(d.value, d.stderr), tag, d.doc);
+            let tag = if d.determined {
+                ""
+            } else {
+                "(not determined by the data)"
+            };
+            let _ = writeln!(
+                s,
+                "    {:<width$} = {} {} # {}",
+                d.name,
+                value_se(d.value, d.stderr),
+                tag,
+                d.doc
+            );
         }
     }
     let _ = writeln!(s, "[[Identifiability]]");
@@ -77,7 +113,11 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
             Verdict::Partial => "some parameter combinations are not determined",
         }
     );
-    let sv: Vec<String> = r.singular_values.iter().map(|v| format!("{v:.3e}")).collect();
+    let sv: Vec<String> = r
+        .singular_values
+        .iter()
+        .map(|v| format!("{v:.3e}"))
+        .collect();
     let _ = writeln!(s, "    singular values = {}", sv.join(", "));
     let _ = writeln!(s, "    condition       = {:.3e}", r.condition);
     for note in &r.notes {
@@ -85,8 +125,17 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     }
     let k = r.corr_names.len();
     if k > 1 {
-        let _ = writeln!(s, "[[Correlations]] (free parameters, ln-space for positive ones)");
-        let w = r.corr_names.iter().map(|n| n.len()).max().unwrap_or(5).max(8);
+        let _ = writeln!(
+            s,
+            "[[Correlations]] (free parameters, ln-space for positive ones)"
+        );
+        let w = r
+            .corr_names
+            .iter()
+            .map(|n| n.len())
+            .max()
+            .unwrap_or(5)
+            .max(8);
         let _ = write!(s, "    {:<w$}", "");
         for name in &r.corr_names {
             let _ = write!(s, " {:>w$}", name);
