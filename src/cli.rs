@@ -17,6 +17,10 @@ pub struct Cli {
 pub enum Command {
     /// Evaluate a model at the angles of a CSV file; prints the rows with `L_model` appended.
     Eval(commands::eval::EvalArgs),
+    /// Render a picture from a model (a lit sphere).
+    Render(commands::render::RenderArgs),
+    /// Regenerate the paper's Figures 4–7 (PNG and SVG) into a folder.
+    Figures(commands::figures::FiguresArgs),
 }
 
 #[cfg(test)]

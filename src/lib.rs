@@ -7,5 +7,6 @@
 pub mod error;
 pub mod geometry;
 pub mod model;
+pub mod plot;
 
 pub use error::{Error, Result};

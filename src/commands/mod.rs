@@ -1,6 +1,8 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
 
 pub mod eval;
+pub mod figures;
+pub mod render;
 
 use crate::cli::{Cli, Command};
 
@@ -8,6 +10,8 @@ use crate::cli::{Cli, Command};
 pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Eval(a) => eval::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Figures(a) => figures::run(a),
     }
 }
 
