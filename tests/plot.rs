@@ -406,3 +406,40 @@ fn fit_plots_demo_output() {
     };
     write_fit_plots(std::path::Path::new(&dir), &input).unwrap();
 }
+
+#[test]
+fn fit_plots_cope_with_awkward_data() {
+    // Out-of-plane samples only, a BRDF, a flat model, a NaN residual and zero values.
+    let m = model("lambert");
+    let params = vec![0.2];
+    let samples: Vec<Sample> = [(30.0, 10.0, 40.0), (30.0, 50.0, 45.0), (60.0, 20.0, 100.0)]
+        .iter()
+        .map(|&(a, b, c)| Sample::from_degrees(a, b, c))
+        .collect();
+    let geo = Geometry::new(&samples, &[1.0], Quantity::Brdf).unwrap();
+    let mut fitted = vec![0.0; geo.len()];
+    m.eval(&geo, &params, &mut fitted, None);
+    let measured = vec![0.0, 0.21, 0.19];
+    let res = vec![f64::NAN, 0.5, -0.5];
+    let input = FitPlotInput {
+        title: "lambert: scale = 0.2".into(),
+        model: m.as_ref(),
+        params: &params,
+        geo: &geo,
+        measured: &measured,
+        fitted: &fitted,
+        std_residuals: &res,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let paths = write_fit_plots(&dir.path().join("new/sub"), &input).unwrap();
+    assert_eq!(paths.len(), 12);
+    // Nearest-to-plane: the 30° group shows its sample at φr = 40° (nearest), not 45°.
+    let chart = goniofit::plot::fit::fit_chart(&input, false).unwrap();
+    let measured_pts: Vec<usize> = chart
+        .series
+        .iter()
+        .filter(|s| s.label.is_none())
+        .map(|s| s.points.len())
+        .collect();
+    assert_eq!(measured_pts, vec![1, 1]);
+}

@@ -5,6 +5,7 @@ use super::{font, heat_color, DrawError};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use std::collections::HashMap;
 
 /// Values z on a rectangular grid: `z[j * xs.len() + i]` at `(xs[i], ys[j])`; `xs`, `ys`
 /// strictly increasing.
@@ -78,9 +79,22 @@ impl Grid {
         (1.0 - fy) * ((1.0 - fx) * z00 + fx * z10) + fy * ((1.0 - fx) * z01 + fx * z11)
     }
 
-    /// The iso-line z = `level` as segments (marching squares; saddles are split by the
-    /// cell's mean value). Cells with a non-finite corner are skipped.
-    pub fn contour(&self, level: f64) -> Vec<Segment> {
+    /// Where the iso-line z = `level` crosses grid edge `e` (linear interpolation between
+    /// the edge's two nodes, always taken in the same order so shared edges agree).
+    fn crossing(&self, e: Edge, level: f64) -> (f64, f64) {
+        let (i, j, vertical) = e;
+        let (i1, j1) = if vertical { (i, j + 1) } else { (i + 1, j) };
+        let (za, zb) = (self.at(i, j), self.at(i1, j1));
+        let t = (level - za) / (zb - za);
+        (
+            self.xs[i] + t * (self.xs[i1] - self.xs[i]),
+            self.ys[j] + t * (self.ys[j1] - self.ys[j]),
+        )
+    }
+
+    /// The iso-line z = `level` as pairs of crossed grid edges (marching squares; saddles
+    /// are split by the cell's mean value). Cells with a non-finite corner are skipped.
+    fn contour_edges(&self, level: f64) -> Vec<(Edge, Edge)> {
         let mut out = Vec::new();
         let (nx, ny) = (self.xs.len(), self.ys.len());
         if nx < 2 || ny < 2 {
@@ -88,36 +102,35 @@ impl Grid {
         }
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
-                // Corners counter-clockwise from bottom-left.
-                let p = [
-                    (self.xs[i], self.ys[j], self.at(i, j)),
-                    (self.xs[i + 1], self.ys[j], self.at(i + 1, j)),
-                    (self.xs[i + 1], self.ys[j + 1], self.at(i + 1, j + 1)),
-                    (self.xs[i], self.ys[j + 1], self.at(i, j + 1)),
+                // Corners counter-clockwise from bottom-left; edge k joins corners k, k+1.
+                let z = [
+                    self.at(i, j),
+                    self.at(i + 1, j),
+                    self.at(i + 1, j + 1),
+                    self.at(i, j + 1),
                 ];
-                if p.iter().any(|c| !c.2.is_finite()) {
+                if z.iter().any(|v| !v.is_finite()) {
                     continue;
                 }
-                let above = p.map(|c| c.2 > level);
-                // Crossing point on edge k (between corners k and k+1).
-                let cross = |k: usize| -> (f64, f64) {
-                    let (a, b) = (p[k], p[(k + 1) % 4]);
-                    let t = (level - a.2) / (b.2 - a.2);
-                    (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1))
-                };
-                let edges: Vec<usize> =
-                    (0..4).filter(|&k| above[k] != above[(k + 1) % 4]).collect();
-                match edges.len() {
-                    2 => out.push((cross(edges[0]), cross(edges[1]))),
+                let edge: [Edge; 4] = [
+                    (i, j, false),
+                    (i + 1, j, true),
+                    (i, j + 1, false),
+                    (i, j, true),
+                ];
+                let above = z.map(|v| v > level);
+                let cut: Vec<usize> = (0..4).filter(|&k| above[k] != above[(k + 1) % 4]).collect();
+                match cut.len() {
+                    2 => out.push((edge[cut[0]], edge[cut[1]])),
                     4 => {
                         // Saddle: join edges so the centre's side stays connected.
-                        let centre_above = p.iter().map(|c| c.2).sum::<f64>() / 4.0 > level;
+                        let centre_above = z.iter().sum::<f64>() / 4.0 > level;
                         if centre_above == above[0] {
-                            out.push((cross(0), cross(1)));
-                            out.push((cross(2), cross(3)));
+                            out.push((edge[0], edge[1]));
+                            out.push((edge[2], edge[3]));
                         } else {
-                            out.push((cross(3), cross(0)));
-                            out.push((cross(1), cross(2)));
+                            out.push((edge[3], edge[0]));
+                            out.push((edge[1], edge[2]));
                         }
                     }
                     _ => {}
@@ -126,7 +139,65 @@ impl Grid {
         }
         out
     }
+
+    /// The iso-line z = `level` as straight segments.
+    pub fn contour(&self, level: f64) -> Vec<Segment> {
+        self.contour_edges(level)
+            .into_iter()
+            .map(|(a, b)| (self.crossing(a, level), self.crossing(b, level)))
+            .collect()
+    }
+
+    /// The iso-line z = `level` as polylines: the segments joined end to end (closed loops
+    /// repeat their first point at the end).
+    pub fn contour_lines(&self, level: f64) -> Vec<Vec<(f64, f64)>> {
+        let segs = self.contour_edges(level);
+        let mut at_edge: HashMap<Edge, Vec<usize>> = HashMap::new();
+        for (k, (a, b)) in segs.iter().enumerate() {
+            at_edge.entry(*a).or_default().push(k);
+            at_edge.entry(*b).or_default().push(k);
+        }
+        let mut used = vec![false; segs.len()];
+        // Walk from edge `from` through unused segments, collecting the edges passed.
+        let walk = |start: usize, from: Edge, used: &mut [bool]| -> Vec<Edge> {
+            let mut path = Vec::new();
+            let mut edge = from;
+            let mut seg = start;
+            loop {
+                let (a, b) = segs[seg];
+                edge = if a == edge { b } else { a };
+                path.push(edge);
+                let next = at_edge[&edge].iter().copied().find(|&s| !used[s]);
+                match next {
+                    Some(s) => {
+                        used[s] = true;
+                        seg = s;
+                    }
+                    None => break,
+                }
+            }
+            path
+        };
+        let mut lines = Vec::new();
+        for k in 0..segs.len() {
+            if used[k] {
+                continue;
+            }
+            used[k] = true;
+            let (a, b) = segs[k];
+            let forward = walk(k, a, &mut used); // a → b → …
+            let mut backward = walk(k, b, &mut used); // b → a → …
+            backward.reverse();
+            let edges: Vec<Edge> = backward.into_iter().chain(forward).collect();
+            lines.push(edges.into_iter().map(|e| self.crossing(e, level)).collect());
+        }
+        lines
+    }
 }
+
+/// A grid edge: (i, j, vertical) is the edge from node (i, j) to (i, j + 1) when vertical,
+/// to (i + 1, j) otherwise.
+type Edge = (usize, usize, bool);
 
 /// Draw `grid` as a heatmap filling the chart's plotting area, colour `heat_color((z − lo) /
 /// (hi − lo))`, as one bitmap (one embedded image in SVG).
@@ -169,10 +240,10 @@ pub fn draw_contours<DB: DrawingBackend>(
     style: ShapeStyle,
 ) -> Result<(), DrawError<DB>> {
     for &level in levels {
-        let segs = grid.contour(level);
         chart.draw_series(
-            segs.into_iter()
-                .map(|(a, b)| PathElement::new(vec![a, b], style)),
+            grid.contour_lines(level)
+                .into_iter()
+                .map(|line| PathElement::new(line, style)),
         )?;
     }
     Ok(())
@@ -237,6 +308,32 @@ mod tests {
                 assert!((r - 0.5).abs() < 0.01, "r = {r}");
             }
         }
+    }
+
+    #[test]
+    fn contour_lines_join_into_one_closed_loop() {
+        let xs = linspace(-1.0, 1.0, 41);
+        let ys = linspace(-1.0, 1.0, 41);
+        let g = Grid::from_fn(xs, ys, |x, y| x * x + y * y);
+        let lines = g.contour_lines(0.25);
+        assert_eq!(lines.len(), 1);
+        let line = &lines[0];
+        assert_eq!(line.len(), g.contour(0.25).len() + 1);
+        let (a, b) = (line[0], line[line.len() - 1]);
+        assert!(
+            (a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12,
+            "closed"
+        );
+        // Two separate bumps give two loops; an open line touching the border stays open.
+        let g2 = Grid::from_fn(linspace(-2.0, 2.0, 81), linspace(-1.0, 1.0, 41), |x, y| {
+            (-(x - 1.0).powi(2) * 8.0 - y * y * 8.0).exp()
+                + (-(x + 1.0).powi(2) * 8.0 - y * y * 8.0).exp()
+        });
+        assert_eq!(g2.contour_lines(0.5).len(), 2);
+        let g3 = Grid::from_fn(linspace(0.0, 1.0, 11), linspace(0.0, 1.0, 11), |x, _| x);
+        let open = g3.contour_lines(0.55);
+        assert_eq!(open.len(), 1);
+        assert_eq!(open[0].len(), 11);
     }
 
     #[test]
