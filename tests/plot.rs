@@ -144,6 +144,20 @@ fn figure5_curves_peak_at_the_marks_and_narrow() {
         (curves[5].peak().0 + 45.0).abs() <= 0.5,
         "Lambertian at the light"
     );
+    // The drawn figure: six labelled curves peaking at the specular mark (Lambert: light).
+    let fig = goniofit::plot::figures::figure5().unwrap();
+    assert_eq!(fig.series.len(), 6);
+    for (k, s) in fig.series.iter().enumerate() {
+        assert!(s.label.is_some());
+        let peak = s
+            .points
+            .iter()
+            .copied()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap();
+        let want = if k < 5 { -22.5 } else { -45.0 };
+        assert!((peak.0 - want).abs() <= 0.75, "{:?}: {peak:?}", s.label);
+    }
 }
 
 #[test]
@@ -169,6 +183,28 @@ fn figure6_peaks_move_monotonically_from_the_mirror_to_the_normal() {
         (curves[0].peak().1 - 1.0).abs() < 1e-12,
         "normalised to the φr = 0 peak"
     );
+    // The same holds for the series the drawn figure plots.
+    let fig = goniofit::plot::figures::figure6().unwrap();
+    assert_eq!(fig.series.len(), 9);
+    let drawn: Vec<f64> = fig
+        .series
+        .iter()
+        .map(|s| {
+            s.points
+                .iter()
+                .copied()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap()
+                .0
+        })
+        .collect();
+    assert!(
+        (drawn[0] - 45.0).abs() < 1e-9 && drawn[8].abs() < 1e-9,
+        "{drawn:?}"
+    );
+    for w in drawn.windows(2) {
+        assert!(w[1] < w[0], "drawn peaks move toward 0: {drawn:?}");
+    }
 }
 
 #[test]

@@ -95,10 +95,16 @@ fn plot_error<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
     }
 }
 
-/// Write `pic` to `path` as PNG or SVG (by extension). The parent folder must exist.
+/// Write `pic` to `path` as PNG or SVG (by extension), creating the parent folder if needed.
 pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
     let format = Format::of(path)?;
     ensure_font()?;
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|source| Error::Io {
+            path: parent.to_path_buf(),
+            source,
+        })?;
+    }
     let size = pic.size();
     match format {
         Format::Png => {
