@@ -23,6 +23,10 @@ pub enum Command {
     /// Generate synthetic measurements from known parameters, with seeded noise; writes the
     /// CSV and the truth beside it as JSON.
     Synth(Box<commands::synth::SynthArgs>),
+    /// Render a picture from a model (a lit sphere).
+    Render(commands::render::RenderArgs),
+    /// Regenerate the paper's Figures 4–7 (PNG and SVG) into a folder.
+    Figures(commands::figures::FiguresArgs),
 }
 
 #[cfg(test)]

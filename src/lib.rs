@@ -11,5 +11,6 @@ pub mod io;
 pub mod model;
 pub mod report;
 pub mod synth;
+pub mod plot;
 
 pub use error::{Error, Result};

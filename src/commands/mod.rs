@@ -3,6 +3,8 @@
 pub mod eval;
 pub mod fit;
 pub mod synth;
+pub mod figures;
+pub mod render;
 
 use crate::cli::{Cli, Command};
 
@@ -12,6 +14,8 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Eval(a) => eval::run(a),
         Command::Fit(a) => fit::run(*a),
         Command::Synth(a) => synth::run(*a),
+        Command::Render(a) => render::run(a),
+        Command::Figures(a) => figures::run(a),
     }
 }
 
