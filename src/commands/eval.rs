@@ -69,7 +69,7 @@ pub struct EvalArgs {
     #[arg(long)]
     pub params: String,
     /// Wavelength for every sample (the unit of sigma and T); overrides the file's.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub wavelength: Option<f64>,
     /// Output quantity.
     #[arg(long, value_enum, default_value_t = QuantityArg::Radiance)]

@@ -222,10 +222,12 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
     if let Some(np) = header.get("NUM_POINTS") {
         match np.trim().parse::<usize>() {
             Ok(n) if n == data.len() => {}
-            Ok(n) => return Err(file_err(format!(
+            Ok(n) => {
+                return Err(file_err(format!(
                 "NUM_POINTS says {n} rows but the file has {} data rows (truncated or damaged?)",
                 data.len()
-            ))),
+            )))
+            }
             Err(_) => {
                 let line = text
                     .lines()

@@ -144,44 +144,13 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         message,
     };
 
-    let mut reader = ::csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .comment(Some(b'#'))
-        .trim(::csv::Trim::All)
-        .from_reader(text.as_bytes());
-
-    let mut header: Option<(usize, Vec<String>)> = None;
-    let mut records: Vec<(usize, Vec<String>)> = Vec::new();
-    let mut rec = ::csv::StringRecord::new();
-    loop {
-        let line_before = reader.position().line() as usize;
-        match reader.read_record(&mut rec) {
-            Ok(false) => break,
-            Ok(true) => {
-                let line = rec
-                    .position()
-                    .map_or(line_before, |p| p.line() as usize)
-                    .max(1);
-                if rec.iter().all(|f| f.is_empty()) {
-                    continue; // blank (or whitespace-only) line
-                }
-                let fields: Vec<String> = rec.iter().map(str::to_string).collect();
-                if header.is_none() {
-                    header = Some((line, fields));
-                } else {
-                    records.push((line, fields));
-                }
-            }
-            Err(e) => {
-                let line = e
-                    .position()
-                    .map_or(line_before, |p| p.line() as usize)
-                    .max(1);
-                return Err(input_err(line, "(row)", format!("malformed CSV: {e}")));
-            }
-        }
-    }
+    let mut all = split_records(text).map_err(|(line, m)| input_err(line, "(row)", m))?;
+    let header = if all.is_empty() {
+        None
+    } else {
+        Some(all.remove(0))
+    };
+    let records = all;
 
     let Some((header_line, headers)) = header else {
         return Err(file_err(
@@ -473,6 +442,117 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         }
     }
     Ok(ds)
+}
+
+/// One CSV record: the 1-based line it starts on, and its trimmed fields.
+pub type Record = (usize, Vec<String>);
+
+/// Split CSV text into records of trimmed fields, each with the 1-based line it starts on.
+/// Skips blank (or whitespace-only) lines and lines whose first non-blank character is `#`.
+/// Fields may be quoted (`"a, b"`, `""` for a quote, line breaks inside); line ends are
+/// `\n`, `\r\n` or `\r`. Errors: (line, message) for an unterminated quote or text after
+/// a closing quote.
+pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, String)> {
+    let b = text.as_bytes();
+    let n = b.len();
+    let mut i = 0;
+    let mut line = 1;
+    let mut out = Vec::new();
+    // Consume one line end at i (if any); returns whether one was consumed.
+    let eol = |i: &mut usize, line: &mut usize| -> bool {
+        if *i < n && b[*i] == b'\r' {
+            *i += 1;
+            if *i < n && b[*i] == b'\n' {
+                *i += 1;
+            }
+            *line += 1;
+            true
+        } else if *i < n && b[*i] == b'\n' {
+            *i += 1;
+            *line += 1;
+            true
+        } else {
+            false
+        }
+    };
+    while i < n {
+        // Start of a line: blank or comment?
+        let mut j = i;
+        while j < n && (b[j] == b' ' || b[j] == b'\t') {
+            j += 1;
+        }
+        if j >= n {
+            break;
+        }
+        if b[j] == b'\n' || b[j] == b'\r' || b[j] == b'#' {
+            i = j;
+            while i < n && b[i] != b'\n' && b[i] != b'\r' {
+                i += 1;
+            }
+            eol(&mut i, &mut line);
+            continue;
+        }
+        let start_line = line;
+        let mut fields = Vec::new();
+        loop {
+            while i < n && (b[i] == b' ' || b[i] == b'\t') {
+                i += 1;
+            }
+            if i < n && b[i] == b'"' {
+                let quote_line = line;
+                i += 1;
+                let mut f = String::new();
+                let mut seg = i;
+                loop {
+                    if i >= n {
+                        return Err((quote_line, "a quoted field is never closed".into()));
+                    }
+                    if b[i] == b'"' {
+                        f.push_str(&text[seg..i]);
+                        if i + 1 < n && b[i + 1] == b'"' {
+                            f.push('"');
+                            i += 2;
+                            seg = i;
+                            continue;
+                        }
+                        i += 1;
+                        break;
+                    }
+                    if b[i] == b'\n' || (b[i] == b'\r' && !(i + 1 < n && b[i + 1] == b'\n')) {
+                        line += 1;
+                    }
+                    i += 1;
+                }
+                while i < n && (b[i] == b' ' || b[i] == b'\t') {
+                    i += 1;
+                }
+                if i < n && !matches!(b[i], b',' | b'\n' | b'\r') {
+                    let rest: String = text[i..].chars().take(20).collect();
+                    return Err((
+                        line,
+                        format!("unexpected text '{rest}' after a closing quote"),
+                    ));
+                }
+                fields.push(f.trim().to_string());
+            } else {
+                let s0 = i;
+                while i < n && !matches!(b[i], b',' | b'\n' | b'\r') {
+                    i += 1;
+                }
+                fields.push(text[s0..i].trim().to_string());
+            }
+            if i < n && b[i] == b',' {
+                i += 1;
+                continue;
+            }
+            eol(&mut i, &mut line);
+            break;
+        }
+        if fields.iter().any(|f| !f.is_empty()) {
+            out.push((start_line, fields));
+        }
+    }
+    Ok(out)
 }
 
 /// Convert NIST-convention angles (absolute azimuths of outward directions; θi < 0 puts the
