@@ -438,3 +438,39 @@ fn eval_usage_errors_exit_2() {
         .code(2)
         .stderr(predicate::str::contains("--channel").and(predicate::str::contains("550nm")));
 }
+
+#[cfg(unix)]
+#[test]
+fn eval_into_a_closed_pipe_is_quiet() {
+    use std::io::Read;
+    use std::process::Stdio;
+    // ~2 MB of output, far more than a pipe buffer: the writer meets the closed pipe.
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("goniofit"))
+        .args(["eval", "--model", "lambert", "--params", "scale=1"])
+        .arg(data("nist-ptfe/PTFE.data.csv"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child
+        .stdout
+        .as_mut()
+        .unwrap()
+        .read_exact(&mut first)
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(&first[..6], b"lambda");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -800,3 +800,18 @@ fn csv_quoted_line_breaks_keep_line_numbers() {
     assert_eq!(line, 2);
     assert!(m.contains("after a closing quote"), "{m}");
 }
+
+#[cfg(unix)]
+#[test]
+fn write_atomic_gives_ordinary_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("out.csv");
+    write_atomic(&p, |w| w.write_all(b"x")).unwrap();
+    let mode = std::fs::metadata(&p).unwrap().permissions().mode();
+    // The same mode as a file created the ordinary way (0o666 less the umask).
+    let q = dir.path().join("plain.csv");
+    std::fs::write(&q, b"x").unwrap();
+    let plain = std::fs::metadata(&q).unwrap().permissions().mode();
+    assert_eq!(mode & 0o777, plain & 0o777);
+}

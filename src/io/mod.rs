@@ -170,11 +170,15 @@ pub fn write_atomic(
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let tmp = tempfile::Builder::new()
-        .prefix(".goniofit-")
-        .suffix(".tmp")
-        .tempfile_in(&dir)
-        .map_err(io_err)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".goniofit-").suffix(".tmp");
+    // An ordinary output file: 0o666 less the umask, not the temporary's private 0o600.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder.tempfile_in(&dir).map_err(io_err)?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file());
         f(&mut w).map_err(io_err)?;
@@ -189,10 +193,15 @@ pub fn write_atomic(
 /// are quoted where CSV needs it.
 pub fn write_csv(path: &Path, headers: &[String], rows: &[Vec<String>]) -> Result<()> {
     let write = |w: &mut dyn Write| -> std::io::Result<()> {
+        // Keep the underlying I/O error (its kind tells a closed pipe from a full disk).
+        let unwrap = |e: ::csv::Error| match e.into_kind() {
+            ::csv::ErrorKind::Io(io) => io,
+            other => std::io::Error::other(format!("{other:?}")),
+        };
         let mut cw = ::csv::WriterBuilder::new().flexible(true).from_writer(w);
-        cw.write_record(headers)?;
+        cw.write_record(headers).map_err(unwrap)?;
         for r in rows {
-            cw.write_record(r)?;
+            cw.write_record(r).map_err(unwrap)?;
         }
         cw.flush()?;
         Ok(())
