@@ -474,3 +474,29 @@ fn eval_into_a_closed_pipe_is_quiet() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn eval_output_fed_back_replaces_l_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first.csv");
+    let second = dir.path().join("second.csv");
+    goniofit()
+        .args(["eval", "--model", "lambert", "--params", "scale=1", "-o"])
+        .arg(&first)
+        .arg(data("angles_inplane.csv"))
+        .assert()
+        .success();
+    goniofit()
+        .args(["eval", "--model", "lambert", "--params", "scale=2", "-o"])
+        .arg(&second)
+        .arg(&first)
+        .assert()
+        .success();
+    let (h1, r1) = parse_out(&std::fs::read(&first).unwrap());
+    let (h2, r2) = parse_out(&std::fs::read(&second).unwrap());
+    assert_eq!(h1, h2);
+    for (a, b) in r1.iter().zip(&r2) {
+        let (a, b): (f64, f64) = (a[4].parse().unwrap(), b[4].parse().unwrap());
+        assert_eq!(b, 2.0 * a);
+    }
+}

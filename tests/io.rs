@@ -815,3 +815,15 @@ fn write_atomic_gives_ordinary_permissions() {
     let plain = std::fs::metadata(&q).unwrap().permissions().mode();
     assert_eq!(mode & 0o777, plain & 0o777);
 }
+
+#[test]
+fn dataset_subset_by_channel() {
+    let ds = read_dataset(&data("cornell/garnet_red.astm"), &astm_opts(Some("all"))).unwrap();
+    let idx = ds.channel_indices("700nm");
+    let sub = ds.subset(&idx);
+    assert_eq!(sub.len(), 1439);
+    assert!(sub.wavelength.as_ref().unwrap().iter().all(|&w| w == 700.0));
+    assert_eq!(sub.rows[0][4], "700nm");
+    assert_eq!(sub.lines[0], 23);
+    assert_eq!(sub.value.as_ref().unwrap()[0], 0.050083);
+}

@@ -144,19 +144,15 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         message,
     };
 
-    let mut all = split_records(text).map_err(|(line, m)| input_err(line, "(row)", m))?;
-    let header = if all.is_empty() {
-        None
-    } else {
-        Some(all.remove(0))
-    };
-    let records = all;
-
-    let Some((header_line, headers)) = header else {
+    let mut records = split_records(text)
+        .map_err(|(line, m)| input_err(line, "(row)", m))?
+        .into_iter();
+    let Some((header_line, headers)) = records.next() else {
         return Err(file_err(
             "empty file: no header row (expected e.g. theta_i,theta_r,phi_r,L)".into(),
         ));
     };
+    let records: Vec<Record> = records.collect();
     if records.is_empty() {
         return Err(file_err(format!(
             "no data rows after the header on line {header_line}"

@@ -90,6 +90,26 @@ impl Dataset {
         out
     }
 
+    /// The samples at `idx` (in that order), every per-sample vector subset alike; used for
+    /// per-channel fits. Indices must be `< self.len()`.
+    pub fn subset(&self, idx: &[usize]) -> Dataset {
+        fn pick<T: Clone>(v: &[T], idx: &[usize]) -> Vec<T> {
+            idx.iter().map(|&i| v[i].clone()).collect()
+        }
+        Dataset {
+            path: self.path.clone(),
+            headers: self.headers.clone(),
+            rows: pick(&self.rows, idx),
+            lines: pick(&self.lines, idx),
+            samples: pick(&self.samples, idx),
+            value: self.value.as_deref().map(|v| pick(v, idx)),
+            weight: self.weight.as_deref().map(|v| pick(v, idx)),
+            sigma_l: self.sigma_l.as_deref().map(|v| pick(v, idx)),
+            wavelength: self.wavelength.as_deref().map(|v| pick(v, idx)),
+            channel: self.channel.as_deref().map(|v| pick(v, idx)),
+        }
+    }
+
     /// Indices of the samples with channel label `name`.
     pub fn channel_indices(&self, name: &str) -> Vec<usize> {
         match &self.channel {
