@@ -827,3 +827,26 @@ fn dataset_subset_by_channel() {
     assert_eq!(sub.lines[0], 23);
     assert_eq!(sub.value.as_ref().unwrap()[0], 0.050083);
 }
+
+fn csv_row() -> impl Strategy<Value = Vec<String>> {
+    proptest::collection::vec("[a-z0-9 ,\"#\r\n\t.-]{0,6}", 1..5)
+}
+
+proptest! {
+    /// What write_csv writes, the CSV reader splits back into exactly the same fields.
+    #[test]
+    fn written_csv_reads_back_exactly(rows in proptest::collection::vec(csv_row(), 1..6)) {
+        let rows: Vec<Vec<String>> = rows
+            .into_iter()
+            .filter(|r| r.iter().any(|f| !f.is_empty()))
+            .collect();
+        let mut buf = Vec::new();
+        for r in &rows {
+            io::write_record(&mut buf, r).unwrap();
+        }
+        let text = String::from_utf8(buf).unwrap();
+        let back = io::csv::split_records(&text).unwrap();
+        let fields: Vec<Vec<String>> = back.into_iter().map(|(_, f)| f).collect();
+        prop_assert_eq!(fields, rows);
+    }
+}

@@ -440,10 +440,11 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
     Ok(ds)
 }
 
-/// One CSV record: the 1-based line it starts on, and its trimmed fields.
+/// One CSV record: the 1-based line it starts on, and its fields.
 pub type Record = (usize, Vec<String>);
 
-/// Split CSV text into records of trimmed fields, each with the 1-based line it starts on.
+/// Split CSV text into records, each with the 1-based line it starts on. Unquoted fields are
+/// trimmed of surrounding blanks; quoted fields are kept verbatim.
 /// Skips blank (or whitespace-only) lines and lines whose first non-blank character is `#`.
 /// Fields may be quoted (`"a, b"`, `""` for a quote, line breaks inside); line ends are
 /// `\n`, `\r\n` or `\r`. Errors: (line, message) for an unterminated quote or text after
@@ -529,7 +530,7 @@ pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, Str
                         format!("unexpected text '{rest}' after a closing quote"),
                     ));
                 }
-                fields.push(f.trim().to_string());
+                fields.push(f);
             } else {
                 let s0 = i;
                 while i < n && !matches!(b[i], b',' | b'\n' | b'\r') {

@@ -210,26 +210,20 @@ pub fn write_atomic(
 }
 
 /// Write a CSV table (headers + rows) atomically, or to stdout when `path` is `-`. Fields
-/// are quoted where CSV needs it.
+/// are quoted where reading them back needs it (see [`csv_field`]), so the readers here
+/// return exactly the fields written. A closed stdout pipe is not an error.
 pub fn write_csv(path: &Path, headers: &[String], rows: &[Vec<String>]) -> Result<()> {
     let write = |w: &mut dyn Write| -> std::io::Result<()> {
-        // Keep the underlying I/O error (its kind tells a closed pipe from a full disk).
-        let unwrap = |e: ::csv::Error| match e.into_kind() {
-            ::csv::ErrorKind::Io(io) => io,
-            other => std::io::Error::other(format!("{other:?}")),
-        };
-        let mut cw = ::csv::WriterBuilder::new().flexible(true).from_writer(w);
-        cw.write_record(headers).map_err(unwrap)?;
+        write_record(w, headers)?;
         for r in rows {
-            cw.write_record(r).map_err(unwrap)?;
+            write_record(w, r)?;
         }
-        cw.flush()?;
         Ok(())
     };
     if path.as_os_str() == "-" {
         let stdout = std::io::stdout();
-        let mut lock = stdout.lock();
-        match write(&mut lock) {
+        let mut lock = std::io::BufWriter::new(stdout.lock());
+        match write(&mut lock).and_then(|()| lock.flush()) {
             // A closed pipe (`goniofit eval ... | head`) is the reader's choice, not a failure.
             Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
             r => r.map_err(|source| Error::Io {
@@ -239,6 +233,33 @@ pub fn write_csv(path: &Path, headers: &[String], rows: &[Vec<String>]) -> Resul
         }
     } else {
         write_atomic(path, write)
+    }
+}
+
+/// Write one CSV record, comma-separated, `\n`-terminated.
+pub fn write_record(w: &mut dyn Write, fields: &[String]) -> std::io::Result<()> {
+    for (k, f) in fields.iter().enumerate() {
+        if k > 0 {
+            w.write_all(b",")?;
+        }
+        w.write_all(csv_field(f, k == 0).as_bytes())?;
+    }
+    w.write_all(b"\n")
+}
+
+/// A field as written to CSV: quoted (`"` doubled) when it holds a comma, quote or line
+/// break, has surrounding blanks (the reader trims unquoted fields), or, as the first field
+/// of a record, starts with `#` (the reader would take the line for a comment).
+pub fn csv_field(f: &str, first: bool) -> std::borrow::Cow<'_, str> {
+    let blank = |c: char| c == ' ' || c == '\t';
+    let needs = f.contains([',', '"', '\n', '\r'])
+        || f.starts_with(blank)
+        || f.ends_with(blank)
+        || (first && f.starts_with('#'));
+    if needs {
+        format!("\"{}\"", f.replace('"', "\"\"")).into()
+    } else {
+        f.into()
     }
 }
 
