@@ -720,6 +720,24 @@ fn mutate(base: &str, edits: &[(usize, u8, u8)]) -> Vec<u8> {
     b
 }
 
+fn edge_number() -> impl Strategy<Value = String> {
+    prop_oneof![
+        (-400.0f64..400.0).prop_map(|v| v.to_string()),
+        (-2.0f64..2.0).prop_map(|v| v.to_string()),
+        Just("90".to_string()),
+        Just("89.99999999999999999".to_string()),
+        Just("1.5707963267948966".to_string()),
+        Just("-0".to_string()),
+        Just("0".to_string()),
+        Just("1e-320".to_string()),
+        Just("1e999".to_string()),
+        Just("nan".to_string()),
+        Just("".to_string()),
+        Just("360".to_string()),
+        Just("-360.0000001".to_string()),
+    ]
+}
+
 fn interesting_byte() -> impl Strategy<Value = u8> {
     prop_oneof![
         Just(b','),
@@ -752,6 +770,29 @@ proptest! {
         read_all_ways("p.astm", text.as_bytes());
         let astm = format!("VARS theta_i,phi_i,theta_s,phi_s,550nm\n{text}");
         read_all_ways("p.astm", astm.as_bytes());
+    }
+
+    #[test]
+    fn arbitrary_unicode_never_panics(text in "\\PC{0,200}", sep in "[,\n\"# ]") {
+        let text = text.replace('x', &sep);
+        read_all_ways("u.csv", text.as_bytes());
+        read_all_ways("u.astm", text.as_bytes());
+        let csv = format!("theta_i,theta_r,phi_r,L\n{text}");
+        read_all_ways("u.csv", csv.as_bytes());
+    }
+
+    #[test]
+    fn structured_csv_with_edge_numbers(
+        rows in proptest::collection::vec(proptest::collection::vec(edge_number(), 7), 1..5)
+    ) {
+        let mut text = String::from("theta_i,theta_r,phi_r,L,sigma_L,wavelength,group\n");
+        for r in &rows {
+            text.push_str(&r.join(","));
+            text.push('\n');
+        }
+        read_all_ways("s.csv", text.as_bytes());
+        let astm = format!("NUM_POINTS {}\nVARS theta_i,phi_i,theta_s,phi_s,550nm,1um,x\n{}", rows.len(), &text[text.find('\n').unwrap() + 1..]);
+        read_all_ways("s.astm", astm.as_bytes());
     }
 
     #[test]

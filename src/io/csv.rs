@@ -164,7 +164,7 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         headers
             .iter()
             .enumerate()
-            .filter(|(_, h)| h.eq_ignore_ascii_case(name.trim()))
+            .filter(|(_, h)| h.trim().eq_ignore_ascii_case(name.trim()))
             .map(|(i, _)| i)
             .collect()
     };

@@ -33,11 +33,12 @@ pub struct ReadOptions {
     /// θr < 0 means θr = |θr| on the opposite side (φr + 180°); at φr = 0 that is φr = 180°.
     pub signed_theta_r: bool,
     /// `--columns role=name` mappings; roles: theta_i, theta_r, phi_r, L, weight, sigma_L,
-    /// wavelength, group (case-insensitive; `value` is accepted for `L`).
+    /// wavelength, group (case-insensitive; `value` is accepted for `L`). CSV only.
     pub columns: Vec<(String, String)>,
     /// Whether column L (the measured value) must exist (fit: yes; eval: no).
     pub require_value: bool,
-    /// ASTM: one channel name such as `550nm`, or `all`.
+    /// ASTM: one channel name such as `550nm`, or `all`. Ignored for CSV (a `group`
+    /// column labels its samples instead).
     pub channel: Option<String>,
 }
 
