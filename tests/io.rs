@@ -602,10 +602,16 @@ fn write_atomic_writes_and_cleans_up() {
     // A missing directory: an error, and nothing created.
     let q = dir.path().join("missing").join("out.csv");
     let r = write_atomic(&q, |w| w.write_all(b"x"));
-    assert!(
-        matches!(r, Err(Error::Io { ref path, .. }) if path == &q),
-        "{r:?}"
-    );
+    match r {
+        Err(Error::File { path, message }) => {
+            assert_eq!(path, q);
+            assert!(
+                message.contains("missing") && message.contains("no such directory"),
+                "{message}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
     assert!(!dir.path().join("missing").exists());
 }
 

@@ -199,7 +199,18 @@ pub fn write_atomic(
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let tmp = builder.tempfile_in(&dir).map_err(io_err)?;
+    let tmp = builder.tempfile_in(&dir).map_err(|e| {
+        // tempfile's message names its random temporary; name the directory instead.
+        let why = if dir.is_dir() {
+            e.kind().to_string()
+        } else {
+            "no such directory".to_string()
+        };
+        Error::File {
+            path: path.to_path_buf(),
+            message: format!("cannot create a file in directory {}: {why}", dir.display()),
+        }
+    })?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file());
         f(&mut w).map_err(io_err)?;
