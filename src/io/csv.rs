@@ -24,6 +24,13 @@
 //! (one of them decides the weights). With `require_value`, a file whose values are all
 //! zero is an error (nothing to fit).
 //!
+//! Values of L may be negative (background-subtracted data); they must be finite.
+//!
+//! Errors: a bad field is an `Error::Input` naming the 1-based line (as an editor counts
+//! them, comments and blank lines included), the column's header name and the value; a
+//! missing column is an `Error::Input` on the header line; an empty file or a header without
+//! rows is an `Error::File`.
+//!
 //! NIST layout: a header with `thetai`, `thetar`, `phir` and no `theta_i` (Germer's PTFE
 //! BRDF files, `lambda,thetai,phi,thetar,phir,f_r11,...`, also with `phii`/`fr11`) is read
 //! in its own convention: azimuths are those of direction vectors pointing away from the
