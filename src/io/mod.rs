@@ -13,6 +13,16 @@
 //! renames it into place, so a failed write leaves nothing behind; [`write_csv`] writes a
 //! table that way, or to stdout for the path `-`.
 //!
+//! ```
+//! use goniofit::io::{read_dataset, ReadOptions};
+//! let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
+//! let opts = ReadOptions { channel: Some("550nm".into()), require_value: true, ..Default::default() };
+//! let ds = read_dataset(&path, &opts)?;
+//! assert_eq!(ds.len(), 1439);
+//! assert_eq!(ds.wavelength.as_ref().unwrap()[0], 550.0); // nm, from the channel name
+//! # Ok::<(), goniofit::Error>(())
+//! ```
+//!
 //! Every reading error is an [`Error::Input`] (file, 1-based line, column, offending value),
 //! an [`Error::File`] (the whole file: empty, no data rows, missing column) or an
 //! [`Error::Io`]; no input makes the readers panic (proptest in `tests/io.rs`).
