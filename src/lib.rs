@@ -9,8 +9,8 @@ pub mod fit;
 pub mod geometry;
 pub mod io;
 pub mod model;
+pub mod plot;
 pub mod report;
 pub mod synth;
-pub mod plot;
 
 pub use error::{Error, Result};

@@ -1,10 +1,10 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
 
 pub mod eval;
-pub mod fit;
-pub mod synth;
 pub mod figures;
+pub mod fit;
 pub mod render;
+pub mod synth;
 
 use crate::cli::{Cli, Command};
 
