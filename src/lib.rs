@@ -5,6 +5,7 @@
 //! writers), [`report`] and [`plot`].
 
 pub mod error;
+pub mod fit;
 pub mod geometry;
 pub mod model;
 

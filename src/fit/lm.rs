@@ -1,0 +1,1321 @@
+//! Levenberg–Marquardt as an argmin [`Solver`]: Moré's scaled trust-region method, the
+//! design of MINPACK's `lmder` (Moré 1978, "The Levenberg–Marquardt algorithm:
+//! implementation and theory"; Moré, Garbow, Hillstrom 1980, ANL-80-74).
+//!
+//! # Problem and cost convention
+//! Minimise `cost(x) = ½ Σᵢ r̃ᵢ(x)²` over `x ∈ ℝⁿ`, where the residuals are already weighted,
+//! `r̃ᵢ = √wᵢ rᵢ` (the factor ½ as in MINPACK, scipy and Ceres; the gradient is `Jᵀr̃`).
+//!
+//! # The step
+//! Each trial step `p` solves `min ½‖J p + r‖²` subject to `‖D p‖ ≤ Δ` (`D` diagonal scaling).
+//! It is computed from a Householder QR factorisation of `J` with column pivoting
+//! (`J P = Q R`, as MINPACK `qrfac`), and for a positive Levenberg parameter `λ` by
+//! Givens-rotating `√λ D` into `R` (MINPACK `qrsolv`); `λ` is found by Moré's safeguarded
+//! Newton iteration on `‖D p(λ)‖ = Δ` (MINPACK `lmpar`). `JᵀJ` is never formed or inverted.
+//! A rank-deficient `R` (zero pivots) gives the minimum-length Gauss–Newton step of the
+//! non-singular part, and for `λ > 0` the system is always regular.
+//!
+//! * `D = diag(max over iterations of the column norms of J)` (MINPACK `mode = 1`).
+//! * `Δ₀ = stepbound · ‖D x₀‖` (or `stepbound` when that is zero); `stepbound = 100`.
+//! * Ratio `ρ = actual / predicted reduction`; `ρ < 0.25` shrinks `Δ` (by a factor in
+//!   `[0.1, 0.5]` from a quadratic interpolation), `ρ > 0.75` (or `λ = 0`) sets
+//!   `Δ = 2‖D p‖`; the step is accepted when `ρ ≥ 10⁻⁴`.
+//! * A trial point whose residual vector contains NaN or ±∞ is treated as a failed step of
+//!   infinite cost: it is rejected and `Δ` shrinks by 10.
+//!
+//! # Iterations and the argmin state
+//! One argmin iteration is one trial step (one residual evaluation), accepted or not — as
+//! Ceres counts iterations. The Jacobian is evaluated after each accepted step only. In the
+//! [`IterState`], `param` is the current (best) point, `cost` is `½‖r‖²` there, `gradient`
+//! holds `Jᵀr` and `jacobian` holds `J`, both at the point where the Jacobian was last
+//! evaluated (the current point, except right after an accepted step).
+//!
+//! # Stopping rules (MINPACK's, reported as [`Termination`])
+//! * `Ftol`: both the actual and the predicted relative reductions of the cost are at most
+//!   `ftol` (MINPACK info 1), or at most machine epsilon (info 6).
+//! * `Xtol`: the trust radius is at most `xtol · ‖D x‖` (info 2), or machine epsilon (7).
+//! * `Gtol`: the largest cosine between `r` and a column of `J` is at most `gtol` (info 4),
+//!   or machine epsilon (8).
+//! * `MaxEvaluations`, `MaxIterations`, `Timeout`, `Interrupted` (Ctrl-C, SIGTERM, SIGHUP).
+//!
+//! Defaults: `ftol = xtol = 1e-10`, `gtol = 1e-12`. MINPACK's driver `lmder1` uses
+//! `ftol = xtol = √ε ≈ 1.5e-8`, `gtol = 0`; our defaults are tighter because a fit's standard
+//! errors are only as good as its convergence, and LM converges quadratically on
+//! small-residual problems so the extra digits cost one or two iterations.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Once};
+use std::time::{Duration, Instant};
+
+use argmin::core::observers::{Observe, ObserverMode};
+use argmin::core::{
+    Error as ArgminError, Executor, IterState, Jacobian, Operator, Problem, Solver, State,
+    TerminationReason, TerminationStatus, KV,
+};
+use nalgebra::{DMatrix, DVector};
+
+use crate::Error;
+
+/// The argmin state the solver runs on: parameters `DVector`, gradient slot `Jᵀr`,
+/// Jacobian `DMatrix`, no Hessian, no residual slot (residuals live in the solver), `f64` cost.
+pub type LmState = IterState<DVector<f64>, DVector<f64>, DMatrix<f64>, (), (), f64>;
+
+const EPSMCH: f64 = f64::EPSILON;
+/// Acceptance threshold on the ratio of actual to predicted reduction.
+const RHO_ACCEPT: f64 = 1e-4;
+const RHO_SHRINK: f64 = 0.25;
+const RHO_EXPAND: f64 = 0.75;
+
+/// Which stopping rule ended a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Termination {
+    /// Relative reduction of the cost (actual and predicted) at most `ftol`, or at machine
+    /// precision.
+    Ftol,
+    /// Relative size of the trust region at most `xtol`, or at machine precision.
+    Xtol,
+    /// Both `Ftol` and `Xtol` hold.
+    FtolXtol,
+    /// Residual orthogonal to the columns of the Jacobian to within `gtol` (includes a zero
+    /// residual or a zero gradient).
+    Gtol,
+    /// The iteration budget ran out.
+    MaxIterations,
+    /// The residual evaluation budget ran out.
+    MaxEvaluations,
+    /// The wall-clock budget ran out.
+    Timeout,
+    /// Ctrl-C (SIGINT), SIGTERM or SIGHUP, or the caller's interrupt flag.
+    Interrupted,
+    /// The residuals at the starting point are not all finite.
+    NonFiniteStart,
+    /// The Jacobian at an accepted point is not all finite; the run stops there.
+    NonFiniteJacobian,
+    /// The trust region collapsed without any other criterion holding (e.g. every trial
+    /// point has non-finite residuals).
+    NoProgress,
+}
+
+impl Termination {
+    /// Whether the run ended at a (local) minimum according to the tolerances.
+    pub fn converged(self) -> bool {
+        matches!(
+            self,
+            Termination::Ftol | Termination::Xtol | Termination::FtolXtol | Termination::Gtol
+        )
+    }
+
+    /// One line for a human.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Termination::Ftol => "converged: relative reduction of the cost below ftol",
+            Termination::Xtol => "converged: relative step size below xtol",
+            Termination::FtolXtol => {
+                "converged: relative cost reduction below ftol and step size below xtol"
+            }
+            Termination::Gtol => "converged: gradient (residual-column cosine) below gtol",
+            Termination::MaxIterations => "stopped: maximum number of iterations reached",
+            Termination::MaxEvaluations => "stopped: maximum number of evaluations reached",
+            Termination::Timeout => "stopped: time limit reached",
+            Termination::Interrupted => "stopped: interrupted",
+            Termination::NonFiniteStart => "failed: residuals at the starting point are not finite",
+            Termination::NonFiniteJacobian => "stopped: Jacobian is not finite",
+            Termination::NoProgress => {
+                "stopped: no further progress possible (trust region collapsed)"
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for Termination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.describe())
+    }
+}
+
+/// Moré's scaled trust-region Levenberg–Marquardt (MINPACK `lmder` design) as an argmin
+/// [`Solver`] over `DVector<f64>` parameters, `DVector<f64>` residuals and `DMatrix<f64>`
+/// Jacobians. See the [module documentation](self) for the algorithm and the state layout.
+#[derive(Debug, Clone)]
+pub struct LevenbergMarquardt {
+    ftol: f64,
+    xtol: f64,
+    gtol: f64,
+    stepbound: f64,
+    max_evals: u64,
+    interrupt: Option<Arc<AtomicBool>>,
+    interrupt_generation: u64,
+    work: Option<Work>,
+    termination: Option<Termination>,
+}
+
+/// Everything the iteration carries between trial steps.
+#[derive(Debug, Clone)]
+struct Work {
+    /// Number of residuals as supplied (before padding to `max(m, n)` rows).
+    m: usize,
+    x: DVector<f64>,
+    /// Residuals at `x`, padded with zeros to `max(m, n)`.
+    r: DVector<f64>,
+    fnorm: f64,
+    /// Jacobian at `x` (padded), valid when `!need_jac`.
+    jac: DMatrix<f64>,
+    qr: Option<QrState>,
+    diag: DVector<f64>,
+    delta: f64,
+    par: f64,
+    xnorm: f64,
+    need_jac: bool,
+    /// No step accepted yet (MINPACK's `iter == 1`).
+    first: bool,
+    nfev: u64,
+    njev: u64,
+}
+
+/// The pivoted QR of the Jacobian at the current point, and what `lmpar` needs.
+#[derive(Debug, Clone)]
+struct QrState {
+    /// `n × n`: `R` in the upper triangle; the strict lower triangle is workspace for `qrsolv`.
+    r: DMatrix<f64>,
+    /// Column `j` of `R` is column `ipvt[j]` of `J`.
+    ipvt: Vec<usize>,
+    /// First `n` components of `Qᵀ r`.
+    qtf: DVector<f64>,
+}
+
+impl Default for LevenbergMarquardt {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl LevenbergMarquardt {
+    /// Defaults: `ftol = xtol = 1e-10`, `gtol = 1e-12`, step bound factor 100, unlimited
+    /// evaluations (bound the run with the Executor's `max_iters`, or [`Self::with_max_evals`]).
+    pub fn new() -> Self {
+        LevenbergMarquardt {
+            ftol: 1e-10,
+            xtol: 1e-10,
+            gtol: 1e-12,
+            stepbound: 100.0,
+            max_evals: u64::MAX,
+            interrupt: None,
+            interrupt_generation: 0,
+            work: None,
+            termination: None,
+        }
+    }
+
+    fn check_tol(name: &str, v: f64) -> Result<f64, Error> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(Error::Param {
+                name: name.to_string(),
+                message: format!(
+                    "{v} is not a valid tolerance; use a finite number ≥ 0, e.g. 1e-10"
+                ),
+            })
+        }
+    }
+
+    /// Relative cost-reduction tolerance (finite, ≥ 0).
+    pub fn with_ftol(mut self, v: f64) -> Result<Self, Error> {
+        self.ftol = Self::check_tol("ftol", v)?;
+        Ok(self)
+    }
+
+    /// Relative step-size tolerance (finite, ≥ 0).
+    pub fn with_xtol(mut self, v: f64) -> Result<Self, Error> {
+        self.xtol = Self::check_tol("xtol", v)?;
+        Ok(self)
+    }
+
+    /// Gradient tolerance on the cosine between `r` and the columns of `J` (finite, ≥ 0).
+    pub fn with_gtol(mut self, v: f64) -> Result<Self, Error> {
+        self.gtol = Self::check_tol("gtol", v)?;
+        Ok(self)
+    }
+
+    /// Initial trust radius factor: `Δ₀ = factor · ‖D x₀‖` (MINPACK `factor`, default 100;
+    /// must be finite and > 0).
+    pub fn with_stepbound(mut self, v: f64) -> Result<Self, Error> {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::Param {
+                name: "stepbound".into(),
+                message: format!("{v} must be a finite number > 0, e.g. 100"),
+            });
+        }
+        self.stepbound = v;
+        Ok(self)
+    }
+
+    /// Maximum number of residual evaluations (including the one at the start; ≥ 1).
+    pub fn with_max_evals(mut self, v: u64) -> Result<Self, Error> {
+        if v == 0 {
+            return Err(Error::Param {
+                name: "max_evals".into(),
+                message: "0 evaluations cannot start a fit; use at least 1".into(),
+            });
+        }
+        self.max_evals = v;
+        Ok(self)
+    }
+
+    /// A flag the caller can set (from any thread) to stop the run after the current step;
+    /// the run then ends with [`Termination::Interrupted`].
+    pub fn with_interrupt(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.interrupt = Some(flag);
+        self
+    }
+
+    /// The stopping rule that ended the run, if the solver itself stopped it (argmin's
+    /// `MaxItersReached`, `Timeout` and `Interrupt` are recorded in the state instead).
+    pub fn termination(&self) -> Option<Termination> {
+        self.termination
+    }
+
+    /// Residual evaluations so far.
+    pub fn evaluations(&self) -> u64 {
+        self.work.as_ref().map_or(0, |w| w.nfev)
+    }
+
+    /// Jacobian evaluations so far.
+    pub fn jacobian_evaluations(&self) -> u64 {
+        self.work.as_ref().map_or(0, |w| w.njev)
+    }
+
+    /// The current point and its (unpadded) residuals.
+    pub fn current(&self) -> Option<(&DVector<f64>, DVector<f64>)> {
+        self.work
+            .as_ref()
+            .map(|w| (&w.x, w.r.rows(0, w.m).into_owned()))
+    }
+
+    /// The Jacobian at the current point, if it has been evaluated there.
+    pub fn current_jacobian(&self) -> Option<DMatrix<f64>> {
+        self.work
+            .as_ref()
+            .filter(|w| !w.need_jac)
+            .map(|w| w.jac.rows(0, w.m).into_owned())
+    }
+
+    fn interrupted(&self) -> bool {
+        self.interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::SeqCst))
+            || INTERRUPTS.load(Ordering::SeqCst) != self.interrupt_generation
+    }
+}
+
+/// Euclidean norm without destructive overflow or underflow (MINPACK `enorm` in spirit).
+fn enorm<'a>(v: impl IntoIterator<Item = &'a f64> + Clone) -> f64 {
+    let amax = v.clone().into_iter().fold(0.0f64, |a, &x| a.max(x.abs()));
+    if amax == 0.0 || !amax.is_finite() {
+        return amax;
+    }
+    let s: f64 = v.into_iter().map(|&x| (x / amax) * (x / amax)).sum();
+    amax * s.sqrt()
+}
+
+fn pad_vec(v: DVector<f64>, rows: usize) -> DVector<f64> {
+    if v.len() >= rows {
+        v
+    } else {
+        v.resize_vertically(rows, 0.0)
+    }
+}
+
+fn pad_mat(a: DMatrix<f64>, rows: usize) -> DMatrix<f64> {
+    if a.nrows() >= rows {
+        a
+    } else {
+        a.resize_vertically(rows, 0.0)
+    }
+}
+
+/// Householder QR with column pivoting (MINPACK `qrfac` with `pivot = true`), applied to a
+/// copy of `a` (`m × n`, `m ≥ n`). Returns `R` (`n × n`, upper), the pivots, the column norms
+/// of `a`, and `Qᵀ f` (first `n` components). Remaining column norms are recomputed rather
+/// than down-dated, which costs `O(mn²)` like the factorisation itself and is exact.
+fn qrfac(a: &DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<f64>) {
+    let (m, n) = a.shape();
+    let mut a = a.clone();
+    let mut qtf = f.clone();
+    let acnorm = DVector::from_iterator(n, (0..n).map(|j| enorm(a.column(j).iter())));
+    let mut ipvt: Vec<usize> = (0..n).collect();
+    let mut rdiag = DVector::zeros(n);
+    for j in 0..n.min(m) {
+        // Pivot: the remaining column of largest norm (rows j..m) goes to position j.
+        let mut kmax = j;
+        let mut best = -1.0;
+        for k in j..n {
+            let nk = enorm(a.view((j, k), (m - j, 1)).iter());
+            if nk > best {
+                best = nk;
+                kmax = k;
+            }
+        }
+        if kmax != j {
+            a.swap_columns(j, kmax);
+            ipvt.swap(j, kmax);
+        }
+        let mut ajnorm = enorm(a.view((j, j), (m - j, 1)).iter());
+        if ajnorm != 0.0 {
+            if a[(j, j)] < 0.0 {
+                ajnorm = -ajnorm;
+            }
+            for i in j..m {
+                a[(i, j)] /= ajnorm;
+            }
+            a[(j, j)] += 1.0;
+            let ajj = a[(j, j)];
+            // Apply the reflector to the remaining columns and to f.
+            for k in j + 1..n {
+                let mut sum = 0.0;
+                for i in j..m {
+                    sum += a[(i, j)] * a[(i, k)];
+                }
+                let t = sum / ajj;
+                for i in j..m {
+                    let aij = a[(i, j)];
+                    a[(i, k)] -= t * aij;
+                }
+            }
+            let mut sum = 0.0;
+            for i in j..m {
+                sum += a[(i, j)] * qtf[i];
+            }
+            let t = sum / ajj;
+            for i in j..m {
+                qtf[i] -= t * a[(i, j)];
+            }
+        }
+        rdiag[j] = -ajnorm;
+    }
+    let mut r = DMatrix::zeros(n, n);
+    for j in 0..n {
+        for i in 0..j {
+            r[(i, j)] = a[(i, j)];
+        }
+        r[(j, j)] = rdiag[j];
+    }
+    let qtf = qtf.rows(0, n).into_owned();
+    (QrState { r, ipvt, qtf }, acnorm)
+}
+
+/// MINPACK `qrsolv`: given the pivoted QR `J P = Q R` and a diagonal `d`, solve
+/// `min ‖[J; D] x − [b; 0]‖` where `qtb = (Qᵀ b)[..n]`. On return the strict lower triangle of
+/// `r` holds the strict upper triangle of `S` (transposed), with `Pᵀ(JᵀJ + DD)P = SᵀS`, and
+/// `sdiag` the diagonal of `S`. The upper triangle of `r` is unchanged.
+fn qrsolv(
+    r: &mut DMatrix<f64>,
+    ipvt: &[usize],
+    d: &DVector<f64>,
+    qtb: &DVector<f64>,
+    x: &mut DVector<f64>,
+    sdiag: &mut DVector<f64>,
+) {
+    let n = r.ncols();
+    let mut wa = qtb.clone();
+    for j in 0..n {
+        for i in j..n {
+            r[(i, j)] = r[(j, i)];
+        }
+        x[j] = r[(j, j)];
+    }
+    for j in 0..n {
+        let l = ipvt[j];
+        if d[l] != 0.0 {
+            for k in j..n {
+                sdiag[k] = 0.0;
+            }
+            sdiag[j] = d[l];
+            let mut qtbpj = 0.0;
+            for k in j..n {
+                if sdiag[k] == 0.0 {
+                    continue;
+                }
+                let (sin, cos) = if r[(k, k)].abs() < sdiag[k].abs() {
+                    let cotan = r[(k, k)] / sdiag[k];
+                    let sin = 0.5 / (0.25 + 0.25 * cotan * cotan).sqrt();
+                    (sin, sin * cotan)
+                } else {
+                    let tan = sdiag[k] / r[(k, k)];
+                    let cos = 0.5 / (0.25 + 0.25 * tan * tan).sqrt();
+                    (cos * tan, cos)
+                };
+                r[(k, k)] = cos * r[(k, k)] + sin * sdiag[k];
+                let temp = cos * wa[k] + sin * qtbpj;
+                qtbpj = -sin * wa[k] + cos * qtbpj;
+                wa[k] = temp;
+                for i in k + 1..n {
+                    let temp = cos * r[(i, k)] + sin * sdiag[i];
+                    sdiag[i] = -sin * r[(i, k)] + cos * sdiag[i];
+                    r[(i, k)] = temp;
+                }
+            }
+        }
+        sdiag[j] = r[(j, j)];
+        r[(j, j)] = x[j];
+    }
+    // Solve S z = wa; a singular S gives the least-squares solution with trailing zeros.
+    let mut nsing = n;
+    for j in 0..n {
+        if sdiag[j] == 0.0 && nsing == n {
+            nsing = j;
+        }
+        if nsing < n {
+            wa[j] = 0.0;
+        }
+    }
+    for j in (0..nsing).rev() {
+        let mut sum = 0.0;
+        for i in j + 1..nsing {
+            sum += r[(i, j)] * wa[i];
+        }
+        wa[j] = (wa[j] - sum) / sdiag[j];
+    }
+    for j in 0..n {
+        x[ipvt[j]] = wa[j];
+    }
+}
+
+/// MINPACK `lmpar`: find `λ ≥ 0` and the step `x` (the negative of the LM step) with
+/// `(JᵀJ + λDD) x = Jᵀ f`, such that either `λ = 0` and `‖D x‖ ≤ 1.1 Δ`, or
+/// `|‖D x‖ − Δ| ≤ 0.1 Δ`. `par` is the initial estimate on entry and the result on exit.
+fn lmpar(qr: &mut QrState, diag: &DVector<f64>, delta: f64, par: &mut f64, x: &mut DVector<f64>) {
+    let n = qr.r.ncols();
+    let dwarf = f64::MIN_POSITIVE;
+    let r = &mut qr.r;
+    let ipvt = &qr.ipvt;
+    let qtb = &qr.qtf;
+    let mut sdiag = DVector::zeros(n);
+
+    // Gauss–Newton direction (minimum-length on the non-singular part if R is singular).
+    let mut wa1 = qtb.clone();
+    let mut nsing = n;
+    for j in 0..n {
+        if r[(j, j)] == 0.0 && nsing == n {
+            nsing = j;
+        }
+        if nsing < n {
+            wa1[j] = 0.0;
+        }
+    }
+    for j in (0..nsing).rev() {
+        wa1[j] /= r[(j, j)];
+        let t = wa1[j];
+        for i in 0..j {
+            wa1[i] -= r[(i, j)] * t;
+        }
+    }
+    for j in 0..n {
+        x[ipvt[j]] = wa1[j];
+    }
+
+    let mut wa2 = diag.component_mul(x);
+    let mut dxnorm = enorm(wa2.iter());
+    let mut fp = dxnorm - delta;
+    if fp <= 0.1 * delta {
+        *par = 0.0;
+        return;
+    }
+
+    // Lower bound parl (only when R is non-singular: then the Newton step is defined).
+    let mut parl = 0.0;
+    if nsing >= n {
+        for j in 0..n {
+            let l = ipvt[j];
+            wa1[j] = diag[l] * (wa2[l] / dxnorm);
+        }
+        for j in 0..n {
+            let mut sum = 0.0;
+            for i in 0..j {
+                sum += r[(i, j)] * wa1[i];
+            }
+            wa1[j] = (wa1[j] - sum) / r[(j, j)];
+        }
+        let t = enorm(wa1.iter());
+        parl = ((fp / delta) / t) / t;
+        if !parl.is_finite() {
+            parl = 0.0;
+        }
+    }
+
+    // Upper bound paru.
+    for j in 0..n {
+        let mut sum = 0.0;
+        for i in 0..=j {
+            sum += r[(i, j)] * qtb[i];
+        }
+        wa1[j] = sum / diag[ipvt[j]];
+    }
+    let gnorm = enorm(wa1.iter());
+    let mut paru = gnorm / delta;
+    if paru == 0.0 {
+        paru = dwarf / delta.min(0.1);
+    }
+
+    *par = par.max(parl).min(paru);
+    if *par == 0.0 {
+        *par = gnorm / dxnorm;
+    }
+
+    let mut iter = 0;
+    loop {
+        iter += 1;
+        if *par == 0.0 {
+            *par = dwarf.max(0.001 * paru);
+        }
+        let s = par.sqrt();
+        let d = diag * s;
+        qrsolv(r, ipvt, &d, qtb, x, &mut sdiag);
+        wa2 = diag.component_mul(x);
+        dxnorm = enorm(wa2.iter());
+        let temp = fp;
+        fp = dxnorm - delta;
+        if fp.abs() <= 0.1 * delta || (parl == 0.0 && fp <= temp && temp < 0.0) || iter == 10 {
+            break;
+        }
+        // Newton correction.
+        for j in 0..n {
+            let l = ipvt[j];
+            wa1[j] = diag[l] * (wa2[l] / dxnorm);
+        }
+        for j in 0..n {
+            wa1[j] /= sdiag[j];
+            let t = wa1[j];
+            for i in j + 1..n {
+                wa1[i] -= r[(i, j)] * t;
+            }
+        }
+        let t = enorm(wa1.iter());
+        let parc = ((fp / delta) / t) / t;
+        if fp > 0.0 {
+            parl = parl.max(*par);
+        }
+        if fp < 0.0 {
+            paru = paru.min(*par);
+        }
+        *par = parl.max(*par + parc);
+        if !par.is_finite() {
+            *par = paru;
+        }
+    }
+}
+
+fn all_finite(v: &DVector<f64>) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+impl<O> Solver<O, LmState> for LevenbergMarquardt
+where
+    O: Operator<Param = DVector<f64>, Output = DVector<f64>>
+        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+{
+    fn name(&self) -> &str {
+        "Levenberg-Marquardt (More trust region)"
+    }
+
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        mut state: LmState,
+    ) -> Result<(LmState, Option<KV>), ArgminError> {
+        let x = state
+            .take_param()
+            .ok_or_else(|| argmin::core::ArgminError::NotInitialized {
+                text: "LevenbergMarquardt needs an initial parameter vector".to_string(),
+            })?;
+        self.interrupt_generation = INTERRUPTS.load(Ordering::SeqCst);
+        self.termination = None;
+        let n = x.len();
+        let r = problem.apply(&x)?;
+        let m = r.len();
+        let rows = m.max(n);
+        let r = pad_vec(r, rows);
+        let fnorm = enorm(r.iter());
+        let cost = 0.5 * fnorm * fnorm;
+        if !all_finite(&r) || !all_finite(&x) {
+            self.termination = Some(Termination::NonFiniteStart);
+        } else if n == 0 || fnorm == 0.0 {
+            self.termination = Some(Termination::Gtol);
+        }
+        if self.max_evals <= 1 && self.termination.is_none() {
+            self.termination = Some(Termination::MaxEvaluations);
+        }
+        self.work = Some(Work {
+            m,
+            x: x.clone(),
+            r,
+            fnorm,
+            jac: DMatrix::zeros(rows, n),
+            qr: None,
+            diag: DVector::from_element(n, 1.0),
+            delta: 0.0,
+            par: 0.0,
+            xnorm: 0.0,
+            need_jac: true,
+            first: true,
+            nfev: 1,
+            njev: 0,
+        });
+        let cost = if cost.is_nan() { f64::INFINITY } else { cost };
+        Ok((state.param(x).cost(cost), None))
+    }
+
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        mut state: LmState,
+    ) -> Result<(LmState, Option<KV>), ArgminError> {
+        let (ftol, xtol, gtol, stepbound, max_evals) = (
+            self.ftol,
+            self.xtol,
+            self.gtol,
+            self.stepbound,
+            self.max_evals,
+        );
+        let Some(w) = self.work.as_mut() else {
+            return Err(argmin::core::ArgminError::NotInitialized {
+                text: "LevenbergMarquardt::next_iter before init".to_string(),
+            }
+            .into());
+        };
+        let n = w.x.len();
+        let rows = w.r.len();
+
+        if w.need_jac {
+            let jac = problem.jacobian(&w.x)?;
+            w.njev += 1;
+            if jac.shape() != (w.m, n) || jac.iter().any(|v| !v.is_finite()) {
+                self.termination = Some(Termination::NonFiniteJacobian);
+                return Ok((state, None));
+            }
+            w.jac = pad_mat(jac, rows);
+            let (qr, acnorm) = qrfac(&w.jac, &w.r);
+            if w.first {
+                for j in 0..n {
+                    w.diag[j] = if acnorm[j] == 0.0 { 1.0 } else { acnorm[j] };
+                }
+                w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
+                w.delta = stepbound * w.xnorm;
+                if w.delta == 0.0 {
+                    w.delta = stepbound;
+                }
+            }
+            // Scaled gradient norm: the largest cosine between r and a column of J.
+            let mut gnorm: f64 = 0.0;
+            if w.fnorm != 0.0 {
+                for j in 0..n {
+                    let l = qr.ipvt[j];
+                    if acnorm[l] != 0.0 {
+                        let mut sum = 0.0;
+                        for i in 0..=j {
+                            sum += qr.r[(i, j)] * (qr.qtf[i] / w.fnorm);
+                        }
+                        gnorm = gnorm.max((sum / acnorm[l]).abs());
+                    }
+                }
+            }
+            for j in 0..n {
+                w.diag[j] = w.diag[j].max(acnorm[j]);
+            }
+            w.qr = Some(qr);
+            w.need_jac = false;
+            let grad = w.jac.tr_mul(&w.r);
+            state = state
+                .gradient(grad)
+                .jacobian(w.jac.rows(0, w.m).into_owned());
+            if gnorm <= gtol {
+                self.termination = Some(Termination::Gtol);
+                return Ok((state, None));
+            }
+            if gnorm <= EPSMCH {
+                self.termination = Some(Termination::Gtol);
+                return Ok((state, None));
+            }
+        }
+
+        // One trial step.
+        let qr = w.qr.as_mut().expect("QR present after Jacobian");
+        let mut step = DVector::zeros(n);
+        lmpar(qr, &w.diag, w.delta, &mut w.par, &mut step);
+        let step = -step;
+        let trial = &w.x + &step;
+        let pnorm = enorm(w.diag.component_mul(&step).iter());
+        if w.first {
+            w.delta = w.delta.min(pnorm);
+        }
+        let r1 = problem.apply(&trial)?;
+        w.nfev += 1;
+        let r1 = pad_vec(r1, rows);
+        let mut fnorm1 = enorm(r1.iter());
+        if !all_finite(&r1) || r1.len() != rows {
+            fnorm1 = f64::INFINITY;
+        }
+        let actred = if 0.1 * fnorm1 < w.fnorm {
+            1.0 - (fnorm1 / w.fnorm).powi(2)
+        } else {
+            -1.0
+        };
+        // Predicted reduction from the linear model: ‖J p‖² and the λ‖Dp‖² term.
+        let mut jp = DVector::zeros(n);
+        for j in 0..n {
+            let t = step[qr.ipvt[j]];
+            for i in 0..=j {
+                jp[i] += qr.r[(i, j)] * t;
+            }
+        }
+        let temp1 = enorm(jp.iter()) / w.fnorm;
+        let temp2 = w.par.sqrt() * pnorm / w.fnorm;
+        let prered = temp1 * temp1 + temp2 * temp2 / 0.5;
+        let dirder = -(temp1 * temp1 + temp2 * temp2);
+        let ratio = if prered != 0.0 { actred / prered } else { 0.0 };
+
+        if ratio <= RHO_SHRINK {
+            let mut temp = if actred >= 0.0 {
+                0.5
+            } else {
+                0.5 * dirder / (dirder + 0.5 * actred)
+            };
+            if 0.1 * fnorm1 >= w.fnorm || temp.is_nan() || temp < 0.1 {
+                temp = 0.1;
+            }
+            w.delta = temp * w.delta.min(pnorm / 0.1);
+            w.par /= temp;
+        } else if w.par == 0.0 || ratio >= RHO_EXPAND {
+            w.delta = pnorm / 0.5;
+            w.par *= 0.5;
+        }
+
+        let accepted = ratio >= RHO_ACCEPT;
+        if accepted {
+            w.x = trial;
+            w.r = r1;
+            w.fnorm = fnorm1;
+            w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
+            w.need_jac = true;
+            w.first = false;
+        }
+
+        // Convergence tests (MINPACK order).
+        let f_ok = actred.abs() <= ftol && prered <= ftol && 0.5 * ratio <= 1.0;
+        let x_ok = w.delta <= xtol * w.xnorm;
+        let term = if f_ok && x_ok {
+            Some(Termination::FtolXtol)
+        } else if f_ok {
+            Some(Termination::Ftol)
+        } else if x_ok {
+            Some(Termination::Xtol)
+        } else if w.nfev >= max_evals {
+            Some(Termination::MaxEvaluations)
+        } else if actred.abs() <= EPSMCH && prered <= EPSMCH && 0.5 * ratio <= 1.0 {
+            Some(Termination::Ftol)
+        } else if w.delta <= EPSMCH * w.xnorm {
+            Some(Termination::Xtol)
+        } else if w.delta.is_nan() || w.delta <= f64::MIN_POSITIVE {
+            Some(Termination::NoProgress)
+        } else {
+            None
+        };
+        if term.is_some() {
+            self.termination = term;
+        }
+
+        let kv = argmin::kv!(
+            "delta" => w.delta;
+            "lambda" => w.par;
+            "ratio" => ratio;
+            "accepted" => accepted;
+            "evals" => w.nfev;
+        );
+        let cost = 0.5 * w.fnorm * w.fnorm;
+        Ok((state.param(w.x.clone()).cost(cost), Some(kv)))
+    }
+
+    fn terminate(&mut self, _state: &LmState) -> TerminationStatus {
+        if self.termination.is_none() && self.interrupted() {
+            self.termination = Some(Termination::Interrupted);
+        }
+        match self.termination {
+            None => TerminationStatus::NotTerminated,
+            Some(Termination::Interrupted) => {
+                TerminationStatus::Terminated(TerminationReason::Interrupt)
+            }
+            Some(t) if t.converged() => {
+                TerminationStatus::Terminated(TerminationReason::SolverConverged)
+            }
+            Some(t) => TerminationStatus::Terminated(TerminationReason::SolverExit(
+                t.describe().to_string(),
+            )),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Ctrl-C: one process-wide handler, installed on first use.
+//
+// argmin's Executor installs its own handler bound to the flag of the *first* run in the
+// process (later runs cannot be interrupted, and Ctrl-C is swallowed between runs). Instead
+// `minimize` turns the Executor's handler off and installs one that bumps a global
+// generation counter while a fit is running (every running solver sees the change) and,
+// when no fit is running, exits the process with status 130 as an unhandled SIGINT would.
+
+static INTERRUPTS: AtomicU64 = AtomicU64::new(0);
+static ACTIVE_RUNS: AtomicUsize = AtomicUsize::new(0);
+static HANDLER: Once = Once::new();
+
+fn install_interrupt_handler() {
+    HANDLER.call_once(|| {
+        // If another handler is already installed (e.g. by a direct argmin Executor run),
+        // Ctrl-C keeps working through that one; nothing else to do.
+        let _ = ctrlc::set_handler(|| {
+            if ACTIVE_RUNS.load(Ordering::SeqCst) == 0 {
+                std::process::exit(130);
+            }
+            INTERRUPTS.fetch_add(1, Ordering::SeqCst);
+        });
+    });
+}
+
+struct ActiveRun;
+impl ActiveRun {
+    fn start() -> Self {
+        ACTIVE_RUNS.fetch_add(1, Ordering::SeqCst);
+        ActiveRun
+    }
+}
+impl Drop for ActiveRun {
+    fn drop(&mut self) {
+        ACTIVE_RUNS.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The fit layer's view of a problem, and the driver.
+
+/// A least-squares problem in the form the fit layer supplies. Residuals are already
+/// weighted (`r̃ᵢ = √wᵢ rᵢ`), so `cost = ½ Σ r̃ᵢ²`.
+pub trait LeastSquaresProblem {
+    /// Weighted residuals at `x`. May contain NaN or ±∞ (e.g. outside the model's domain):
+    /// such a trial point is rejected and the trust region shrinks.
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64>;
+    /// Jacobian `∂r̃ᵢ/∂xⱼ` (`m × n`), analytic; see [`finite_difference_jacobian`] otherwise.
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64>;
+}
+
+impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        (**self).residuals(x)
+    }
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        (**self).jacobian(x)
+    }
+}
+
+/// Adapts a [`LeastSquaresProblem`] to argmin's [`Operator`] (residuals) and [`Jacobian`].
+#[derive(Debug, Clone, Copy)]
+pub struct ArgminAdapter<'a, P: ?Sized>(pub &'a P);
+
+impl<P: LeastSquaresProblem + ?Sized> Operator for ArgminAdapter<'_, P> {
+    type Param = DVector<f64>;
+    type Output = DVector<f64>;
+    fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
+        Ok(self.0.residuals(x))
+    }
+}
+
+impl<P: LeastSquaresProblem + ?Sized> Jacobian for ArgminAdapter<'_, P> {
+    type Param = DVector<f64>;
+    type Jacobian = DMatrix<f64>;
+    fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
+        Ok(self.0.jacobian(x))
+    }
+}
+
+/// Options for a run through argmin's Executor. Construct with `..Default::default()` so
+/// that fields added later do not break callers.
+#[derive(Debug, Clone)]
+pub struct LmConfig {
+    /// See [`LevenbergMarquardt::with_ftol`]. Default `1e-10`.
+    pub ftol: f64,
+    /// See [`LevenbergMarquardt::with_xtol`]. Default `1e-10`.
+    pub xtol: f64,
+    /// See [`LevenbergMarquardt::with_gtol`]. Default `1e-12`.
+    pub gtol: f64,
+    /// Trial steps (argmin iterations). Default 1000.
+    pub max_iters: u64,
+    /// Residual evaluations, including the one at the start. Default 2000.
+    pub max_evals: u64,
+    /// Wall-clock limit. Default none.
+    pub timeout: Option<Duration>,
+    /// Show a progress line on the terminal (stderr, via indicatif). Default false.
+    pub progress: bool,
+    /// Stop when this flag becomes true (in addition to Ctrl-C). Default none.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+impl Default for LmConfig {
+    fn default() -> Self {
+        LmConfig {
+            ftol: 1e-10,
+            xtol: 1e-10,
+            gtol: 1e-12,
+            max_iters: 1000,
+            max_evals: 2000,
+            timeout: None,
+            progress: false,
+            interrupt: None,
+        }
+    }
+}
+
+/// The result of a run: never an error for non-convergence.
+#[derive(Debug, Clone)]
+pub struct LmReport {
+    /// Final (best) parameters.
+    pub x: DVector<f64>,
+    /// Weighted residuals at `x`.
+    pub residuals: DVector<f64>,
+    /// Jacobian at `x` (evaluated once more at the end if the last step was accepted).
+    pub jacobian: DMatrix<f64>,
+    /// `½ ‖residuals‖²`.
+    pub cost: f64,
+    pub termination: Termination,
+    /// argmin iterations = trial steps.
+    pub iterations: u64,
+    /// Residual evaluations (including the start).
+    pub evaluations: u64,
+    pub jacobian_evaluations: u64,
+    pub seconds: f64,
+}
+
+/// Terminal progress line as an argmin observer.
+struct ProgressObserver {
+    bar: indicatif::ProgressBar,
+}
+
+impl ProgressObserver {
+    fn new() -> Self {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} LM {elapsed} {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+        );
+        ProgressObserver { bar }
+    }
+}
+
+impl Observe<LmState> for ProgressObserver {
+    fn observe_iter(&mut self, state: &LmState, kv: &KV) -> Result<(), ArgminError> {
+        let get = |k: &str| kv.get(k).and_then(|v| v.get_float()).unwrap_or(f64::NAN);
+        self.bar.set_message(format!(
+            "iter {:>5}  cost {:.9e}  Δ {:.3e}  λ {:.3e}",
+            state.get_iter(),
+            state.get_best_cost(),
+            get("delta"),
+            get("lambda"),
+        ));
+        self.bar.tick();
+        Ok(())
+    }
+
+    fn observe_final(&mut self, _state: &LmState) -> Result<(), ArgminError> {
+        self.bar.finish_and_clear();
+        Ok(())
+    }
+}
+
+/// Run LM via argmin's Executor on any [`LeastSquaresProblem`], with Ctrl-C handling (see the
+/// module docs). Never fails: a run that does not converge returns a report saying why.
+/// Invalid tolerances in `config` are clamped to 0 (the builders validate instead).
+pub fn minimize<P: LeastSquaresProblem + ?Sized>(
+    problem: &P,
+    x0: DVector<f64>,
+    config: &LmConfig,
+) -> LmReport {
+    let start = Instant::now();
+    install_interrupt_handler();
+    let _active = ActiveRun::start();
+    let tol = |v: f64| if v.is_finite() && v >= 0.0 { v } else { 0.0 };
+    let mut solver = LevenbergMarquardt {
+        ftol: tol(config.ftol),
+        xtol: tol(config.xtol),
+        gtol: tol(config.gtol),
+        max_evals: config.max_evals.max(1),
+        ..LevenbergMarquardt::new()
+    };
+    if let Some(flag) = &config.interrupt {
+        solver = solver.with_interrupt(flag.clone());
+    }
+    let mut exec = Executor::new(ArgminAdapter(problem), solver)
+        .configure(|s| s.param(x0.clone()).max_iters(config.max_iters))
+        .ctrlc(false);
+    if let Some(t) = config.timeout {
+        exec = exec.timeout(t);
+    }
+    if config.progress {
+        exec = exec.add_observer(ProgressObserver::new(), ObserverMode::Always);
+    }
+    let result = exec.run();
+    let fallback = |termination| {
+        let residuals = problem.residuals(&x0);
+        let jacobian = problem.jacobian(&x0);
+        LmReport {
+            cost: 0.5 * residuals.norm_squared(),
+            x: x0.clone(),
+            residuals,
+            jacobian,
+            termination,
+            iterations: 0,
+            evaluations: 1,
+            jacobian_evaluations: 1,
+            seconds: start.elapsed().as_secs_f64(),
+        }
+    };
+    let Ok(result) = result else {
+        // Unreachable with this adapter (it never fails) and the Executor's handler off.
+        return fallback(Termination::NoProgress);
+    };
+    let state = &result.state;
+    let solver = &result.solver;
+    let termination = solver
+        .termination
+        .unwrap_or(match state.get_termination_reason() {
+            Some(TerminationReason::MaxItersReached) => Termination::MaxIterations,
+            Some(TerminationReason::Timeout) => Termination::Timeout,
+            Some(TerminationReason::Interrupt) => Termination::Interrupted,
+            _ => Termination::NoProgress,
+        });
+    let Some((x, residuals)) = solver.current() else {
+        return fallback(termination);
+    };
+    let x = x.clone();
+    let mut jacobian_evaluations = solver.jacobian_evaluations();
+    let jacobian = match solver.current_jacobian() {
+        Some(j) => j,
+        None => {
+            jacobian_evaluations += 1;
+            problem.jacobian(&x)
+        }
+    };
+    LmReport {
+        cost: 0.5 * enorm(residuals.iter()).powi(2),
+        x,
+        residuals,
+        jacobian,
+        termination,
+        iterations: state.get_iter(),
+        evaluations: solver.evaluations(),
+        jacobian_evaluations,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// Finite-difference Jacobian of `f` at `x`, for models without an analytic one.
+///
+/// * With `r0 = Some(f(x))`: forward differences (`n` evaluations), step
+///   `hⱼ = √ε · |xⱼ|` (`√ε` when `xⱼ = 0`), as MINPACK `fdjac2`; error `O(√ε)` relative.
+/// * With `r0 = None`: central differences (`2n` evaluations), step `hⱼ = ε^{1/3} · max(|xⱼ|, 1e-8)`
+///   … capped below by `ε^{1/3}·1e-8`; error `O(ε^{2/3})` relative.
+///
+/// In both cases the step is rounded so that `xⱼ + hⱼ` is exactly representable.
+pub fn finite_difference_jacobian<F: Fn(&DVector<f64>) -> DVector<f64>>(
+    f: F,
+    x: &DVector<f64>,
+    r0: Option<&DVector<f64>>,
+) -> DMatrix<f64> {
+    let n = x.len();
+    let mut xt = x.clone();
+    match r0 {
+        Some(r0) => {
+            let mut jac = DMatrix::zeros(r0.len(), n);
+            for j in 0..n {
+                let xj = x[j];
+                let mut h = EPSMCH.sqrt() * xj.abs();
+                if h == 0.0 {
+                    h = EPSMCH.sqrt();
+                }
+                xt[j] = xj + h;
+                let h = xt[j] - xj;
+                let r1 = f(&xt);
+                xt[j] = xj;
+                for i in 0..r0.len().min(r1.len()) {
+                    jac[(i, j)] = (r1[i] - r0[i]) / h;
+                }
+            }
+            jac
+        }
+        None => {
+            let mut jac: Option<DMatrix<f64>> = None;
+            for j in 0..n {
+                let xj = x[j];
+                let h = EPSMCH.cbrt() * xj.abs().max(1e-8);
+                xt[j] = xj + h;
+                let hp = xt[j] - xj;
+                let rp = f(&xt);
+                xt[j] = xj - h;
+                let hm = xj - xt[j];
+                let rm = f(&xt);
+                xt[j] = xj;
+                let jac = jac.get_or_insert_with(|| DMatrix::zeros(rp.len(), n));
+                for i in 0..jac.nrows().min(rp.len()).min(rm.len()) {
+                    jac[(i, j)] = (rp[i] - rm[i]) / (hp + hm);
+                }
+            }
+            jac.unwrap_or_else(|| DMatrix::zeros(f(x).len(), 0))
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Positivity and fixed parameters.
+
+/// A [`LeastSquaresProblem`] over the *free* parameters of an inner problem: parameters with
+/// `fixed[j] = Some(v)` are held at `v`; free parameters with `log_mask[j] = true` are
+/// optimised as `zⱼ = ln xⱼ` (so `xⱼ = exp zⱼ > 0` always). The Jacobian follows by the chain
+/// rule, `∂r/∂zⱼ = xⱼ ∂r/∂xⱼ`. [`Transformed::to_full`] maps a solution back and
+/// [`Transformed::covariance_to_full`] maps its covariance by the delta method
+/// (`C_x = G C_z Gᵀ`, `G = ∂x/∂z`, zero rows and columns for fixed parameters) — first order,
+/// so for log parameters with large relative errors the interval on `ln x` is the better one.
+#[derive(Debug, Clone)]
+pub struct Transformed<P> {
+    inner: P,
+    log_mask: Vec<bool>,
+    fixed: Vec<Option<f64>>,
+    /// Indices (into the full vector) of the free parameters, in order.
+    free: Vec<usize>,
+}
+
+impl<P> Transformed<P> {
+    /// `log_mask` and `fixed` have one entry per parameter of `inner`. Fixed values must be
+    /// finite, and positive where `log_mask` is set.
+    pub fn new(inner: P, log_mask: Vec<bool>, fixed: Vec<Option<f64>>) -> Result<Self, Error> {
+        if log_mask.len() != fixed.len() {
+            return Err(Error::Usage(format!(
+                "Transformed: log_mask has {} entries but fixed has {}; give one per parameter",
+                log_mask.len(),
+                fixed.len()
+            )));
+        }
+        for (j, f) in fixed.iter().enumerate() {
+            if let Some(v) = f {
+                if !v.is_finite() || (log_mask[j] && *v <= 0.0) {
+                    return Err(Error::Param {
+                        name: format!("#{j}"),
+                        message: format!(
+                            "fixed value {v} is not allowed (must be finite{})",
+                            if log_mask[j] { " and > 0" } else { "" }
+                        ),
+                    });
+                }
+            }
+        }
+        let free = (0..fixed.len()).filter(|&j| fixed[j].is_none()).collect();
+        Ok(Transformed {
+            inner,
+            log_mask,
+            fixed,
+            free,
+        })
+    }
+
+    /// The wrapped problem.
+    pub fn inner(&self) -> &P {
+        &self.inner
+    }
+
+    /// Number of parameters of the inner problem.
+    pub fn n_full(&self) -> usize {
+        self.fixed.len()
+    }
+
+    /// Number of free parameters (the dimension the solver sees).
+    pub fn n_free(&self) -> usize {
+        self.free.len()
+    }
+
+    /// Indices of the free parameters in the full vector.
+    pub fn free_indices(&self) -> &[usize] {
+        &self.free
+    }
+
+    /// Free (log-)coordinates of a full parameter vector; fixed entries of `x` are ignored.
+    /// Fails when a log parameter is not positive.
+    pub fn to_free(&self, x: &DVector<f64>) -> Result<DVector<f64>, Error> {
+        if x.len() != self.n_full() {
+            return Err(Error::Usage(format!(
+                "expected {} parameters, got {}",
+                self.n_full(),
+                x.len()
+            )));
+        }
+        let mut z = DVector::zeros(self.free.len());
+        for (k, &j) in self.free.iter().enumerate() {
+            z[k] = if self.log_mask[j] {
+                if x[j].is_nan() || x[j] <= 0.0 {
+                    return Err(Error::Param {
+                        name: format!("#{j}"),
+                        message: format!("{} must be > 0 (it is fitted on a log scale)", x[j]),
+                    });
+                }
+                x[j].ln()
+            } else {
+                x[j]
+            };
+        }
+        Ok(z)
+    }
+
+    /// The full parameter vector for free coordinates `z`.
+    pub fn to_full(&self, z: &DVector<f64>) -> DVector<f64> {
+        let mut x = DVector::zeros(self.n_full());
+        for (j, f) in self.fixed.iter().enumerate() {
+            if let Some(v) = f {
+                x[j] = *v;
+            }
+        }
+        for (k, &j) in self.free.iter().enumerate() {
+            x[j] = if self.log_mask[j] { z[k].exp() } else { z[k] };
+        }
+        x
+    }
+
+    /// `G = ∂x/∂z` (`n_full × n_free`).
+    pub fn dx_dz(&self, z: &DVector<f64>) -> DMatrix<f64> {
+        let mut g = DMatrix::zeros(self.n_full(), self.free.len());
+        for (k, &j) in self.free.iter().enumerate() {
+            g[(j, k)] = if self.log_mask[j] { z[k].exp() } else { 1.0 };
+        }
+        g
+    }
+
+    /// Delta-method covariance of the full parameters from the covariance of `z`.
+    pub fn covariance_to_full(&self, z: &DVector<f64>, cov_z: &DMatrix<f64>) -> DMatrix<f64> {
+        let g = self.dx_dz(z);
+        &g * cov_z * g.transpose()
+    }
+
+    /// Jacobian of the full problem mapped to the free coordinates.
+    pub fn jacobian_to_free(&self, z: &DVector<f64>, jac_full: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut jz = DMatrix::zeros(jac_full.nrows(), self.free.len());
+        for (k, &j) in self.free.iter().enumerate() {
+            let s = if self.log_mask[j] { z[k].exp() } else { 1.0 };
+            jz.set_column(k, &(jac_full.column(j) * s));
+        }
+        jz
+    }
+}
+
+impl<P: LeastSquaresProblem> LeastSquaresProblem for Transformed<P> {
+    fn residuals(&self, z: &DVector<f64>) -> DVector<f64> {
+        self.inner.residuals(&self.to_full(z))
+    }
+
+    fn jacobian(&self, z: &DVector<f64>) -> DMatrix<f64> {
+        let jac = self.inner.jacobian(&self.to_full(z));
+        self.jacobian_to_free(z, &jac)
+    }
+}

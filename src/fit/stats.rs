@@ -1,0 +1,129 @@
+//! Statistics of a finished least-squares fit, from the Jacobian at the optimum.
+//!
+//! With `J = U Σ Vᵀ` (thin SVD, `J` padded with zero rows when `n < p`):
+//! * residual variance `s² = 2·cost / (n − p) = Σ r̃ᵢ² / (n − p)` (NaN when `n ≤ p`);
+//! * covariance `C = s² (JᵀJ)⁺ = s² V Σ⁺² Vᵀ`, where singular values `σₖ ≤ rel_threshold · σ₁`
+//!   are treated as zero (pseudo-inverse) — `JᵀJ` is never formed;
+//! * standard errors `√Cⱼⱼ`, correlations `Cᵢⱼ / (sᵢ sⱼ)` (NaN where a standard error is 0);
+//! * condition number `σ₁ / σₚ` (∞ when `σₚ = 0`);
+//! * the undetermined directions: right singular vectors of the dropped singular values, i.e.
+//!   parameter combinations the data do not determine.
+
+use nalgebra::{DMatrix, DVector};
+
+/// Covariance and identifiability from the Jacobian at the optimum.
+#[derive(Debug, Clone)]
+pub struct Uncertainty {
+    /// `s²(JᵀJ)⁺`, `s² = 2·cost/(n−p)`.
+    pub covariance: DMatrix<f64>,
+    pub stderr: DVector<f64>,
+    pub correlation: DMatrix<f64>,
+    /// Singular values of `J`, descending (length `p`).
+    pub singular_values: DVector<f64>,
+    /// `σ_max / σ_min` (∞ when singular).
+    pub condition: f64,
+    /// Right singular vectors (unit, length `p`) of directions the data do not determine.
+    pub undetermined: Vec<DVector<f64>>,
+    /// Number of singular values above `rel_threshold · σ_max`.
+    pub rank: usize,
+    /// `s²`, the residual variance estimate.
+    pub residual_variance: f64,
+}
+
+/// Covariance and identifiability of a fit: `jacobian` of the weighted residuals at the
+/// optimum (`n × p`), `cost = ½ Σ r̃ᵢ²` there, `n` observations; singular values at or below
+/// `rel_threshold · σ_max` count as zero (e.g. `1e-10`; a negative or NaN threshold is
+/// treated as 0, i.e. only exact zeros are dropped).
+pub fn uncertainty(
+    jacobian: &DMatrix<f64>,
+    cost: f64,
+    n: usize,
+    rel_threshold: f64,
+) -> Uncertainty {
+    let p = jacobian.ncols();
+    let rel = if rel_threshold >= 0.0 {
+        rel_threshold
+    } else {
+        0.0
+    };
+    let s2 = if n > p {
+        2.0 * cost / (n - p) as f64
+    } else {
+        f64::NAN
+    };
+    if p == 0 {
+        return Uncertainty {
+            covariance: DMatrix::zeros(0, 0),
+            stderr: DVector::zeros(0),
+            correlation: DMatrix::zeros(0, 0),
+            singular_values: DVector::zeros(0),
+            condition: 1.0,
+            undetermined: Vec::new(),
+            rank: 0,
+            residual_variance: s2,
+        };
+    }
+    let mut j = jacobian.clone();
+    if j.nrows() < p {
+        j = j.resize_vertically(p, 0.0);
+    }
+    let finite = j.iter().all(|v| v.is_finite());
+    if !finite {
+        let nan = DMatrix::from_element(p, p, f64::NAN);
+        return Uncertainty {
+            covariance: nan.clone(),
+            stderr: DVector::from_element(p, f64::NAN),
+            correlation: nan,
+            singular_values: DVector::from_element(p, f64::NAN),
+            condition: f64::NAN,
+            undetermined: Vec::new(),
+            rank: 0,
+            residual_variance: s2,
+        };
+    }
+    let svd = j.svd(false, true);
+    let v_t = svd.v_t.expect("SVD computed with V");
+    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
+    order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
+    let sv = DVector::from_iterator(p, order.iter().map(|&k| svd.singular_values[k]));
+    let smax = sv[0];
+    let cut = rel * smax;
+    let mut cov = DMatrix::zeros(p, p);
+    let mut undetermined = Vec::new();
+    let mut rank = 0;
+    for &k in &order {
+        let s = svd.singular_values[k];
+        let v = v_t.row(k).transpose();
+        if s > cut && s > 0.0 {
+            rank += 1;
+            cov += (&v * v.transpose()) * (s2 / (s * s));
+        } else {
+            undetermined.push(v);
+        }
+    }
+    let stderr = DVector::from_iterator(p, (0..p).map(|i| cov[(i, i)].max(0.0).sqrt()));
+    let correlation = DMatrix::from_fn(p, p, |a, b| {
+        let d = stderr[a] * stderr[b];
+        if d > 0.0 {
+            cov[(a, b)] / d
+        } else {
+            f64::NAN
+        }
+    });
+    let smin = sv[p - 1];
+    let condition = if smin > 0.0 {
+        smax / smin
+    } else {
+        f64::INFINITY
+    };
+    Uncertainty {
+        covariance: cov,
+        stderr,
+        correlation,
+        singular_values: sv,
+        condition,
+        undetermined,
+        rank,
+        residual_variance: s2,
+    }
+}
