@@ -154,6 +154,11 @@ fn main() {
         .map(|&(p, k)| run_theirs(p, &p.starts[k]))
         .collect();
 
+    let plain: Vec<Outcome> = runs
+        .iter()
+        .map(|&(p, k)| run_ours_with(p, &p.starts[k], false))
+        .collect();
+
     println!(
         "{:<10} {:>5} | {:>6} {:>6} {:>6} | {:>6} {:>6} {:>6}",
         "problem", "start", "evals", "jevals", "LRE", "evals", "jevals", "LRE"
@@ -194,31 +199,30 @@ fn main() {
     let rb_ours: u64 = both.iter().map(|&i| ours[i].nres).sum();
     let rb_theirs: u64 = both.iter().map(|&i| theirs[i].nres).sum();
 
-    // Timing interleaves the two solvers run by run (alternating which goes first), so that
-    // both see the same machine load; each repeat sums the 54 runs.
+    // Timing interleaves the solvers run by run (rotating which goes first), so that all
+    // see the same machine load; each repeat sums the 54 runs.
     let mut t_ours = Vec::new();
     let mut t_theirs = Vec::new();
+    let mut t_plain = Vec::new();
     for rep in 0..repeats {
-        let (mut so, mut st) = (0.0, 0.0);
+        let mut acc = [0.0f64; 3];
         for (i, &(p, k)) in runs.iter().enumerate() {
-            let time = |f: &dyn Fn() -> Outcome| {
+            for s in 0..3 {
+                let which = (i + rep + s) % 3;
                 let t0 = Instant::now();
-                std::hint::black_box(f());
-                t0.elapsed().as_secs_f64()
-            };
-            let ours_run = || run_ours(p, &p.starts[k]);
-            let theirs_run = || run_theirs(p, &p.starts[k]);
-            if (i + rep) % 2 == 0 {
-                so += time(&ours_run);
-                st += time(&theirs_run);
-            } else {
-                st += time(&theirs_run);
-                so += time(&ours_run);
+                std::hint::black_box(match which {
+                    0 => run_ours(p, &p.starts[k]),
+                    1 => run_theirs(p, &p.starts[k]),
+                    _ => run_ours_with(p, &p.starts[k], false),
+                });
+                acc[which] += t0.elapsed().as_secs_f64();
             }
         }
-        t_ours.push(so);
-        t_theirs.push(st);
+        t_ours.push(acc[0]);
+        t_theirs.push(acc[1]);
+        t_plain.push(acc[2]);
     }
+    let mp = median(t_plain);
     let (mo, mt) = (median(t_ours), median(t_theirs));
 
     println!();
@@ -230,16 +234,18 @@ fn main() {
         "levenberg-marquardt: solved {}/54, mean LRE {:.2}, residual evals {}, Jacobian evals {}, suite time {:.2} ms (median of {repeats})",
         solved(&theirs), mean(&theirs), r_theirs, j_theirs, mt * 1e3
     );
-    let plain: Vec<Outcome> = runs
-        .iter()
-        .map(|&(p, k)| run_ours_with(p, &p.starts[k], false))
-        .collect();
     println!(
-        "goniofit, polishing off: solved {}/54, mean LRE {:.2}, residual evals {}, Jacobian evals {}",
+        "goniofit, polishing off: solved {}/54, mean LRE {:.2}, residual evals {}, Jacobian evals {}, suite time {:.2} ms (median of {repeats})",
         solved(&plain),
         mean(&plain),
         sum(&plain, |o| o.nres as f64),
-        sum(&plain, |o| o.njac as f64)
+        sum(&plain, |o| o.njac as f64),
+        mp * 1e3
+    );
+    println!(
+        "ratios goniofit (polishing off)/levenberg-marquardt: residual evals {:.3}, time {:.3}",
+        sum(&plain, |o| o.nres as f64) / r_theirs,
+        mp / mt
     );
     println!(
         "ratios goniofit/levenberg-marquardt: residual evals {:.3}, Jacobian evals {:.3}, time {:.3}; \
