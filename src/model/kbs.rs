@@ -101,8 +101,15 @@ impl Kbs {
             Some((x, y)) => 4.0 * x * y / (lambda * lambda),
             None => 1.0,
         };
-        let ln_l =
-            s.ln() + (PI * t * t / area).ln() + 2.0 * geo.h[i].ln() + 2.0 * k_sigma.ln() + q.ln_q;
+        let h = geo.h[i];
+        // One logarithm for the prefactor unless it leaves the normal range.
+        let pref = s * (PI * t * t / area) * (h * k_sigma) * (h * k_sigma);
+        let ln_pref = if pref.is_normal() {
+            pref.ln()
+        } else {
+            s.ln() + (PI * t * t / area).ln() + 2.0 * h.ln() + 2.0 * k_sigma.ln()
+        };
+        let ln_l = ln_pref + q.ln_q;
         let inc = ln_l.exp();
         let mut value = inc;
         let mut d_sigma = inc * (2.0 + 2.0 * g * q.d_g) / sigma;
