@@ -267,6 +267,7 @@ fn sinc(x: f64) -> f64 {
 
 /// eq. 37 and 28 written directly in the paper's form (F, A = 4XY), with S summed naively
 /// (fine for the small g used here).
+#[allow(clippy::too_many_arguments)]
 fn paper_form(ti: f64, tr: f64, pr: f64, lambda: f64, sigma: f64, t: f64, x: f64, y: f64) -> f64 {
     let (ti, tr, pr) = (ti.to_radians(), tr.to_radians(), pr.to_radians());
     let k = 2.0 * PI / lambda;
