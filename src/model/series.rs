@@ -135,6 +135,9 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
 /// The series, summed outward from its largest term until rigorous bounds on the omitted
 /// terms are below `tol`/10 relative to S and to the derivative sums (see the module doc).
 pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
+    if g < 10.0 && a < 600.0 {
+        return series_from_one(g, a, tol);
+    }
     let ln_g = g.ln();
     let m0 = peak_index(g, ln_g, a);
     // ln(e^{−g} t_{m0}).
@@ -209,9 +212,54 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     }
 }
 
+/// The series for small g and moderate a, summed upward from m = 1 with the same tail
+/// bounds as [`series`] (no peak search, no lgamma, one division and one `exp` per term).
+/// With a < 600 and g < 10, t_m/t_1 ≤ e^{a} e^{g} stays far from overflow.
+fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
+    let eps = 0.1 * tol.max(1e-17);
+    let (mut s0, mut s_c, mut s_inv) = (1.0f64, -g, 1.0f64);
+    let mut rel = 1.0f64;
+    let mut m = 1.0f64;
+    let mut inv_m = 1.0f64;
+    loop {
+        let mp1 = m + 1.0;
+        let inv_mp1 = 1.0 / mp1;
+        let mut r = g * m * inv_mp1 * inv_mp1;
+        if a != 0.0 {
+            r *= (a * inv_m * inv_mp1).exp();
+        }
+        // Bound on Σ_{j>m} (valid once r_m < 1, since r_j decreases).
+        if r < 1.0 {
+            let inv = 1.0 / (1.0 - r);
+            let tail = rel * r * inv;
+            if tail <= eps * s0
+                && tail * (m + g + inv) <= eps * (s0 + s_c.abs())
+                && a * tail * inv_mp1 <= eps * (s0 + a * s_inv)
+            {
+                break;
+            }
+        }
+        rel *= r;
+        m = mp1;
+        inv_m = inv_mp1;
+        s0 += rel;
+        s_c += (m - 1.0 - g) * rel;
+        s_inv += rel * inv_m;
+        if rel == 0.0 {
+            break;
+        }
+    }
+    LnQ {
+        ln_q: -g - a + s0.ln(),
+        d_g: s_c / (g * s0),
+        d_a: -s_inv / s0,
+        mode: Mode::Series,
+    }
+}
+
 /// Highest order of the asymptotic expansion tabulated.
 pub const ASYM_ORDERS: usize = 18;
-const ASYM_DEG: usize = 2 * ASYM_ORDERS + 1;
+const ASYM_DEG: usize = 2 * ASYM_ORDERS + 4; // ≥ 2n + 1, padded to a multiple of 4
 const ASYM_K: usize = 2 * ASYM_ORDERS + 1;
 
 /// P_n(b) coefficients: `ASYM[n][i]` multiplies b^i g^{−n}.
@@ -289,7 +337,7 @@ const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
         while k <= 2 * n {
             let w = mu[k][k - n];
             let mut i = 0;
-            while i < ASYM_DEG {
+            while i < ASYM_K {
                 p[n][i] += c[k][i] * w;
                 i += 1;
             }
@@ -313,15 +361,37 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     let (mut r, mut r_g, mut r_b) = (1.0f64, 0.0f64, 0.0f64);
     let mut gp = 1.0;
     let mut prev = f64::INFINITY;
+    // Powers of b, extended two per order; P_n(b) and b P_n'(b) as dot products with
+    // independent partial sums (no serial Horner chain).
+    let mut bp = [0.0f64; ASYM_DEG];
+    let mut bd = [0.0f64; ASYM_DEG]; // bd[i] = i b^{i−1}
+    bp[0] = 1.0;
     for (n, coef) in ASYM.iter().enumerate().skip(1) {
         gp *= x;
         let deg = 2 * n;
-        let mut p = coef[deg];
-        let mut dp = 0.0;
-        for i in (0..deg).rev() {
-            dp = dp * b + p;
-            p = p * b + coef[i];
+        bp[deg - 1] = bp[deg - 2] * b;
+        bp[deg] = bp[deg - 1] * b;
+        bd[deg - 1] = (deg - 1) as f64 * bp[deg - 2];
+        bd[deg] = deg as f64 * bp[deg - 1];
+        let (mut p0, mut p1, mut p2, mut p3) = (0.0, 0.0, 0.0, 0.0);
+        let (mut d0, mut d1, mut d2, mut d3) = (0.0, 0.0, 0.0, 0.0);
+        let end = (deg + 4) & !3; // rows are zero-padded to a multiple of 4
+        let mut i = 0;
+        while i < end {
+            let (c0, c1, c2, c3) = (coef[i], coef[i + 1], coef[i + 2], coef[i + 3]);
+            let (b0, b1, b2, b3) = (bp[i], bp[i + 1], bp[i + 2], bp[i + 3]);
+            p0 += c0 * b0;
+            p1 += c1 * b1;
+            p2 += c2 * b2;
+            p3 += c3 * b3;
+            d0 += c0 * bd[i];
+            d1 += c1 * bd[i + 1];
+            d2 += c2 * bd[i + 2];
+            d3 += c3 * bd[i + 3];
+            i += 4;
         }
+        let p = (p0 + p1) + (p2 + p3);
+        let dp = (d0 + d1) + (d2 + d3);
         let term = gp * p;
         let term_b = gp * dp;
         r += term;
