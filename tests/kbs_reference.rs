@@ -78,6 +78,7 @@ fn check_mode(name: &str, f: impl Fn(f64, f64) -> LnQ) -> BTreeMap<&'static str,
     let (mut w_q, mut w_g, mut w_a, mut w_ratio) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut worst_at = (0.0, 0.0);
     let mut modes = BTreeMap::new();
+    let mut worst_by_mode: BTreeMap<&'static str, f64> = BTreeMap::new();
     let mut failures = Vec::new();
     for r in &rows {
         let q = f(r.g, r.a);
@@ -89,6 +90,8 @@ fn check_mode(name: &str, f: impl Fn(f64, f64) -> LnQ) -> BTreeMap<&'static str,
         );
         *modes.entry(q.mode.name()).or_insert(0) += 1;
         let e = errs(&q, r, TOL);
+        let w = worst_by_mode.entry(q.mode.name()).or_insert(0.0);
+        *w = w.max(e.ratio);
         w_q = w_q.max(e.ln_q);
         w_g = w_g.max(e.g_dg);
         w_a = w_a.max(e.a_da);
@@ -110,6 +113,7 @@ fn check_mode(name: &str, f: impl Fn(f64, f64) -> LnQ) -> BTreeMap<&'static str,
         worst_at.0,
         worst_at.1
     );
+    println!("{name:>6}: worst error/allowance per mode {worst_by_mode:?}");
     assert!(failures.is_empty(), "{name}: {}", failures.join("\n"));
     modes
 }
