@@ -157,6 +157,36 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 3000,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// `auto` against the converged series (itself checked against mpmath) densely over
+    /// the region where auto's cheap paths operate: every path meets the stated accuracy.
+    #[test]
+    fn auto_agrees_with_series(lg in -12.0..5.0f64, b in 0.0..1.0f64, wide in prop::bool::ANY) {
+        let g = 10f64.powf(lg);
+        // a = b g^1.5 spans the asymptotic region's edge; `wide` adds a ≫ g.
+        let a = if wide { b * 50.0 * (1.0 + g * g.sqrt()) } else { b * g * g.sqrt() };
+        let qa = series::auto(g, a, TOL);
+        let qs = series::series(g, a, 1e-14);
+        let d_lnq = (qa.ln_q - qs.ln_q).abs();
+        let gs = g * qs.d_g;
+        let as_ = a * qs.d_a;
+        let d_g = (g * qa.d_g - gs).abs() / (1.0 + gs.abs());
+        let d_a = (a * qa.d_a - as_).abs() / (1.0 + as_.abs());
+        let round = 64.0 * f64::EPSILON * (1.0 + qs.ln_q.abs() + g.sqrt());
+        prop_assert!(
+            d_lnq <= TOL + round && d_g <= TOL + round && d_a <= TOL + round,
+            "g={g:e} a={a:e} mode {:?}: Δ ln Q {d_lnq:e}, Δ g d_g {d_g:e}, Δ a d_a {d_a:e}",
+            qa.mode
+        );
+    }
+}
+
 /// Locate the g where `auto`'s mode changes between g_lo and g_hi (a fixed), by bisection.
 fn switch_point(a: f64, mut g_lo: f64, mut g_hi: f64) -> Option<(f64, f64)> {
     let m_lo = series::auto(g_lo, a, TOL).mode;

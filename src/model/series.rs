@@ -24,9 +24,10 @@
 //!   regrouped by powers of 1/g, give e^{−g} S = (e^{−a/g}/g) Σ_n P_n(b) g^{−n} with
 //!   polynomials P_n of degree 2n (P_0 = 1, P_1 = 1 − 2b + b²/2, and P_n(0) = n!, the
 //!   expansion of Ei at a = 0). The table of P_n is built at compile time. The series is
-//!   asymptotic: orders are added while they shrink, and the last two orders added (with
-//!   their derivative weights) are the error estimate; `auto` accepts it only when both
-//!   are below tol/2 and g ≥ 40 (so the neglected e^{−g}-size effects of the M = 0 end are
+//!   asymptotic: orders are added while they shrink; the error estimate is the first
+//!   omitted order (with its derivative weights), extrapolated from the last order by the
+//!   larger of the last two decay ratios; `auto` accepts it only when the orders decay by
+//!   at least 2× per step, the estimate is below tol/2, and g ≥ 40 (so the neglected e^{−g}-size effects of the M = 0 end are
 //!   below 1e-17). Work: about (n+1)² multiply-adds for n orders (n ≈ 3 at g = 1e4, ≈ 9 at
 //!   g = 100 and moderate b).
 //!
@@ -386,7 +387,7 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     let mut gp = 1.0;
     // Sizes and error estimates of the previous two orders.
     let (mut prev, mut prev2) = (f64::INFINITY, f64::INFINITY);
-    let mut err_prev = f64::INFINITY;
+    let (mut err_prev, mut err_prev2) = (f64::INFINITY, f64::INFINITY);
     // Powers of b, extended two per order; P_n(b) and b P_n'(b) as dot products with
     // independent partial sums (no serial Horner chain).
     let mut bp = [0.0f64; ASYM_DEG];
@@ -425,9 +426,11 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
         r_b += term_b;
         let size = term.abs();
         let err = size * (1.0 + n as f64) + b * term_b.abs();
-        // Accept when two consecutive orders are below the target, so that an order that
-        // happens to be small (P_n(b) near a root) does not stop the expansion early.
-        if err.max(err_prev) <= target * r.abs() && r > 0.0 {
+        // The first omitted order is estimated from the last one and the larger of the
+        // last two decay ratios (so that an order that happens to be small, P_n(b) near a
+        // root, cannot stop the expansion early); accepted only in a clearly decaying phase.
+        let q = (err / err_prev).max(err_prev / err_prev2);
+        if n >= 3 && q < 0.5 && err * q <= 0.3 * target * r.abs() && r > 0.0 {
             return Some(LnQ {
                 ln_q: -b - 2.0 * g.ln() + r.ln(),
                 d_g: (b - 2.0 + (r_g - b * r_b) / r) * x,
@@ -440,6 +443,7 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
         }
         prev2 = prev;
         prev = size;
+        err_prev2 = err_prev;
         err_prev = err;
     }
     None
