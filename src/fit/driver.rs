@@ -37,6 +37,9 @@ pub const ROUGH_G: f64 = 3.0;
 /// Median g below which the smooth regime's ridge is expected.
 pub const SMOOTH_G: f64 = 0.3;
 
+/// Accuracy of the model on the starting-value grid (it only ranks candidates).
+pub const GRID_TOL: f64 = 1e-4;
+
 /// Relative singular-value threshold below which a direction is undetermined.
 pub const RANK_THRESHOLD: f64 = 1e-9;
 
@@ -229,7 +232,14 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     let problem = FitProblem::new(model, layout.clone(), input, config.residual, floor)?;
     let mut given = fixed.clone();
     assign(&layout, &config.init, &mut given)?;
-    let (p0, _) = init::initial_values(&problem, input, &given);
+    let grid_model = model::by_name(
+        model.name(),
+        &ModelOptions {
+            tol: GRID_TOL.max(config.model_opts.tol),
+            ..config.model_opts
+        },
+    )?;
+    let (p0, _) = init::initial_values(&problem, grid_model.as_ref(), input, &given);
     let init_seconds = t0.elapsed().as_secs_f64();
 
     let first = run_lm(&problem, &p0, &config.lm);
