@@ -134,6 +134,9 @@ pub struct FitArgs {
     /// Write the input rows with L_fit, residual, std_residual, mode.
     #[arg(long)]
     pub residuals: Option<PathBuf>,
+    /// Write the fit's pictures (PNG and SVG) into this folder.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
     /// The measurement file (CSV or ASTM E1392).
     pub file: PathBuf,
 }
@@ -304,6 +307,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let mut out = std::io::stdout().lock();
     if args.json {
         let mut v = report::json::to_json(&result, &info);
+        v["replay"] = replay_json(&result);
         if results.len() > 1 {
             v["comparison"] = serde_json::json!(results
                 .iter()
@@ -334,6 +338,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     }
     if let Some(path) = &args.residuals {
         write_residuals(path, &ds, &result)?;
+    }
+    if let Some(dir) = &args.plot {
+        let config = fit_config(&args, &result.model, uncertainties)?;
+        let written = plot_fit(dir, &config, &input, &result.layout, &result.values)?;
+        eprintln!("goniofit: wrote {} pictures to {}", written.len(), dir.display());
     }
     Ok(if result.converged() { 0 } else { 3 })
 }
@@ -425,4 +434,72 @@ fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<(
         .collect();
     io::write_csv(path, &headers, &rows)?;
     Ok(())
+}
+
+/// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
+/// arguments and the fitted values of every parameter (layout order).
+fn replay_json(r: &FitResult) -> serde_json::Value {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    serde_json::json!({
+        "args": args,
+        "model": r.model,
+        "names": r.layout.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
+        "values": r.values,
+        "n_free": r.n_free,
+    })
+}
+
+/// Draw the pictures of a fit at parameter values `values` (layout order). For a joint fit
+/// the middle channel is drawn.
+pub fn plot_fit(
+    dir: &Path,
+    config: &FitConfig,
+    input: &FitInput,
+    layout: &goniofit::fit::problem::ParamLayout,
+    values: &[f64],
+) -> anyhow::Result<Vec<PathBuf>> {
+    use goniofit::fit::problem::FitProblem;
+    let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
+    let c = layout.index.len() / 2;
+    let idx: Vec<usize> = (0..input.y.len()).filter(|&i| input.channel[i] == c).collect();
+    let sub = input.subset(&idx);
+    let max_y = input.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let floor = config.floor.unwrap_or(1e-6 * max_y);
+    let problem = FitProblem::new(model.as_ref(), layout.clone(), &sub, config.residual, floor)?;
+    let (fitted, _) = problem.model_values(values, false);
+    let residuals = problem.raw_residuals(&fitted);
+    let n_free = layout.free().len();
+    let sw = problem.sqrt_weight();
+    let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
+    let s_hat = (chi2 / (sub.y.len().saturating_sub(n_free).max(1)) as f64).sqrt();
+    let std_residuals: Vec<f64> = residuals
+        .iter()
+        .zip(sw)
+        .map(|(r, s)| {
+            if config.weights_are_uncertainties || s_hat == 0.0 {
+                r * s
+            } else {
+                r * s / s_hat
+            }
+        })
+        .collect();
+    let params = layout.model_params(values, c);
+    let specs = model.params();
+    let mut title = format!("{}:", model.name());
+    for (spec, v) in specs.iter().zip(&params) {
+        title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
+    }
+    if layout.channel_names.len() > 1 {
+        title += &format!(" [{}]", layout.channel_names[c]);
+    }
+    let plot_input = goniofit::plot::fit::FitPlotInput {
+        title,
+        model: model.as_ref(),
+        params: &params,
+        geo: &sub.geo,
+        measured: &sub.y,
+        fitted: &fitted,
+        std_residuals: &std_residuals,
+    };
+    Ok(goniofit::plot::fit::write_fit_plots(dir, &plot_input)?)
 }

@@ -3,6 +3,7 @@
 pub mod eval;
 pub mod figures;
 pub mod fit;
+pub mod plot;
 pub mod render;
 pub mod synth;
 
@@ -13,6 +14,7 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Eval(a) => eval::run(a),
         Command::Fit(a) => fit::run(*a),
+        Command::Plot(a) => plot::run(a),
         Command::Synth(a) => synth::run(*a),
         Command::Render(a) => render::run(a),
         Command::Figures(a) => figures::run(a),

@@ -2,8 +2,11 @@
 //! (per channel, and in chunks for parallel evaluation), residuals of a chosen kind, and
 //! the mapping between the model's parameters and the solver's free variables.
 //!
-//! Free variables: every parameter that is not fixed; positive parameters enter as their
-//! logarithm (x = ln p), so the solver can never step to σ ≤ 0. Residuals are weighted,
+//! Free variables: every parameter that is not fixed, through a [`Transform`]: the positive
+//! nonlinear parameters (σ, T, w) as their logarithm, so the solver can never step to
+//! σ ≤ 0; the linear amplitudes (scales, lobe strength) through p = √(x² + 1) − 1 (lmfit's
+//! one-sided bound), which reaches the bound p = 0 at x = 0 instead of drifting towards
+//! ln 0 when the data shows no such component. Residuals are weighted,
 //! r̃ᵢ = √wᵢ rᵢ, so the solver's cost ½‖r̃‖² is the fit cost ½ Σ wᵢ rᵢ².
 //!
 //! Joint multi-channel fits share every parameter except the linear scales (`scale`,
@@ -36,11 +39,58 @@ pub enum ResidualKind {
     Log,
 }
 
-/// Whether a parameter is fitted as its logarithm: the positive nonlinear ones (σ, T, w).
-/// Linear amplitudes (scales, lobe strength) stay linear so that a component the data does
-/// not show converges to ≈ 0 (and is reported so) instead of drifting towards ln 0.
-pub fn fitted_in_log(spec: &crate::model::ParamSpec) -> bool {
-    spec.positive && !super::init::LINEAR.contains(&spec.name)
+/// How a parameter p maps to the solver variable x.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transform {
+    /// x = p (unbounded).
+    Identity,
+    /// x = ln p (p > 0).
+    Log,
+    /// p = √(x² + 1) − 1 ≥ 0, bounded below by 0.
+    NonNegative,
+}
+
+impl Transform {
+    /// The transform for a model parameter: log for positive nonlinear parameters,
+    /// non-negative for the linear amplitudes, identity otherwise.
+    pub fn for_spec(spec: &crate::model::ParamSpec) -> Self {
+        match (spec.positive, super::init::LINEAR.contains(&spec.name)) {
+            (true, false) => Transform::Log,
+            (true, true) => Transform::NonNegative,
+            _ => Transform::Identity,
+        }
+    }
+
+    /// x from p (p is clamped into the domain).
+    pub fn to_x(self, p: f64) -> f64 {
+        match self {
+            Transform::Identity => p,
+            Transform::Log => p.max(f64::MIN_POSITIVE).ln(),
+            Transform::NonNegative => {
+                let p = p.max(0.0);
+                (p * (p + 2.0)).sqrt()
+            }
+        }
+    }
+
+    /// p from x.
+    pub fn from_x(self, x: f64) -> f64 {
+        match self {
+            Transform::Identity => x,
+            Transform::Log => x.exp(),
+            // √(x²+1) − 1 without cancellation for small x.
+            Transform::NonNegative => x * x / ((x * x + 1.0).sqrt() + 1.0),
+        }
+    }
+
+    /// dp/dx at x.
+    pub fn dp_dx(self, x: f64) -> f64 {
+        match self {
+            Transform::Identity => 1.0,
+            Transform::Log => x.exp(),
+            Transform::NonNegative => x / (x * x + 1.0).sqrt(),
+        }
+    }
 }
 
 /// One parameter of the (possibly joint) fit.
@@ -52,8 +102,8 @@ pub struct FitParam {
     pub spec: usize,
     /// Channel index for per-channel copies, None when shared.
     pub channel: Option<usize>,
-    /// Fitted in log space (see [`fitted_in_log`]).
-    pub positive: bool,
+    /// How the solver sees it.
+    pub transform: Transform,
     /// Held at this value, not fitted.
     pub fixed: Option<f64>,
 }
@@ -83,7 +133,7 @@ impl ParamLayout {
                         name: format!("{}[{name}]", spec.name),
                         spec: j,
                         channel: Some(c),
-                        positive: fitted_in_log(spec),
+                        transform: Transform::for_spec(spec),
                         fixed: None,
                     });
                 }
@@ -95,7 +145,7 @@ impl ParamLayout {
                     name: spec.name.to_string(),
                     spec: j,
                     channel: None,
-                    positive: fitted_in_log(spec),
+                    transform: Transform::for_spec(spec),
                     fixed: None,
                 });
             }
@@ -140,18 +190,12 @@ impl ParamLayout {
             .collect()
     }
 
-    /// Solver variables from full parameter values (free parameters only, log for positive).
+    /// Solver variables from full parameter values (free parameters only).
     pub fn to_x(&self, p: &[f64]) -> DVector<f64> {
         let free = self.free();
         DVector::from_iterator(
             free.len(),
-            free.iter().map(|&k| {
-                if self.params[k].positive {
-                    p[k].ln()
-                } else {
-                    p[k]
-                }
-            }),
+            free.iter().map(|&k| self.params[k].transform.to_x(p[k])),
         )
     }
 
@@ -162,14 +206,9 @@ impl ParamLayout {
             .iter()
             .map(|fp| match fp.fixed {
                 Some(v) => v,
-                None => {
-                    let xi = *it.next().expect("x has one entry per free parameter");
-                    if fp.positive {
-                        xi.exp()
-                    } else {
-                        xi
-                    }
-                }
+                None => fp
+                    .transform
+                    .from_x(*it.next().expect("x has one entry per free parameter")),
             })
             .collect()
     }
@@ -403,11 +442,7 @@ impl FitProblem<'_> {
         let free = self.layout.free();
         let mut out = DMatrix::zeros(self.n, free.len());
         for (col, &k) in free.iter().enumerate() {
-            let chain = if self.layout.params[k].positive {
-                p[k]
-            } else {
-                1.0
-            };
+            let chain = self.layout.params[k].transform.dp_dx(x[col]);
             for i in 0..self.n {
                 out[(i, col)] = self.sqrt_w[i] * self.dr_df(i, f[i]) * jac[(i, k)] * chain;
             }
