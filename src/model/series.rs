@@ -290,6 +290,24 @@ const ASYM_K: usize = 2 * ASYM_ORDERS + 1;
 /// P_n(b) coefficients: `ASYM[n][i]` multiplies b^i g^{−n}.
 static ASYM: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_table();
 
+/// P_n'(b) coefficients: `ASYM_D[n][i] = (i+1) ASYM[n][i+1]`.
+static ASYM_D: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_deriv_table();
+
+const fn asym_deriv_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
+    let p = asym_table();
+    let mut d = [[0.0f64; ASYM_DEG]; ASYM_ORDERS + 1];
+    let mut n = 0;
+    while n <= ASYM_ORDERS {
+        let mut i = 0;
+        while i + 1 < ASYM_DEG {
+            d[n][i] = (i + 1) as f64 * p[n][i + 1];
+            i += 1;
+        }
+        n += 1;
+    }
+    d
+}
+
 /// Build the table of P_n (see the module doc) at compile time.
 const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
     // Poisson central moments μ_k(g) = Σ_j mu[k][j] g^j: μ0 = 1, μ1 = 0,
@@ -388,37 +406,26 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     // Sizes and error estimates of the previous two orders.
     let (mut prev, mut prev2) = (f64::INFINITY, f64::INFINITY);
     let (mut err_prev, mut err_prev2) = (f64::INFINITY, f64::INFINITY);
-    // Powers of b, extended two per order; P_n(b) and b P_n'(b) as dot products with
-    // independent partial sums (no serial Horner chain).
-    let mut bp = [0.0f64; ASYM_DEG];
-    let mut bd = [0.0f64; ASYM_DEG]; // bd[i] = i b^{i−1}
-    bp[0] = 1.0;
-    for (n, coef) in ASYM.iter().enumerate().skip(1) {
+    // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): four
+    // independent Horner chains in b², no arrays written and re-read.
+    let y = b * b;
+    for (n, (coef, dcoef)) in ASYM.iter().zip(ASYM_D.iter()).enumerate().skip(1) {
         gp *= x;
         let deg = 2 * n;
-        bp[deg - 1] = bp[deg - 2] * b;
-        bp[deg] = bp[deg - 1] * b;
-        bd[deg - 1] = (deg - 1) as f64 * bp[deg - 2];
-        bd[deg] = deg as f64 * bp[deg - 1];
-        let (mut p0, mut p1, mut p2, mut p3) = (0.0, 0.0, 0.0, 0.0);
-        let (mut d0, mut d1, mut d2, mut d3) = (0.0, 0.0, 0.0, 0.0);
-        let end = (deg + 4) & !3; // rows are zero-padded to a multiple of 4
-        let mut i = 0;
-        while i < end {
-            let (c0, c1, c2, c3) = (coef[i], coef[i + 1], coef[i + 2], coef[i + 3]);
-            let (b0, b1, b2, b3) = (bp[i], bp[i + 1], bp[i + 2], bp[i + 3]);
-            p0 += c0 * b0;
-            p1 += c1 * b1;
-            p2 += c2 * b2;
-            p3 += c3 * b3;
-            d0 += c0 * bd[i];
-            d1 += c1 * bd[i + 1];
-            d2 += c2 * bd[i + 2];
-            d3 += c3 * bd[i + 3];
-            i += 4;
+        let (mut pe, mut po, mut de, mut d_o) = (coef[deg], 0.0f64, 0.0f64, dcoef[deg - 1]);
+        let mut j = deg;
+        while j >= 2 {
+            // P: even index j−2, odd index j−1; P': even index j−2, odd index j−3.
+            pe = pe * y + coef[j - 2];
+            po = po * y + coef[j - 1];
+            de = de * y + dcoef[j - 2];
+            if j >= 3 {
+                d_o = d_o * y + dcoef[j - 3];
+            }
+            j -= 2;
         }
-        let p = (p0 + p1) + (p2 + p3);
-        let dp = (d0 + d1) + (d2 + d3);
+        let p = pe + b * po;
+        let dp = de + b * d_o;
         let term = gp * p;
         let term_b = gp * dp;
         r += term;
@@ -429,10 +436,18 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
         // The first omitted order is estimated from the last one and the larger of the
         // last two decay ratios (so that an order that happens to be small, P_n(b) near a
         // root, cannot stop the expansion early); accepted only in a clearly decaying phase.
-        let q = (err / err_prev).max(err_prev / err_prev2);
-        if n >= 3 && q < 0.5 && err * q <= 0.3 * target * r.abs() && r > 0.0 {
+        // (Written without divisions: q1 = err/err_prev, q2 = err_prev/err_prev2 < ½ and
+        // err·max(q1, q2) ≤ 0.3 target r.)
+        let t = 0.3 * target * r.abs();
+        if n >= 3
+            && err < 0.5 * err_prev
+            && err_prev < 0.5 * err_prev2
+            && err * err <= t * err_prev
+            && err * err_prev <= t * err_prev2
+            && r > 0.0
+        {
             return Some(LnQ {
-                ln_q: -b - 2.0 * g.ln() + r.ln(),
+                ln_q: -b + (r / g / g).ln(),
                 d_g: (b - 2.0 + (r_g - b * r_b) / r) * x,
                 d_a: (-1.0 + r_b / r) * x,
                 mode: Mode::Rough,
