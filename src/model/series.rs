@@ -349,35 +349,43 @@ const fn small_table() -> [[f64; 3]; SMALL_M] {
 /// per term when a > 0). With a < 600 and g < 10, t_m/t_1 ≤ e^{a} e^{g} stays far from
 /// overflow, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
 fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
+    const BLOCK: usize = 8;
     let eps = 0.1 * tol.max(1e-17);
     let (mut s0, mut s_c, mut s_inv) = (1.0f64, -g, 1.0f64);
     let mut rel = 1.0f64;
     let mut m = 1.0f64;
-    for row in SMALL_TABLE.iter() {
-        let [m_over, inv_mm1, inv_mp1] = *row;
-        let mut r = g * m_over;
-        if a != 0.0 {
-            r *= exp_tab(a * inv_mm1);
-        }
-        // Σ_{j>m} t_j ≤ rel r/(1−r) once r_m < 1 (r_j decreases); the checks of the module
-        // doc multiplied through by (1−r) or (1−r)².
-        if r < 1.0 {
-            let om = 1.0 - r;
-            let tail_om = rel * r; // tail · (1−r)
-            if tail_om <= eps * s0 * om
-                && tail_om * ((m + g) * om + 1.0) <= eps * (s0 + s_c.abs()) * om * om
-                && a * tail_om * inv_mp1 <= eps * (s0 + a * s_inv) * om
-            {
-                break;
+    let mut rs = [0.0f64; BLOCK];
+    'blocks: for rows in SMALL_TABLE.chunks_exact(BLOCK) {
+        // The ratios of a block first (independent of each other, so they overlap), then
+        // the serial accumulation.
+        for (r, row) in rs.iter_mut().zip(rows) {
+            *r = g * row[0];
+            if a != 0.0 {
+                *r *= exp_tab(a * row[1]);
             }
         }
-        rel *= r;
-        m += 1.0;
-        s0 += rel;
-        s_c += (m - 1.0 - g) * rel;
-        s_inv += rel * inv_mp1;
-        if rel == 0.0 {
-            break;
+        for (&r, row) in rs.iter().zip(rows) {
+            let inv_mp1 = row[2];
+            // Σ_{j>m} t_j ≤ rel r/(1−r) once r_m < 1 (r_j decreases); the checks of the
+            // module doc multiplied through by (1−r) or (1−r)².
+            if r < 1.0 {
+                let om = 1.0 - r;
+                let tail_om = rel * r; // tail · (1−r)
+                if tail_om <= eps * s0 * om
+                    && tail_om * ((m + g) * om + 1.0) <= eps * (s0 + s_c.abs()) * om * om
+                    && a * tail_om * inv_mp1 <= eps * (s0 + a * s_inv) * om
+                {
+                    break 'blocks;
+                }
+            }
+            rel *= r;
+            m += 1.0;
+            s0 += rel;
+            s_c += (m - 1.0 - g) * rel;
+            s_inv += rel * inv_mp1;
+            if rel == 0.0 {
+                break 'blocks;
+            }
         }
     }
     LnQ {
