@@ -156,11 +156,16 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     // Sums relative to the peak term: s0 = Σ t/t0, s_c = Σ (m−1−g) t/t0 (centred so that
     // g ∂lnQ/∂g = s_c/s0 has no cancellation at large g), s_inv = Σ (t/m)/t0.
     let (mut s0, mut s_c, mut s_inv) = (1.0, m0 - 1.0 - g, 1.0 / m0);
+    // The inline exp (≤ 2 ulp) is used while the accumulated rounding of the ratio
+    // products over the O(√g) terms stays far below tol; the libm exp otherwise.
+    let inline_exp = tol >= 1e-12 && g < 1e4;
     let ratio = |m: f64| -> f64 {
         let mp1 = m + 1.0;
         let base = g * m / (mp1 * mp1);
         if a == 0.0 {
             base
+        } else if inline_exp {
+            base * exp_tab(a / (m * mp1))
         } else {
             base * (a / (m * mp1)).exp()
         }
