@@ -342,7 +342,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     if let Some(dir) = &args.plot {
         let config = fit_config(&args, &result.model, uncertainties)?;
         let written = plot_fit(dir, &config, &input, &result.layout, &result.values)?;
-        eprintln!("goniofit: wrote {} pictures to {}", written.len(), dir.display());
+        eprintln!(
+            "goniofit: wrote {} pictures to {}",
+            written.len(),
+            dir.display()
+        );
     }
     Ok(if result.converged() { 0 } else { 3 })
 }
@@ -461,7 +465,9 @@ pub fn plot_fit(
     use goniofit::fit::problem::FitProblem;
     let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
     let c = layout.index.len() / 2;
-    let idx: Vec<usize> = (0..input.y.len()).filter(|&i| input.channel[i] == c).collect();
+    let idx: Vec<usize> = (0..input.y.len())
+        .filter(|&i| input.channel[i] == c)
+        .collect();
     let sub = input.subset(&idx);
     let max_y = input.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let floor = config.floor.unwrap_or(1e-6 * max_y);

@@ -27,13 +27,18 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     })?;
     let bad = |what: &str| Error::File {
         path: args.report.clone(),
-        message: format!("not a goniofit fit report ({what}); write one with `goniofit fit --json`"),
+        message: format!(
+            "not a goniofit fit report ({what}); write one with `goniofit fit --json`"
+        ),
     };
     let json: serde_json::Value = serde_json::from_str(&text).map_err(|_| bad("not JSON"))?;
     let replay = json.get("replay").ok_or_else(|| bad("no 'replay' block"))?;
-    let fit_args: Vec<String> = serde_json::from_value(replay["args"].clone()).map_err(|_| bad("replay.args"))?;
-    let model: String = serde_json::from_value(replay["model"].clone()).map_err(|_| bad("replay.model"))?;
-    let values: Vec<f64> = serde_json::from_value(replay["values"].clone()).map_err(|_| bad("replay.values"))?;
+    let fit_args: Vec<String> =
+        serde_json::from_value(replay["args"].clone()).map_err(|_| bad("replay.args"))?;
+    let model: String =
+        serde_json::from_value(replay["model"].clone()).map_err(|_| bad("replay.model"))?;
+    let values: Vec<f64> =
+        serde_json::from_value(replay["values"].clone()).map_err(|_| bad("replay.values"))?;
     let cli = Cli::try_parse_from(std::iter::once("goniofit".to_string()).chain(fit_args))
         .map_err(|e| bad(&format!("its fit arguments do not parse: {e}")))?;
     let Command::Fit(fa) = cli.command else {
@@ -48,7 +53,12 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     };
     let ds = io::read_dataset(&fa.file, &opts)
         .with_context(|| format!("re-reading the data of {}", args.report.display()))?;
-    let input = fit_input(&ds, fa.quantity.into(), fa.wavelength, model.starts_with("kbs"))?;
+    let input = fit_input(
+        &ds,
+        fa.quantity.into(),
+        fa.wavelength,
+        model.starts_with("kbs"),
+    )?;
     let config = fit_config(&fa, &model, ds.sigma_l.is_some())?;
     let m = goniofit::model::by_name(&model, &config.model_opts)?;
     let layout = ParamLayout::new(m.as_ref(), &input.channel_names);
@@ -56,6 +66,10 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         return Err(bad("parameter count does not match the model").into());
     }
     let written = plot_fit(&args.out, &config, &input, &layout, &values)?;
-    eprintln!("goniofit: wrote {} pictures to {}", written.len(), args.out.display());
+    eprintln!(
+        "goniofit: wrote {} pictures to {}",
+        written.len(),
+        args.out.display()
+    );
     Ok(0)
 }

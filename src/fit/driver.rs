@@ -188,7 +188,10 @@ fn assign(layout: &ParamLayout, pairs: &[(String, f64)], out: &mut [Option<f64>]
         }
         for k in ks {
             let fp = &layout.params[k];
-            if !v.is_finite() || (fp.transform == Transform::Log && *v <= 0.0) || *v < 0.0 && fp.transform == Transform::NonNegative {
+            if !v.is_finite()
+                || (fp.transform == Transform::Log && *v <= 0.0)
+                || *v < 0.0 && fp.transform == Transform::NonNegative
+            {
                 return Err(Error::Param {
                     name: name.clone(),
                     message: format!("value {v} is outside its domain"),
@@ -279,8 +282,8 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
                 problem_used = problem_red;
             }
             notes.push(match v {
-                Verdict::Rough => "rough regime (g ≫ 1 on every sample): the data determines only T/σ and the amplitude s·(T/σ)²; σ was held at its estimate and σ, T, scale are reported as undetermined".to_string(),
-                Verdict::Smooth => "smooth regime (g ≪ 1 on every sample): the data determines only T and the amplitude s·σ²; σ was held at its estimate and σ, scale are reported as undetermined".to_string(),
+                Verdict::Rough => format!("rough regime (median g = {g_median:.3e}): the data determines only T/σ and the amplitude s·(T/σ)²; σ was held at its estimate and σ, T, scale are reported as undetermined"),
+                Verdict::Smooth => format!("smooth regime (median g = {g_median:.3e}): the data determines only T and the amplitude s·σ²; σ was held at its estimate and σ, scale are reported as undetermined"),
                 _ => "some parameter combinations are not determined by the data: see the singular values and correlations".to_string(),
             });
         }
@@ -495,7 +498,8 @@ fn assemble(
                 || (verdict == Verdict::Rough && spec.name == "T"));
         // Standard error of p through the transform, dp = (dp/dx) dx.
         let se = log_se(k).map(|s| s * fp.transform.dp_dx(fp.transform.to_x(p[k])).abs());
-        let loose = log_se(k).is_some_and(|s| fp.transform == Transform::Log && s > DETERMINED_MAX_LOG_SE);
+        let loose =
+            log_se(k).is_some_and(|s| fp.transform == Transform::Log && s > DETERMINED_MAX_LOG_SE);
         let at_bound = fp.transform == Transform::NonNegative
             && se.is_some_and(|e| p[k] <= 1e-3 * e.max(f64::MIN_POSITIVE) || p[k] == 0.0);
         if at_bound && fp.fixed.is_none() {

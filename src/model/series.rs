@@ -605,6 +605,17 @@ fn smooth_checked(g: f64, a: f64, tol: f64) -> Option<LnQ> {
 /// The cheapest evaluation whose error bound meets `tol`: smooth (m = 1 with its bound),
 /// the rough approximation's asymptotic completion, else the series.
 pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
+    if g > G_DOMAIN_MAX {
+        // Beyond the stated domain (a fit's trial step can go there): no O(√g) series;
+        // the asymptotic expansion where it applies, else the rough approximation, whose
+        // relative error is O(1/g) < 1e-6 here. Best effort, not held to `tol`.
+        if a < g * g.sqrt() {
+            if let Some(q) = asymptotic(g, a, tol.max(1e-6)) {
+                return q;
+            }
+        }
+        return rough(g, a);
+    }
     // u = (g/4) e^{a/2} ≥ g/4, so smooth can only pass when g ≤ 2 tol.
     if g <= 2.0 * tol {
         if let Some(q) = smooth_checked(g, a, tol) {
@@ -617,6 +628,9 @@ pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
     }
     series(g, a, tol)
 }
+
+/// Largest g of the stated domain; `auto` does not sum the series beyond it.
+pub const G_DOMAIN_MAX: f64 = 1e6;
 
 /// ln Q by the given evaluation mode.
 #[inline]
