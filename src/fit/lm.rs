@@ -835,8 +835,9 @@ where
             state = state
                 .gradient(grad)
                 .jacobian(w.jac.rows(0, w.m).into_owned());
-            if gnorm <= gtol || gnorm <= EPSMCH {
-                self.termination = Some(w.polish.as_ref().map_or(Termination::Gtol, |p| p.reason));
+            // (While polishing, the polishing rules decide; they also end at a zero step.)
+            if w.polish.is_none() && (gnorm <= gtol || gnorm <= EPSMCH) {
+                self.termination = Some(Termination::Gtol);
                 return Ok((state, None));
             }
         }
