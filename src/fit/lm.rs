@@ -110,7 +110,8 @@ pub enum Termination {
     Interrupted,
     /// The residuals at the starting point are not all finite.
     NonFiniteStart,
-    /// The Jacobian at an accepted point is not all finite; the run stops there.
+    /// The Jacobian at an accepted point is not all finite (or not `m × n`); the run stops
+    /// there.
     NonFiniteJacobian,
     /// The trust region collapsed without any other criterion holding (e.g. every trial
     /// point has non-finite residuals).
@@ -190,8 +191,6 @@ struct Work {
     need_jac: bool,
     /// Set once the LM iteration has converged: the Gauss–Newton polishing phase.
     polish: Option<Polish>,
-    /// `‖D p‖` of the last accepted step.
-    last_accepted_pnorm: f64,
     /// Largest |actual relative reduction| seen on trial steps whose predicted reduction was
     /// below `1e-12`: an estimate of the rounding noise in the relative cost.
     cost_noise: f64,
@@ -762,7 +761,6 @@ where
             xnorm: 0.0,
             need_jac: true,
             polish: None,
-            last_accepted_pnorm: f64::INFINITY,
             cost_noise: 0.0,
             first: true,
             nfev: 1,
@@ -999,7 +997,6 @@ where
             w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
             w.need_jac = true;
             w.first = false;
-            w.last_accepted_pnorm = pnorm;
         }
 
         // Convergence tests (MINPACK order).
