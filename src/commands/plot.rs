@@ -51,7 +51,8 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         require_value: true,
         channel: fa.channel.clone(),
     };
-    let ds = io::read_dataset(&fa.file, &opts)
+    let file = fa.file.first().ok_or_else(|| bad("no input file"))?;
+    let ds = io::read_dataset(file, &opts)
         .with_context(|| format!("re-reading the data of {}", args.report.display()))?;
     let input = fit_input(
         &ds,

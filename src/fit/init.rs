@@ -145,7 +145,9 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
         // solver's transform has a gradient there.
         let largest = coef.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let tiny = if largest > 0.0 { 1e-3 * largest } else { 1e-3 };
-        let clamped = coef.iter().any(|v| v.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
+        let clamped = coef
+            .iter()
+            .any(|v| v.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
         for (c, &k) in linear.iter().enumerate() {
             p[k] = if coef[c] > 0.0 { coef[c] } else { tiny };
         }

@@ -432,10 +432,53 @@ impl<'a> FitProblem<'a> {
     }
 }
 
+/// Largest g a fit may step to: beyond it a trial step is rejected (σ ≫ λ is far past any
+/// scene the data could tell from the rough limit).
+pub const G_FIT_MAX: f64 = 1e7;
+
+/// Largest a = v_xy² T²/4 a fit may step to (T ≫ λ: the lobe is narrower than e^{-1e10}).
+pub const A_FIT_MAX: f64 = 1e10;
+
 impl FitProblem<'_> {
+    /// Whether full parameters `p` keep every sample inside the domain where the models are
+    /// evaluated at their stated cost and accuracy: finite values, σ, T > 0 and normal,
+    /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`]. Outside, the solver sees non-finite residuals
+    /// and rejects the step.
+    pub fn in_domain(&self, p: &[f64]) -> bool {
+        if !p.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        let specs = self.model.params();
+        let find = |name: &str| specs.iter().position(|s| s.name == name);
+        let (Some(js), Some(jt)) = (find("sigma"), find("T")) else {
+            return true;
+        };
+        self.blocks.iter().all(|b| {
+            let sigma = p[self.layout.index[b.channel][js]];
+            let corr = p[self.layout.index[b.channel][jt]];
+            if !(sigma.is_normal() && corr.is_normal() && sigma > 0.0 && corr > 0.0) {
+                return false;
+            }
+            let two_pi = 2.0 * std::f64::consts::PI;
+            (0..b.geo.len()).all(|i| {
+                let k = two_pi / b.geo.wavelength[i];
+                let g = (k * sigma * b.geo.c[i]).powi(2);
+                let a = b.geo.vxy2[i] * (k * corr).powi(2) * 0.25;
+                g <= G_FIT_MAX && a <= A_FIT_MAX
+            })
+        })
+    }
+
     /// Weighted residuals and their Jacobian with respect to the solver variables x.
     pub fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
         let p = self.layout.from_x(x);
+        if !self.in_domain(&p) {
+            let free = self.layout.free().len();
+            return (
+                DVector::from_element(self.n, f64::NAN),
+                DMatrix::from_element(self.n, free, f64::NAN),
+            );
+        }
         let (f, jac) = self.model_values(&p, true);
         let jac = jac.expect("requested");
         let r = self.raw_residuals(&f);
