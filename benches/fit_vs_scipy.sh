@@ -21,7 +21,7 @@ $G synth --model kbs --params sigma=0.25,T=2.5,scale=1 --wavelength 1 --layout h
 init=$($G fit --model kbs --wavelength 1 --max-iter 0 --json "$dir/h10k.csv" | python3 -c '
 import json, sys
 d = json.load(sys.stdin)
-print(",".join(f"{k}={d[\"params\"][k][\"value\"]!r}" for k in ("sigma", "T", "scale")))' || true)
+print(",".join("%s=%r" % (k, d["params"][k]["value"]) for k in ("sigma", "T", "scale")))' || true)
 python3 - "$G" "$dir/h10k.csv" "$init" "$repeats" <<'PY'
 import json, statistics, subprocess, sys
 g, data, init, repeats = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])

@@ -453,19 +453,24 @@ fn assemble(
         .collect();
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-    let y = &input.y;
+    // R² in the space the residuals live in: the data itself, or ln y for log residuals.
+    let space = |v: f64| match problem.kind() {
+        ResidualKind::Log => v.max(problem.floor).ln(),
+        _ => v,
+    };
+    let t: Vec<f64> = input.y.iter().map(|&v| space(v)).collect();
     let wsum: f64 = sw.iter().map(|s| s * s).sum();
-    let ybar = y.iter().zip(sw).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
-    let ss_tot: f64 = y
+    let tbar = t.iter().zip(sw).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
+    let ss_tot: f64 = t
         .iter()
         .zip(sw)
-        .map(|(v, s)| (s * (v - ybar)).powi(2))
+        .map(|(v, s)| (s * (v - tbar)).powi(2))
         .sum();
     let ss_res: f64 = fitted
         .iter()
-        .zip(y)
+        .zip(&t)
         .zip(sw)
-        .map(|((f, v), s)| (s * (f - v)).powi(2))
+        .map(|((f, v), s)| (s * (space(*f) - v)).powi(2))
         .sum();
     let r2 = if ss_tot > 0.0 {
         1.0 - ss_res / ss_tot
