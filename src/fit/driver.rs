@@ -242,7 +242,26 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             ..config.model_opts
         },
     )?;
-    let (p0, _) = init::initial_values(&problem, grid_model.as_ref(), input, &given);
+    let (mut p0, _) = init::initial_values(&problem, grid_model.as_ref(), input, &given);
+    // Refine on a subsample before the full fit: the grid's best point can be a factor of a
+    // few off, and those LM iterations are cheap on REFINE_SAMPLES samples.
+    if n > 2 * init::REFINE_SAMPLES {
+        let sub = input.subset(&init::subsample(n, init::REFINE_SAMPLES));
+        if sub.y.len() > n_free {
+            let sub_problem = FitProblem::new(model, layout.clone(), &sub, config.residual, floor)?;
+            let coarse = LmConfig {
+                ftol: 1e-6,
+                xtol: 1e-6,
+                max_iters: 100,
+                progress: false,
+                ..config.lm.clone()
+            };
+            let refined = run_lm(&sub_problem, &p0, &coarse);
+            if refined.lm.cost.is_finite() && sub_problem.in_domain(&refined.values) {
+                p0 = refined.values;
+            }
+        }
+    }
     let init_seconds = t0.elapsed().as_secs_f64();
 
     let first = run_lm(&problem, &p0, &config.lm);

@@ -10,6 +10,9 @@ use nalgebra::{DMatrix, DVector};
 /// Largest number of samples the coarse grid is evaluated on.
 pub const GRID_SAMPLES: usize = 256;
 
+/// Samples of the quick LM refinement between the grid and the full fit.
+pub const REFINE_SAMPLES: usize = 1024;
+
 /// Parameters that enter the model linearly (solved exactly at each grid point).
 pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
 
@@ -44,27 +47,61 @@ pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::Pa
 /// grid's best cost.
 ///
 /// `grid_model` is the model the grid is evaluated with: the fit's model at a loose
-/// tolerance (the grid only ranks candidates; LM then works at the requested one).
+/// tolerance (the grid only ranks candidates; LM then works at the requested one). For KBS
+/// models, grid points whose median g is far into a limit use that limit's approximation
+/// (the grid's corners, σ ≫ λ or T ≫ λ, would otherwise dominate its cost).
 pub fn initial_values(
     problem: &FitProblem,
     grid_model: &dyn crate::model::Model,
     input: &FitInput,
     given: &[Option<f64>],
 ) -> (Vec<f64>, f64) {
+    use crate::model::{by_name, EvalMode, ModelOptions};
     let layout = &problem.layout;
     let specs = problem.model.params();
     let n = problem.len();
     // Evenly spaced subsample.
-    let stride = n.div_ceil(GRID_SAMPLES).max(1);
-    let idx: Vec<usize> = (0..n).step_by(stride).collect();
-    let sub = FitProblem::new(
-        grid_model,
-        layout.clone(),
-        &input.subset(&idx),
-        problem.kind(),
-        problem.floor,
-    )
-    .expect("subsample is consistent");
+    let idx = subsample(n, GRID_SAMPLES);
+    let sub_input = input.subset(&idx);
+    fn make<'m>(
+        m: &'m dyn crate::model::Model,
+        p: &FitProblem,
+        input: &FitInput,
+    ) -> FitProblem<'m> {
+        FitProblem::new(m, p.layout.clone(), input, p.kind(), p.floor)
+            .expect("subsample is consistent")
+    }
+    let sub = make(grid_model, problem, &sub_input);
+    let limit = |mode: EvalMode| {
+        by_name(
+            grid_model.name(),
+            &ModelOptions {
+                mode,
+                ..ModelOptions::default()
+            },
+        )
+        .ok()
+    };
+    let is_kbs = specs.iter().any(|s| s.name == "sigma");
+    let (rough_model, smooth_model) = if is_kbs {
+        (limit(EvalMode::Rough), limit(EvalMode::Smooth))
+    } else {
+        (None, None)
+    };
+    let sub_rough = rough_model.as_deref().map(|m| make(m, problem, &sub_input));
+    let sub_smooth = smooth_model
+        .as_deref()
+        .map(|m| make(m, problem, &sub_input));
+    // Median of (c/λ)² over the subsample: g ≈ (2πσ)² × that.
+    let c2_lambda = median(
+        &(0..sub_input.geo.len())
+            .map(|i| (sub_input.geo.c[i] / sub_input.geo.wavelength[i]).powi(2))
+            .collect::<Vec<_>>(),
+    );
+    let sigma_k = layout
+        .params
+        .iter()
+        .position(|fp| specs[fp.spec].name == "sigma");
     let lambda = median(&input.geo.wavelength);
 
     // The nonlinear parameters to search over and their candidate values.
@@ -91,7 +128,13 @@ pub fn initial_values(
             p[k] = axis[rem % axis.len()];
             rem /= axis.len();
         }
-        if let Some(cost) = solve_linear(&sub, &mut p, &linear) {
+        let g = sigma_k.map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * c2_lambda);
+        let grid_problem = match (g, &sub_rough, &sub_smooth) {
+            (Some(g), Some(r), _) if g > 1e3 => r,
+            (Some(g), _, Some(s)) if g < 1e-4 => s,
+            _ => &sub,
+        };
+        if let Some(cost) = solve_linear(grid_problem, &mut p, &linear) {
             if cost < best.0 {
                 best = (cost, p);
             }
@@ -161,6 +204,12 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
     let r = problem.weighted_residuals(p);
     let cost = 0.5 * r.norm_squared();
     cost.is_finite().then_some(cost)
+}
+
+/// Evenly spaced indices of at most `max` of `n` samples.
+pub fn subsample(n: usize, max: usize) -> Vec<usize> {
+    let stride = n.div_ceil(max).max(1);
+    (0..n).step_by(stride).collect()
 }
 
 /// Median of a non-empty slice (NaN-free).
