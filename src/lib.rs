@@ -9,7 +9,9 @@ pub mod fit;
 pub mod geometry;
 pub mod io;
 pub mod model;
+pub mod recover;
 pub mod report;
 pub mod synth;
+pub mod workprec;
 
 pub use error::{Error, Result};

@@ -1,7 +1,9 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
 
+pub mod bench;
 pub mod eval;
 pub mod fit;
+pub mod recover;
 pub mod synth;
 
 use crate::cli::{Cli, Command};
@@ -12,6 +14,8 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Eval(a) => eval::run(a),
         Command::Fit(a) => fit::run(*a),
         Command::Synth(a) => synth::run(*a),
+        Command::Recover(a) => recover::run(*a),
+        Command::Bench(a) => bench::run(*a),
     }
 }
 
