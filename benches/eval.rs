@@ -1,1 +1,164 @@
-fn main() {}
+//! Throughput of model evaluation, per model and per KBS regime.
+//!
+//! `cargo bench --bench eval`. Batches of 10 000 samples built with `Geometry::new`:
+//! θi, θr uniform in [0°, 60°], φr uniform in [0°, 360°) (so c = cos θi + cos θr ∈ [1, 2]
+//! and g varies by at most 4× within a batch), λ = 1. Regime "g≈G": σ chosen so that g = G
+//! at c = 1.5 (g ∈ [0.44 G, 1.8 G]); T/σ = 5 as in the paper's Figures 6–7, so
+//! b = a/g = 6.25 v_xy²/c² spans 0..≈20 over the hemisphere. A second geometry set,
+//! "lobe", keeps the view within 10° of the mirror direction (where a gonioreflectometer
+//! puts most samples of a glossy surface): b ≲ 0.2.
+//!
+//! Groups: `kbs/<regime>/<mode>` (whole-model radiance, values only), `kbs_jac/<regime>`
+//! (values + Jacobian, auto and rough), `lnq/<regime>/<mode>` (the sum alone), and
+//! `models/<name>` for the other models. Throughput is reported in samples/s.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use goniofit::geometry::{Geometry, Quantity, Sample};
+use goniofit::model::{self, series, EvalMode, Model, ModelOptions};
+use rand::{Rng, SeedableRng};
+use std::time::Duration;
+
+const N: usize = 10_000;
+
+fn geometry(lobe: bool, seed: u64) -> Geometry {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let samples: Vec<Sample> = (0..N)
+        .map(|_| {
+            if lobe {
+                let ti: f64 = rng.gen_range(10.0..50.0);
+                let tr = (ti + rng.gen_range(-10.0..10.0f64)).clamp(0.0, 90.0);
+                let pr: f64 = rng.gen_range(-10.0..10.0);
+                Sample::from_degrees(ti, tr, pr)
+            } else {
+                Sample::from_degrees(
+                    rng.gen_range(0.0..60.0),
+                    rng.gen_range(0.0..60.0),
+                    rng.gen_range(0.0..360.0),
+                )
+            }
+        })
+        .collect();
+    Geometry::new(&samples, &[1.0], Quantity::Radiance).unwrap()
+}
+
+/// σ (λ = 1) such that g = target at c = 1.5.
+fn sigma_for(g: f64) -> f64 {
+    g.sqrt() / 1.5 / (2.0 * std::f64::consts::PI)
+}
+
+const REGIMES: [(&str, f64); 4] = [
+    ("g=0.01", 0.01),
+    ("g=1", 1.0),
+    ("g=100", 100.0),
+    ("g=1e4", 1e4),
+];
+const MODES: [(&str, EvalMode); 4] = [
+    ("series", EvalMode::Series),
+    ("rough", EvalMode::Rough),
+    ("smooth", EvalMode::Smooth),
+    ("auto", EvalMode::Auto),
+];
+
+fn bench_kbs(c: &mut Criterion) {
+    for (set, lobe) in [("hemi", false), ("lobe", true)] {
+        let geo = geometry(lobe, 7);
+        let mut group = c.benchmark_group(format!("kbs_{set}"));
+        group
+            .sample_size(20)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(2))
+            .throughput(Throughput::Elements(N as u64));
+        for (rname, g) in REGIMES {
+            let sigma = sigma_for(g);
+            let p = [sigma, 5.0 * sigma, 1.0];
+            for (mname, mode) in MODES {
+                let m = model::kbs::Kbs::new(ModelOptions {
+                    mode,
+                    ..Default::default()
+                })
+                .unwrap();
+                let mut out = vec![0.0; N];
+                group.bench_function(BenchmarkId::new(rname, mname), |b| {
+                    b.iter(|| m.radiance(&geo, &p, &mut out, None))
+                });
+            }
+            // With the Jacobian, as a fit evaluates it.
+            for (mname, mode) in [("rough+jac", EvalMode::Rough), ("auto+jac", EvalMode::Auto)] {
+                let m = model::kbs::Kbs::new(ModelOptions {
+                    mode,
+                    ..Default::default()
+                })
+                .unwrap();
+                let mut out = vec![0.0; N];
+                let mut jac = vec![0.0; 3 * N];
+                group.bench_function(BenchmarkId::new(rname, mname), |b| {
+                    b.iter(|| m.radiance(&geo, &p, &mut out, Some(&mut jac)))
+                });
+            }
+        }
+        group.finish();
+    }
+}
+
+fn bench_lnq(c: &mut Criterion) {
+    let geo = geometry(false, 7);
+    let mut group = c.benchmark_group("lnq_hemi");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(N as u64));
+    for (rname, g0) in REGIMES {
+        let sigma = sigma_for(g0);
+        let k = 2.0 * std::f64::consts::PI;
+        let ga: Vec<(f64, f64)> = (0..N)
+            .map(|i| {
+                let g = (k * sigma * geo.c[i]).powi(2);
+                let a = geo.vxy2[i] * (k * 5.0 * sigma).powi(2) * 0.25;
+                (g, a)
+            })
+            .collect();
+        for (mname, mode) in MODES {
+            group.bench_function(BenchmarkId::new(rname, mname), |b| {
+                b.iter(|| {
+                    let mut acc = 0.0;
+                    for &(g, a) in &ga {
+                        acc += series::ln_q(g, a, mode, 1e-10).ln_q;
+                    }
+                    acc
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+fn bench_models(c: &mut Criterion) {
+    let geo = geometry(false, 7);
+    let mut group = c.benchmark_group("models");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(N as u64));
+    let sigma = sigma_for(1.0);
+    for (name, p) in [
+        ("lambert", vec![1.0]),
+        ("lambert-specular", vec![1.0, 1.0, 0.1]),
+        ("kbs+lambert", vec![sigma, 5.0 * sigma, 1.0, 0.3]),
+    ] {
+        let m = model::by_name(name, &ModelOptions::default()).unwrap();
+        let mut out = vec![0.0; N];
+        let mut jac = vec![0.0; p.len() * N];
+        group.bench_function(BenchmarkId::new(name, "values"), |b| {
+            b.iter(|| m.radiance(&geo, &p, &mut out, None))
+        });
+        group.bench_function(BenchmarkId::new(name, "jacobian"), |b| {
+            b.iter(|| m.radiance(&geo, &p, &mut out, Some(&mut jac)))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_kbs, bench_lnq, bench_models);
+criterion_main!(benches);

@@ -28,6 +28,10 @@ pub enum Command {
     Recover(Box<commands::recover::RecoverArgs>),
     /// Benchmarks with a table: `bench work-precision` (error against run time).
     Bench(Box<commands::bench::BenchArgs>),
+    /// Render a picture from a model (a lit sphere).
+    Render(commands::render::RenderArgs),
+    /// Regenerate the paper's Figures 4–7 (PNG and SVG) into a folder.
+    Figures(commands::figures::FiguresArgs),
 }
 
 #[cfg(test)]

@@ -34,6 +34,9 @@ pub enum Error {
     /// A usage error: inconsistent options or arguments.
     #[error("{0}")]
     Usage(String),
+    /// A picture could not be drawn or written.
+    #[error("{path}: drawing failed: {message}")]
+    Plot { path: PathBuf, message: String },
     /// A numerical failure inside the library (a bug, or a domain violation that slipped through).
     #[error("numerical failure: {0}")]
     Numerical(String),
@@ -43,7 +46,7 @@ impl Error {
     /// Whether the error is the user's input or usage (CLI exit code 2) rather than an
     /// internal failure (exit code 1).
     pub fn is_user_error(&self) -> bool {
-        !matches!(self, Error::Numerical(_))
+        !matches!(self, Error::Numerical(_) | Error::Plot { .. })
     }
 }
 

@@ -10,6 +10,7 @@ pub mod geometry;
 pub mod io;
 pub mod model;
 pub mod recover;
+pub mod plot;
 pub mod report;
 pub mod synth;
 pub mod workprec;

@@ -1,7 +1,8 @@
 //! `goniofit eval`: a model's values at the angles of a CSV (or ASTM) file.
 //!
 //! Prints the input rows — every original column, original header names — with a column
-//! `L_model` appended. Values are written with full precision: the shortest decimal that
+//! `L_model` appended (or, when the input already has an `L_model` column, e.g. an earlier
+//! eval's output, that column's values replaced). Values are written with full precision: the shortest decimal that
 //! parses back to the same `f64`, in scientific notation (`1.2345678901234567e-3`).
 //!
 //! Wavelength: the KBS models need one. `--wavelength` sets it for every sample (and then
@@ -69,7 +70,7 @@ pub struct EvalArgs {
     #[arg(long)]
     pub params: String,
     /// Wavelength for every sample (the unit of sigma and T); overrides the file's.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub wavelength: Option<f64>,
     /// Output quantity.
     #[arg(long, value_enum, default_value_t = QuantityArg::Radiance)]
@@ -81,7 +82,7 @@ pub struct EvalArgs {
     #[arg(long, value_enum, default_value_t = ModeArg::Auto)]
     pub mode: ModeArg,
     /// Relative accuracy target of the KBS sum.
-    #[arg(long, default_value_t = 1e-10)]
+    #[arg(long, default_value = "1e-10")]
     pub tol: f64,
     /// Angles are in radians (CSV; ASTM files are always radians).
     #[arg(long)]
@@ -171,15 +172,22 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let mut values = vec![0.0; geo.len()];
     model.eval(&geo, &params, &mut values, None);
 
+    // Append L_model; a file that already has one (an earlier eval's output) gets it replaced.
     let mut headers = ds.headers.clone();
-    headers.push("L_model".into());
+    let existing = headers.iter().position(|h| h == "L_model");
+    if existing.is_none() {
+        headers.push("L_model".into());
+    }
     let rows: Vec<Vec<String>> = ds
         .rows
         .iter()
         .zip(&values)
         .map(|(r, v)| {
             let mut r = r.clone();
-            r.push(io::format_value(*v));
+            match existing {
+                Some(j) => r[j] = io::format_value(*v),
+                None => r.push(io::format_value(*v)),
+            }
             r
         })
         .collect();

@@ -2,8 +2,10 @@
 
 pub mod bench;
 pub mod eval;
+pub mod figures;
 pub mod fit;
 pub mod recover;
+pub mod render;
 pub mod synth;
 
 use crate::cli::{Cli, Command};
@@ -16,6 +18,8 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Synth(a) => synth::run(*a),
         Command::Recover(a) => recover::run(*a),
         Command::Bench(a) => bench::run(*a),
+        Command::Render(a) => render::run(a),
+        Command::Figures(a) => figures::run(a),
     }
 }
 

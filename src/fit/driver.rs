@@ -24,6 +24,22 @@ use std::time::Instant;
 /// Largest standard error of ln p for a parameter to count as determined.
 pub const DETERMINED_MAX_LOG_SE: f64 = 1.0;
 
+/// Standard error of ln σ above which a ridge along a regime's known direction counts as
+/// undetermined (see `kbs_verdict`).
+pub const LOOSE_LOG_SE: f64 = 0.05;
+
+/// Alignment |cos| of the weakest direction with a regime's known direction.
+pub const ALIGN: f64 = 0.98;
+
+/// Median g above which the rough regime's ridge is expected.
+pub const ROUGH_G: f64 = 3.0;
+
+/// Median g below which the smooth regime's ridge is expected.
+pub const SMOOTH_G: f64 = 0.3;
+
+/// Accuracy of the model on the starting-value grid (it only ranks candidates).
+pub const GRID_TOL: f64 = 1e-4;
+
 /// Relative singular-value threshold below which a direction is undetermined.
 pub const RANK_THRESHOLD: f64 = 1e-9;
 
@@ -216,7 +232,14 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     let problem = FitProblem::new(model, layout.clone(), input, config.residual, floor)?;
     let mut given = fixed.clone();
     assign(&layout, &config.init, &mut given)?;
-    let (p0, _) = init::initial_values(&problem, input, &given);
+    let grid_model = model::by_name(
+        model.name(),
+        &ModelOptions {
+            tol: GRID_TOL.max(config.model_opts.tol),
+            ..config.model_opts
+        },
+    )?;
+    let (p0, _) = init::initial_values(&problem, grid_model.as_ref(), input, &given);
     let init_seconds = t0.elapsed().as_secs_f64();
 
     let first = run_lm(&problem, &p0, &config.lm);
@@ -230,12 +253,13 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     let has_kbs = specs.iter().any(|s| s.name == "sigma");
     let unc = uncertainty_of(&problem_used, &report);
     if has_kbs && config.reduce {
-        if let Some(v) = kbs_verdict(&problem_used.layout, &unc, &report.values) {
+        let sig = problem_used.layout.find("sigma")[0];
+        let g_median = median_g(input, report.values[sig]);
+        if let Some(v) = kbs_verdict(&problem_used.layout, &unc, &report.values, g_median) {
             verdict = v;
             // Reduced problem: hold σ at its estimate; T and the scales carry the
             // determined combinations.
-            let sig = problem_used.layout.find("sigma")[0];
-            if problem_used.layout.params[sig].fixed.is_none() {
+            if v != Verdict::Partial && problem_used.layout.params[sig].fixed.is_none() {
                 let mut reduced = problem_used.layout.clone();
                 reduced.params[sig].fixed = Some(report.values[sig]);
                 let p_start = report.values.clone();
@@ -257,7 +281,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             notes.push(match v {
                 Verdict::Rough => "rough regime (g ≫ 1 on every sample): the data determines only T/σ and the amplitude s·(T/σ)²; σ was held at its estimate and σ, T, scale are reported as undetermined".to_string(),
                 Verdict::Smooth => "smooth regime (g ≪ 1 on every sample): the data determines only T and the amplitude s·σ²; σ was held at its estimate and σ, scale are reported as undetermined".to_string(),
-                _ => String::new(),
+                _ => "some parameter combinations are not determined by the data: see the singular values and correlations".to_string(),
             });
         }
     }
@@ -295,28 +319,68 @@ fn uncertainty_of(problem: &FitProblem, run: &Run) -> stats::Uncertainty {
     stats::uncertainty(&run.lm.jacobian, run.lm.cost, problem.len(), RANK_THRESHOLD)
 }
 
-/// Decide whether the (σ, T, scale) block is only partly determined, and which regime's
-/// combination the undetermined direction matches.
-fn kbs_verdict(layout: &ParamLayout, unc: &stats::Uncertainty, _p: &[f64]) -> Option<Verdict> {
+/// The covariance of the free parameters in log space: entries of parameters fitted
+/// linearly (the scales) are divided by their values, d ln p = dp / p.
+fn log_covariance(layout: &ParamLayout, unc: &stats::Uncertainty, p: &[f64]) -> DMatrix<f64> {
     let free = layout.free();
+    let f: Vec<f64> = free
+        .iter()
+        .map(|&k| {
+            if layout.params[k].positive {
+                1.0
+            } else {
+                1.0 / p[k]
+            }
+        })
+        .collect();
+    DMatrix::from_fn(free.len(), free.len(), |i, j| {
+        unc.covariance[(i, j)] * f[i] * f[j]
+    })
+}
+
+/// Median of g = (2πσ/λ)²(cos θi + cos θr)² over the samples at σ = `sigma`.
+fn median_g(input: &FitInput, sigma: f64) -> f64 {
+    let g: Vec<f64> = (0..input.geo.len())
+        .map(|i| {
+            (2.0 * std::f64::consts::PI * sigma / input.geo.wavelength[i] * input.geo.c[i]).powi(2)
+        })
+        .collect();
+    init::median(&g)
+}
+
+/// Decide whether the (σ, T, scale) block is only partly determined, and which regime's
+/// combination the weakly determined direction matches.
+///
+/// Rough (median g > [`ROUGH_G`]): the least determined direction of (ln σ, ln T, ln s)
+/// is within [`ALIGN`] of (1, 1, 0) — σ and T move together at fixed T/σ and s(T/σ)² —
+/// and σ's standard error exceeds [`LOOSE_LOG_SE`]. Smooth (median g < [`SMOOTH_G`]): the
+/// direction is (1, 0, −2) — s σ² fixed. Past [`LOOSE_LOG_SE`] the linearised standard
+/// error along such a ridge is not trustworthy (a fit 2× off can report ±28 %), so the
+/// parameters are reported as undetermined rather than with a misleading error bar.
+fn kbs_verdict(
+    layout: &ParamLayout,
+    unc: &stats::Uncertainty,
+    p: &[f64],
+    g_median: f64,
+) -> Option<Verdict> {
+    let free = layout.free();
+    let cov = log_covariance(layout, unc, p);
     let pos = |name: &str| -> Option<usize> {
         let k = *layout.find(name).first()?;
         free.iter().position(|&f| f == k)
     };
     let (i_s, i_t) = (pos("sigma")?, pos("T")?);
     let i_a = pos("scale");
-    let se = |i: usize| unc.covariance[(i, i)].max(0.0).sqrt();
+    let se = |i: usize| cov[(i, i)].max(0.0).sqrt();
     let rank_deficient = unc.rank < free.len();
-    let sigma_loose = se(i_s) > DETERMINED_MAX_LOG_SE || !se(i_s).is_finite();
-    if !rank_deficient && !sigma_loose {
+    let sigma_se = se(i_s);
+    if !rank_deficient && sigma_se.is_finite() && sigma_se <= LOOSE_LOG_SE {
         return None;
     }
     // The least determined direction in (ln σ, ln T, ln s): the largest-variance
     // eigenvector of that covariance block, or the null direction when singular.
     let idx: Vec<usize> = [Some(i_s), Some(i_t), i_a].into_iter().flatten().collect();
-    let block = DMatrix::from_fn(idx.len(), idx.len(), |a, b| {
-        unc.covariance[(idx[a], idx[b])]
-    });
+    let block = DMatrix::from_fn(idx.len(), idx.len(), |a, b| cov[(idx[a], idx[b])]);
     let dir: DVector<f64> = if rank_deficient {
         let v = unc.undetermined.first()?;
         DVector::from_iterator(idx.len(), idx.iter().map(|&i| v[i]))
@@ -326,7 +390,7 @@ fn kbs_verdict(layout: &ParamLayout, unc: &stats::Uncertainty, _p: &[f64]) -> Op
         eig.eigenvectors.column(imax).into_owned()
     };
     let norm = dir.norm();
-    if norm == 0.0 {
+    if norm == 0.0 || !norm.is_finite() {
         return Some(Verdict::Partial);
     }
     let dir = dir / norm;
@@ -334,16 +398,17 @@ fn kbs_verdict(layout: &ParamLayout, unc: &stats::Uncertainty, _p: &[f64]) -> Op
         let t = DVector::from_iterator(idx.len(), v.iter().take(idx.len()).copied());
         (t.dot(&dir) / t.norm()).abs()
     };
-    // Rough: (1, 1, 0) keeps T/σ and s·(T/σ)²; smooth: (1, 0, −2) keeps T and s·σ².
     let rough = align(&[1.0, 1.0, 0.0]);
     let smooth = align(&[1.0, 0.0, -2.0]);
-    Some(if rough > 0.9 && rough >= smooth {
-        Verdict::Rough
-    } else if smooth > 0.9 {
-        Verdict::Smooth
+    if rough > ALIGN && g_median > ROUGH_G {
+        Some(Verdict::Rough)
+    } else if smooth > ALIGN && g_median < SMOOTH_G {
+        Some(Verdict::Smooth)
+    } else if rank_deficient || !sigma_se.is_finite() || sigma_se > DETERMINED_MAX_LOG_SE {
+        Some(Verdict::Partial)
     } else {
-        Verdict::Partial
-    })
+        None
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -446,6 +511,7 @@ fn assemble(
     }
 
     // Derived quantities from the log-space covariance of the free parameters.
+    let log_cov = log_covariance(layout, &unc, p);
     let mut derived = Vec::new();
     let combo = |coef: &[(usize, f64)]| -> (f64, Option<f64>) {
         // value = Π p_k^{c_k}; var ln value = cᵀ Σ c over free log-parameters.
@@ -459,7 +525,7 @@ fn assemble(
                 ) else {
                     continue;
                 };
-                var += c1 * c2 * unc.covariance[(i1, i2)];
+                var += c1 * c2 * log_cov[(i1, i2)];
             }
         }
         (

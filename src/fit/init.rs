@@ -8,7 +8,7 @@ use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
 use nalgebra::{DMatrix, DVector};
 
 /// Largest number of samples the coarse grid is evaluated on.
-pub const GRID_SAMPLES: usize = 768;
+pub const GRID_SAMPLES: usize = 256;
 
 /// Parameters that enter the model linearly (solved exactly at each grid point).
 pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
@@ -21,11 +21,11 @@ fn grid_for(name: &str, lambda: f64) -> Vec<f64> {
             .collect()
     };
     match name {
-        "sigma" => logspace(0.002, 4.0, 14)
+        "sigma" => logspace(0.002, 4.0, 12)
             .into_iter()
             .map(|v| v * lambda)
             .collect(),
-        "T" => logspace(0.02, 400.0, 16)
+        "T" => logspace(0.02, 400.0, 14)
             .into_iter()
             .map(|v| v * lambda)
             .collect(),
@@ -42,8 +42,12 @@ pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::Pa
 /// Starting values for every layout parameter. `given[k]` holds a user's `--init` or
 /// `--fix` value (used as is, and not searched over). Returns full parameter values and the
 /// grid's best cost.
+///
+/// `grid_model` is the model the grid is evaluated with: the fit's model at a loose
+/// tolerance (the grid only ranks candidates; LM then works at the requested one).
 pub fn initial_values(
     problem: &FitProblem,
+    grid_model: &dyn crate::model::Model,
     input: &FitInput,
     given: &[Option<f64>],
 ) -> (Vec<f64>, f64) {
@@ -54,7 +58,7 @@ pub fn initial_values(
     let stride = n.div_ceil(GRID_SAMPLES).max(1);
     let idx: Vec<usize> = (0..n).step_by(stride).collect();
     let sub = FitProblem::new(
-        problem.model,
+        grid_model,
         layout.clone(),
         &input.subset(&idx),
         problem.kind(),
@@ -132,10 +136,19 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
         if !a.iter().chain(b.iter()).all(|v| v.is_finite()) {
             return None;
         }
-        let svd = a.svd(true, true);
-        let coef = svd.solve(&b, 1e-12 * svd.singular_values.max()).ok()?;
+        // Small normal equations (k ≤ 2 per channel), solved by SVD for rank safety.
+        let ata = a.tr_mul(&a);
+        let atb = a.tr_mul(&b);
+        let svd = ata.svd(true, true);
+        let coef = svd.solve(&atb, 1e-14 * svd.singular_values.max()).ok()?;
         for (c, &k) in linear.iter().enumerate() {
             p[k] = coef[c];
+        }
+        if problem.kind() != ResidualKind::Log {
+            // The linearised residual is exact for absolute and relative residuals.
+            let r = b - a * coef;
+            let cost = 0.5 * r.norm_squared();
+            return cost.is_finite().then_some(cost);
         }
     }
     let r = problem.weighted_residuals(p);

@@ -227,6 +227,10 @@ pub struct FitProblem<'a> {
     /// Floor for relative and log residuals (in the unit of y).
     pub floor: f64,
     n: usize,
+    /// The Jacobian computed alongside the last residual evaluation: the models produce
+    /// derivatives at little extra cost, and LM asks for the Jacobian at the point it just
+    /// accepted, so one model pass serves both.
+    cache: std::sync::Mutex<Option<(DVector<f64>, DMatrix<f64>)>>,
 }
 
 impl<'a> FitProblem<'a> {
@@ -270,6 +274,7 @@ impl<'a> FitProblem<'a> {
             kind,
             floor,
             n,
+            cache: std::sync::Mutex::new(None),
         })
     }
 
@@ -388,15 +393,13 @@ impl<'a> FitProblem<'a> {
     }
 }
 
-impl LeastSquaresProblem for FitProblem<'_> {
-    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
-        self.weighted_residuals(&self.layout.from_x(x))
-    }
-
-    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+impl FitProblem<'_> {
+    /// Weighted residuals and their Jacobian with respect to the solver variables x.
+    pub fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
         let p = self.layout.from_x(x);
         let (f, jac) = self.model_values(&p, true);
         let jac = jac.expect("requested");
+        let r = self.raw_residuals(&f);
         let free = self.layout.free();
         let mut out = DMatrix::zeros(self.n, free.len());
         for (col, &k) in free.iter().enumerate() {
@@ -409,6 +412,28 @@ impl LeastSquaresProblem for FitProblem<'_> {
                 out[(i, col)] = self.sqrt_w[i] * self.dr_df(i, f[i]) * jac[(i, k)] * chain;
             }
         }
-        out
+        let rw = DVector::from_iterator(self.n, r.iter().zip(&self.sqrt_w).map(|(r, s)| r * s));
+        (rw, out)
+    }
+}
+
+impl LeastSquaresProblem for FitProblem<'_> {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        let (r, j) = self.residuals_and_jacobian(x);
+        if let Ok(mut c) = self.cache.lock() {
+            *c = Some((x.clone(), j));
+        }
+        r
+    }
+
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        if let Ok(c) = self.cache.lock() {
+            if let Some((cx, cj)) = c.as_ref() {
+                if cx == x {
+                    return cj.clone();
+                }
+            }
+        }
+        self.residuals_and_jacobian(x).1
     }
 }

@@ -127,3 +127,92 @@ pub fn uncertainty(
         residual_variance: s2,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    /// Straight line y = a + b t: the textbook closed forms for the covariance,
+    /// Var(b) = s²/Sₜₜ, Var(a) = s²(1/n + t̄²/Sₜₜ), Cov(a, b) = −s² t̄/Sₜₜ.
+    #[test]
+    fn covariance_matches_closed_form_linear_regression() {
+        let t = [0.5, 1.0, 2.0, 3.5, 4.0, 6.0, 7.5];
+        let y = [1.1, 1.9, 3.2, 5.1, 5.8, 8.9, 11.2];
+        let n = t.len();
+        let tbar = t.iter().sum::<f64>() / n as f64;
+        let ybar = y.iter().sum::<f64>() / n as f64;
+        let stt: f64 = t.iter().map(|&t| (t - tbar).powi(2)).sum();
+        let sty: f64 = t
+            .iter()
+            .zip(&y)
+            .map(|(&t, &y)| (t - tbar) * (y - ybar))
+            .sum();
+        let b = sty / stt;
+        let a = ybar - b * tbar;
+        let rss: f64 = t
+            .iter()
+            .zip(&y)
+            .map(|(&t, &y)| (y - a - b * t).powi(2))
+            .sum();
+        let s2 = rss / (n - 2) as f64;
+
+        let jac = DMatrix::from_fn(n, 2, |i, j| if j == 0 { 1.0 } else { t[i] });
+        let u = uncertainty(&jac, 0.5 * rss, n, 1e-12);
+        assert_relative_eq!(u.residual_variance, s2, max_relative = 1e-14);
+        assert_relative_eq!(u.covariance[(1, 1)], s2 / stt, max_relative = 1e-12);
+        assert_relative_eq!(
+            u.covariance[(0, 0)],
+            s2 * (1.0 / n as f64 + tbar * tbar / stt),
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(u.covariance[(0, 1)], -s2 * tbar / stt, max_relative = 1e-12);
+        assert_relative_eq!(
+            u.covariance[(1, 0)],
+            u.covariance[(0, 1)],
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(u.stderr[1], (s2 / stt).sqrt(), max_relative = 1e-12);
+        let rho = -tbar / (tbar * tbar + stt / n as f64).sqrt();
+        assert_relative_eq!(u.correlation[(0, 1)], rho, max_relative = 1e-12);
+        assert_relative_eq!(u.correlation[(0, 0)], 1.0, max_relative = 1e-12);
+        assert_eq!(u.rank, 2);
+        assert!(u.undetermined.is_empty());
+        assert!(u.singular_values[0] >= u.singular_values[1]);
+        assert_relative_eq!(
+            u.condition,
+            u.singular_values[0] / u.singular_values[1],
+            max_relative = 1e-14
+        );
+    }
+
+    #[test]
+    fn singular_jacobian_uses_the_pseudo_inverse() {
+        // Columns 0 and 2 identical: the direction (1, 0, −1)/√2 is undetermined.
+        let jac = DMatrix::from_fn(6, 3, |i, j| match j {
+            0 | 2 => 1.0,
+            _ => i as f64,
+        });
+        let u = uncertainty(&jac, 1.5, 6, 1e-12);
+        assert_eq!(u.rank, 2);
+        assert_eq!(u.undetermined.len(), 1);
+        let d = &u.undetermined[0];
+        assert_relative_eq!(d[1], 0.0, epsilon = 1e-12);
+        assert_relative_eq!(d[0], -d[2], epsilon = 1e-12);
+        assert!(u.condition > 1e12);
+        assert!(u.stderr.iter().all(|s| s.is_finite()));
+        // The pseudo-inverse gives zero variance along the undetermined direction.
+        let var_d = (d.transpose() * &u.covariance * d)[(0, 0)];
+        assert!(var_d.abs() < 1e-12);
+    }
+
+    #[test]
+    fn too_few_observations_give_nan_variance() {
+        let jac = DMatrix::from_row_slice(1, 2, &[1.0, 2.0]);
+        let u = uncertainty(&jac, 0.0, 1, 1e-12);
+        assert!(u.residual_variance.is_nan());
+        assert_eq!(u.rank, 1);
+        assert_eq!(u.undetermined.len(), 1);
+        assert_eq!(u.singular_values.len(), 2);
+    }
+}

@@ -111,15 +111,8 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
                 if !header.vars.is_empty() {
                     return Err(input_err(line_no, "VARS", "a second VARS line".into()));
                 }
-                header.vars = value
-                    .split(',')
-                    .flat_map(|v| {
-                        if value.contains(',') {
-                            vec![v.trim()]
-                        } else {
-                            v.split_whitespace().collect()
-                        }
-                    })
+                header.vars = split_row(&value)
+                    .into_iter()
                     .filter(|v| !v.is_empty())
                     .map(str::to_string)
                     .collect();

@@ -24,6 +24,13 @@
 //! (one of them decides the weights). With `require_value`, a file whose values are all
 //! zero is an error (nothing to fit).
 //!
+//! Values of L may be negative (background-subtracted data); they must be finite.
+//!
+//! Errors: a bad field is an `Error::Input` naming the 1-based line (as an editor counts
+//! them, comments and blank lines included), the column's header name and the value; a
+//! missing column is an `Error::Input` on the header line; an empty file or a header without
+//! rows is an `Error::File`.
+//!
 //! NIST layout: a header with `thetai`, `thetar`, `phir` and no `theta_i` (Germer's PTFE
 //! BRDF files, `lambda,thetai,phi,thetar,phir,f_r11,...`, also with `phii`/`fr11`) is read
 //! in its own convention: azimuths are those of direction vectors pointing away from the
@@ -144,50 +151,15 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         message,
     };
 
-    let mut reader = ::csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .comment(Some(b'#'))
-        .trim(::csv::Trim::All)
-        .from_reader(text.as_bytes());
-
-    let mut header: Option<(usize, Vec<String>)> = None;
-    let mut records: Vec<(usize, Vec<String>)> = Vec::new();
-    let mut rec = ::csv::StringRecord::new();
-    loop {
-        let line_before = reader.position().line() as usize;
-        match reader.read_record(&mut rec) {
-            Ok(false) => break,
-            Ok(true) => {
-                let line = rec
-                    .position()
-                    .map_or(line_before, |p| p.line() as usize)
-                    .max(1);
-                if rec.iter().all(|f| f.is_empty()) {
-                    continue; // blank (or whitespace-only) line
-                }
-                let fields: Vec<String> = rec.iter().map(str::to_string).collect();
-                if header.is_none() {
-                    header = Some((line, fields));
-                } else {
-                    records.push((line, fields));
-                }
-            }
-            Err(e) => {
-                let line = e
-                    .position()
-                    .map_or(line_before, |p| p.line() as usize)
-                    .max(1);
-                return Err(input_err(line, "(row)", format!("malformed CSV: {e}")));
-            }
-        }
-    }
-
-    let Some((header_line, headers)) = header else {
+    let mut records = split_records(text)
+        .map_err(|(line, m)| input_err(line, "(row)", m))?
+        .into_iter();
+    let Some((header_line, headers)) = records.next() else {
         return Err(file_err(
             "empty file: no header row (expected e.g. theta_i,theta_r,phi_r,L)".into(),
         ));
     };
+    let records: Vec<Record> = records.collect();
     if records.is_empty() {
         return Err(file_err(format!(
             "no data rows after the header on line {header_line}"
@@ -199,7 +171,7 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         headers
             .iter()
             .enumerate()
-            .filter(|(_, h)| h.eq_ignore_ascii_case(name.trim()))
+            .filter(|(_, h)| h.trim().eq_ignore_ascii_case(name.trim()))
             .map(|(i, _)| i)
             .collect()
     };
@@ -473,6 +445,118 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         }
     }
     Ok(ds)
+}
+
+/// One CSV record: the 1-based line it starts on, and its fields.
+pub type Record = (usize, Vec<String>);
+
+/// Split CSV text into records, each with the 1-based line it starts on. Unquoted fields are
+/// trimmed of surrounding blanks; quoted fields are kept verbatim.
+/// Skips blank (or whitespace-only) lines and lines whose first non-blank character is `#`.
+/// Fields may be quoted (`"a, b"`, `""` for a quote, line breaks inside); line ends are
+/// `\n`, `\r\n` or `\r`. Errors: (line, message) for an unterminated quote or text after
+/// a closing quote.
+pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, String)> {
+    let b = text.as_bytes();
+    let n = b.len();
+    let mut i = 0;
+    let mut line = 1;
+    let mut out = Vec::new();
+    // Consume one line end at i (if any); returns whether one was consumed.
+    let eol = |i: &mut usize, line: &mut usize| -> bool {
+        if *i < n && b[*i] == b'\r' {
+            *i += 1;
+            if *i < n && b[*i] == b'\n' {
+                *i += 1;
+            }
+            *line += 1;
+            true
+        } else if *i < n && b[*i] == b'\n' {
+            *i += 1;
+            *line += 1;
+            true
+        } else {
+            false
+        }
+    };
+    while i < n {
+        // Start of a line: blank or comment?
+        let mut j = i;
+        while j < n && (b[j] == b' ' || b[j] == b'\t') {
+            j += 1;
+        }
+        if j >= n {
+            break;
+        }
+        if b[j] == b'\n' || b[j] == b'\r' || b[j] == b'#' {
+            i = j;
+            while i < n && b[i] != b'\n' && b[i] != b'\r' {
+                i += 1;
+            }
+            eol(&mut i, &mut line);
+            continue;
+        }
+        let start_line = line;
+        let mut fields = Vec::new();
+        loop {
+            while i < n && (b[i] == b' ' || b[i] == b'\t') {
+                i += 1;
+            }
+            if i < n && b[i] == b'"' {
+                let quote_line = line;
+                i += 1;
+                let mut f = String::new();
+                let mut seg = i;
+                loop {
+                    if i >= n {
+                        return Err((quote_line, "a quoted field is never closed".into()));
+                    }
+                    if b[i] == b'"' {
+                        f.push_str(&text[seg..i]);
+                        if i + 1 < n && b[i + 1] == b'"' {
+                            f.push('"');
+                            i += 2;
+                            seg = i;
+                            continue;
+                        }
+                        i += 1;
+                        break;
+                    }
+                    if b[i] == b'\n' || (b[i] == b'\r' && !(i + 1 < n && b[i + 1] == b'\n')) {
+                        line += 1;
+                    }
+                    i += 1;
+                }
+                while i < n && (b[i] == b' ' || b[i] == b'\t') {
+                    i += 1;
+                }
+                if i < n && !matches!(b[i], b',' | b'\n' | b'\r') {
+                    let rest: String = text[i..].chars().take(20).collect();
+                    return Err((
+                        line,
+                        format!("unexpected text '{rest}' after a closing quote"),
+                    ));
+                }
+                fields.push(f);
+            } else {
+                let s0 = i;
+                while i < n && !matches!(b[i], b',' | b'\n' | b'\r') {
+                    i += 1;
+                }
+                fields.push(text[s0..i].trim().to_string());
+            }
+            if i < n && b[i] == b',' {
+                i += 1;
+                continue;
+            }
+            eol(&mut i, &mut line);
+            break;
+        }
+        if fields.iter().any(|f| !f.is_empty()) {
+            out.push((start_line, fields));
+        }
+    }
+    Ok(out)
 }
 
 /// Convert NIST-convention angles (absolute azimuths of outward directions; θi < 0 puts the

@@ -13,6 +13,16 @@
 //! renames it into place, so a failed write leaves nothing behind; [`write_csv`] writes a
 //! table that way, or to stdout for the path `-`.
 //!
+//! ```
+//! use goniofit::io::{read_dataset, ReadOptions};
+//! let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
+//! let opts = ReadOptions { channel: Some("550nm".into()), require_value: true, ..Default::default() };
+//! let ds = read_dataset(&path, &opts)?;
+//! assert_eq!(ds.len(), 1439);
+//! assert_eq!(ds.wavelength.as_ref().unwrap()[0], 550.0); // nm, from the channel name
+//! # Ok::<(), goniofit::Error>(())
+//! ```
+//!
 //! Every reading error is an [`Error::Input`] (file, 1-based line, column, offending value),
 //! an [`Error::File`] (the whole file: empty, no data rows, missing column) or an
 //! [`Error::Io`]; no input makes the readers panic (proptest in `tests/io.rs`).
@@ -33,11 +43,12 @@ pub struct ReadOptions {
     /// θr < 0 means θr = |θr| on the opposite side (φr + 180°); at φr = 0 that is φr = 180°.
     pub signed_theta_r: bool,
     /// `--columns role=name` mappings; roles: theta_i, theta_r, phi_r, L, weight, sigma_L,
-    /// wavelength, group (case-insensitive; `value` is accepted for `L`).
+    /// wavelength, group (case-insensitive; `value` is accepted for `L`). CSV only.
     pub columns: Vec<(String, String)>,
     /// Whether column L (the measured value) must exist (fit: yes; eval: no).
     pub require_value: bool,
-    /// ASTM: one channel name such as `550nm`, or `all`.
+    /// ASTM: one channel name such as `550nm`, or `all`. Ignored for CSV (a `group`
+    /// column labels its samples instead).
     pub channel: Option<String>,
 }
 
@@ -88,6 +99,26 @@ impl Dataset {
             }
         }
         out
+    }
+
+    /// The samples at `idx` (in that order), every per-sample vector subset alike; used for
+    /// per-channel fits. Indices must be `< self.len()`.
+    pub fn subset(&self, idx: &[usize]) -> Dataset {
+        fn pick<T: Clone>(v: &[T], idx: &[usize]) -> Vec<T> {
+            idx.iter().map(|&i| v[i].clone()).collect()
+        }
+        Dataset {
+            path: self.path.clone(),
+            headers: self.headers.clone(),
+            rows: pick(&self.rows, idx),
+            lines: pick(&self.lines, idx),
+            samples: pick(&self.samples, idx),
+            value: self.value.as_deref().map(|v| pick(v, idx)),
+            weight: self.weight.as_deref().map(|v| pick(v, idx)),
+            sigma_l: self.sigma_l.as_deref().map(|v| pick(v, idx)),
+            wavelength: self.wavelength.as_deref().map(|v| pick(v, idx)),
+            channel: self.channel.as_deref().map(|v| pick(v, idx)),
+        }
     }
 
     /// Indices of the samples with channel label `name`.
@@ -170,11 +201,26 @@ pub fn write_atomic(
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let tmp = tempfile::Builder::new()
-        .prefix(".goniofit-")
-        .suffix(".tmp")
-        .tempfile_in(&dir)
-        .map_err(io_err)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".goniofit-").suffix(".tmp");
+    // An ordinary output file: 0o666 less the umask, not the temporary's private 0o600.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder.tempfile_in(&dir).map_err(|e| {
+        // tempfile's message names its random temporary; name the directory instead.
+        let why = if dir.is_dir() {
+            e.kind().to_string()
+        } else {
+            "no such directory".to_string()
+        };
+        Error::File {
+            path: path.to_path_buf(),
+            message: format!("cannot create a file in directory {}: {why}", dir.display()),
+        }
+    })?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file());
         f(&mut w).map_err(io_err)?;
@@ -186,21 +232,20 @@ pub fn write_atomic(
 }
 
 /// Write a CSV table (headers + rows) atomically, or to stdout when `path` is `-`. Fields
-/// are quoted where CSV needs it.
+/// are quoted where reading them back needs it (see [`csv_field`]), so the readers here
+/// return exactly the fields written. A closed stdout pipe is not an error.
 pub fn write_csv(path: &Path, headers: &[String], rows: &[Vec<String>]) -> Result<()> {
     let write = |w: &mut dyn Write| -> std::io::Result<()> {
-        let mut cw = ::csv::WriterBuilder::new().flexible(true).from_writer(w);
-        cw.write_record(headers)?;
+        write_record(w, headers)?;
         for r in rows {
-            cw.write_record(r)?;
+            write_record(w, r)?;
         }
-        cw.flush()?;
         Ok(())
     };
     if path.as_os_str() == "-" {
         let stdout = std::io::stdout();
-        let mut lock = stdout.lock();
-        match write(&mut lock) {
+        let mut lock = std::io::BufWriter::new(stdout.lock());
+        match write(&mut lock).and_then(|()| lock.flush()) {
             // A closed pipe (`goniofit eval ... | head`) is the reader's choice, not a failure.
             Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
             r => r.map_err(|source| Error::Io {
@@ -210,6 +255,33 @@ pub fn write_csv(path: &Path, headers: &[String], rows: &[Vec<String>]) -> Resul
         }
     } else {
         write_atomic(path, write)
+    }
+}
+
+/// Write one CSV record, comma-separated, `\n`-terminated.
+pub fn write_record(w: &mut dyn Write, fields: &[String]) -> std::io::Result<()> {
+    for (k, f) in fields.iter().enumerate() {
+        if k > 0 {
+            w.write_all(b",")?;
+        }
+        w.write_all(csv_field(f, k == 0).as_bytes())?;
+    }
+    w.write_all(b"\n")
+}
+
+/// A field as written to CSV: quoted (`"` doubled) when it holds a comma, quote or line
+/// break, has surrounding blanks (the reader trims unquoted fields), or, as the first field
+/// of a record, starts with `#` (the reader would take the line for a comment).
+pub fn csv_field(f: &str, first: bool) -> std::borrow::Cow<'_, str> {
+    let blank = |c: char| c == ' ' || c == '\t';
+    let needs = f.contains([',', '"', '\n', '\r'])
+        || f.starts_with(blank)
+        || f.ends_with(blank)
+        || (first && f.starts_with('#'));
+    if needs {
+        format!("\"{}\"", f.replace('"', "\"\"")).into()
+    } else {
+        f.into()
     }
 }
 

@@ -1,0 +1,21 @@
+//! `goniofit figures`: regenerate the paper's Figures 4–7 as PNG and SVG.
+
+use anyhow::Context;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct FiguresArgs {
+    /// Output folder (created if needed); writes figure4.png, figure4.svg, … figure7.svg.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+pub fn run(args: FiguresArgs) -> anyhow::Result<u8> {
+    let paths = goniofit::plot::figures::write_all(&args.out)
+        .with_context(|| format!("writing figures into {}", args.out.display()))?;
+    for p in paths {
+        println!("{}", p.display());
+    }
+    Ok(0)
+}

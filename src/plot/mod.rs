@@ -1,0 +1,293 @@
+//! Pictures: rendered spheres, the paper's Figures 4–7, and the plots a fit needs.
+//!
+//! Everything is drawn with plotters, to PNG or SVG chosen by the file extension. Text uses
+//! the bundled DejaVu Sans (registered once through plotters' ab_glyph support), so no system
+//! fonts or fontconfig are needed.
+//!
+//! A picture is a value implementing [`Picture`]: its data are computed when it is built
+//! (so tests can check the data the picture shows), and [`Picture::draw`] only draws.
+//! [`write_picture`] writes a file, [`svg_string`] and [`rgb_buffer`] render in memory.
+
+pub mod contour;
+pub mod figures;
+pub mod fit;
+pub mod sphere;
+pub mod xy;
+
+use crate::error::{Error, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::{FontDesc, FontStyle};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// The font family every picture uses.
+pub const FONT: &str = "sans-serif";
+
+static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Register the bundled font under [`FONT`] (once per process).
+pub fn ensure_font() -> Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::Plot {
+            path: PathBuf::from("assets/fonts/DejaVuSans.ttf"),
+            message: "the bundled font could not be loaded".into(),
+        })
+    }
+}
+
+/// The font at `size` pixels.
+pub fn font(size: f64) -> FontDesc<'static> {
+    (FONT, size).into_font()
+}
+
+/// Error type of drawing on a backend `DB`.
+pub type DrawError<DB> = DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>;
+
+/// A picture that can be drawn on any plotters backend.
+pub trait Picture {
+    /// Size in pixels (width, height).
+    fn size(&self) -> (u32, u32);
+
+    /// Draw on `root` (already filled white, of [`Picture::size`]).
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), DrawError<DB>>;
+}
+
+/// Output format, chosen by the file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Png,
+    Svg,
+}
+
+impl Format {
+    /// The format of `path` by its extension (`.png` or `.svg`, any case).
+    pub fn of(path: &Path) -> Result<Format> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("png") => Ok(Format::Png),
+            Some("svg") => Ok(Format::Svg),
+            _ => Err(Error::Usage(format!(
+                "{}: the output file must end in .png or .svg",
+                path.display()
+            ))),
+        }
+    }
+}
+
+fn plot_error<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::Plot {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// Write `pic` to `path` as PNG or SVG (by extension), creating the parent folder if needed.
+pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
+    let format = Format::of(path)?;
+    ensure_font()?;
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|source| Error::Io {
+            path: parent.to_path_buf(),
+            source,
+        })?;
+    }
+    let size = pic.size();
+    match format {
+        Format::Png => {
+            let root = BitMapBackend::new(path, size).into_drawing_area();
+            root.fill(&WHITE).map_err(plot_error(path))?;
+            pic.draw(&root).map_err(plot_error(path))?;
+            root.present().map_err(plot_error(path))?;
+        }
+        Format::Svg => {
+            let text = svg_string(pic).map_err(|e| match e {
+                Error::Plot { message, .. } => Error::Plot {
+                    path: path.to_path_buf(),
+                    message,
+                },
+                other => other,
+            })?;
+            std::fs::write(path, text).map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        }
+    }
+    Ok(())
+}
+
+/// Write `pic` as `dir/stem.png` and `dir/stem.svg`; returns both paths.
+pub fn write_png_svg<P: Picture>(pic: &P, dir: &Path, stem: &str) -> Result<Vec<PathBuf>> {
+    let mut paths = Vec::with_capacity(2);
+    for ext in ["png", "svg"] {
+        let path = dir.join(format!("{stem}.{ext}"));
+        write_picture(pic, &path)?;
+        paths.push(path);
+    }
+    Ok(paths)
+}
+
+/// Render `pic` to an SVG document in memory.
+pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
+    ensure_font()?;
+    let mut out = String::new();
+    let here = Path::new("<svg in memory>");
+    {
+        let root = SVGBackend::with_string(&mut out, pic.size()).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error(here))?;
+        pic.draw(&root).map_err(plot_error(here))?;
+        root.present().map_err(plot_error(here))?;
+    }
+    // plotters-svg 0.3.7 labels embedded bitmaps "data:png"; viewers need the MIME type.
+    Ok(out.replace("href=\"data:png;base64,", "href=\"data:image/png;base64,"))
+}
+
+/// Render `pic` to an RGB buffer in memory (row-major, 3 bytes per pixel, top row first).
+pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
+    ensure_font()?;
+    let (w, h) = pic.size();
+    let mut buf = vec![0u8; w as usize * h as usize * 3];
+    let here = Path::new("<bitmap in memory>");
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error(here))?;
+        pic.draw(&root).map_err(plot_error(here))?;
+        root.present().map_err(plot_error(here))?;
+    }
+    Ok(buf)
+}
+
+/// The i-th of ten well-separated line colours (matplotlib's "tab10"), cycling.
+pub fn series_color(i: usize) -> RGBColor {
+    const TAB10: [(u8, u8, u8); 10] = [
+        (31, 119, 180),
+        (255, 127, 14),
+        (44, 160, 44),
+        (214, 39, 40),
+        (148, 103, 189),
+        (140, 86, 75),
+        (227, 119, 194),
+        (127, 127, 127),
+        (188, 189, 34),
+        (23, 190, 207),
+    ];
+    let (r, g, b) = TAB10[i % TAB10.len()];
+    RGBColor(r, g, b)
+}
+
+/// A light sequential colour map (white → yellow → orange → dark red) for heatmaps under
+/// black contour lines; `t` is clamped to [0, 1].
+pub fn heat_color(t: f64) -> RGBColor {
+    const STOPS: [(f64, [f64; 3]); 5] = [
+        (0.0, [255.0, 255.0, 255.0]),
+        (0.25, [255.0, 237.0, 160.0]),
+        (0.5, [254.0, 178.0, 76.0]),
+        (0.75, [240.0, 59.0, 32.0]),
+        (1.0, [128.0, 0.0, 38.0]),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let k = STOPS
+        .windows(2)
+        .position(|w| t <= w[1].0)
+        .unwrap_or(STOPS.len() - 2);
+    let (t0, c0) = STOPS[k];
+    let (t1, c1) = STOPS[k + 1];
+    let f = (t - t0) / (t1 - t0);
+    let mix = |j: usize| (c0[j] + f * (c1[j] - c0[j])).round() as u8;
+    RGBColor(mix(0), mix(1), mix(2))
+}
+
+/// Format a number compactly for titles and legends (at most 4 significant digits).
+pub fn fmt_num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if (1e-3..1e5).contains(&a) {
+        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        // Mantissa with trailing zeros trimmed: 1e-6, 2.5e-7.
+        let s = format!("{v:.3e}");
+        match s.split_once('e') {
+            Some((m, e)) if m.contains('.') => {
+                format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+            }
+            _ => s,
+        }
+    }
+}
+
+/// A tick label on a linear axis: like [`fmt_num`], but rounding noise around zero
+/// (|v| < 1e-9) shows as 0.
+pub fn fmt_tick(v: f64) -> String {
+    if v.abs() < 1e-9 {
+        "0".into()
+    } else {
+        fmt_num(v)
+    }
+}
+
+/// "name: p1 = v1, p2 = v2" for a model and its parameters.
+pub fn model_title(model: &dyn crate::model::Model, params: &[f64]) -> String {
+    let ps: Vec<String> = model
+        .params()
+        .iter()
+        .zip(params)
+        .map(|(s, v)| format!("{} = {}", s.name, fmt_num(*v)))
+        .collect();
+    format!("{}: {}", model.name(), ps.join(", "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn format_by_extension() {
+        assert_eq!(Format::of(Path::new("a/b.PNG")).unwrap(), Format::Png);
+        assert_eq!(Format::of(Path::new("b.svg")).unwrap(), Format::Svg);
+        assert!(Format::of(Path::new("b.jpg")).is_err());
+        assert!(Format::of(Path::new("b")).is_err());
+    }
+
+    #[test]
+    fn numbers_are_compact() {
+        assert_eq!(fmt_num(5.0), "5");
+        assert_eq!(fmt_num(0.125), "0.125");
+        assert_eq!(fmt_num(12.3456), "12.35");
+        assert_eq!(fmt_num(2.5e-7), "2.5e-7");
+        assert_eq!(fmt_num(1e-6), "1e-6");
+        assert_eq!(fmt_tick(-2.2e-16), "0");
+    }
+
+    #[test]
+    fn heat_map_ends() {
+        assert_eq!(heat_color(0.0), RGBColor(255, 255, 255));
+        assert_eq!(heat_color(1.0), RGBColor(128, 0, 38));
+        assert_eq!(heat_color(f64::NAN), RGBColor(255, 255, 255));
+    }
+}

@@ -1,0 +1,481 @@
+//! Pictures: what each one must show (Peters 2000, Figures 4–7), and that the files are
+//! valid PNG and SVG.
+
+use assert_cmd::Command;
+use goniofit::geometry::{Geometry, Quantity, Sample};
+use goniofit::model::{by_name, Model, ModelOptions};
+use goniofit::plot::figures::{
+    figure4_spheres, figure5_curves, figure6_curves, figure7_grid, Figure4, T_OVER_SIGMA,
+};
+use goniofit::plot::fit::{write_fit_plots, FitPlotInput};
+use goniofit::plot::sphere::{pixel_xy, sphere_radiance, SpherePicture};
+use goniofit::plot::{rgb_buffer, svg_string};
+
+fn model(name: &str) -> Box<dyn Model> {
+    by_name(name, &ModelOptions::default()).unwrap()
+}
+
+/// Width and height from a PNG's IHDR chunk, after checking the signature.
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert!(bytes.len() > 33, "PNG too short");
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+    (w, h)
+}
+
+fn assert_svg(text: &str) {
+    assert!(text.starts_with("<svg"), "starts with <svg");
+    assert!(text.trim_end().ends_with("</svg>"), "ends with </svg>");
+    assert!(text.contains("<text"), "has text");
+    assert!(
+        !text.contains("data:png;"),
+        "embedded images carry a MIME type"
+    );
+}
+
+/// Brightest pixel of a rendered (plain) sphere bitmap, in sphere coordinates.
+fn brightest_in_bitmap(rgb: &[u8], size: u32) -> (f64, f64) {
+    let n = size as usize;
+    let k = (0..n * n).max_by_key(|&k| rgb[3 * k] as u32).unwrap();
+    // Ties (several pixels at 255): take the mean position of all maximal pixels.
+    let top = rgb[3 * k];
+    let maxima: Vec<(f64, f64)> = (0..n * n)
+        .filter(|&k| rgb[3 * k] == top)
+        .map(|k| pixel_xy(size, k % n, k / n))
+        .collect();
+    let m = maxima.len() as f64;
+    (
+        maxima.iter().map(|p| p.0).sum::<f64>() / m,
+        maxima.iter().map(|p| p.1).sum::<f64>() / m,
+    )
+}
+
+#[test]
+fn kbs_sphere_bitmap_is_brightest_at_the_specular_normal() {
+    let size = 96;
+    let img = sphere_radiance(
+        model("kbs-rough").as_ref(),
+        &[1.0, 5.0, 1.0],
+        45.0,
+        1.0,
+        size,
+    )
+    .unwrap();
+    let pic = SpherePicture {
+        image: img,
+        negative: false,
+        marks: false,
+    };
+    let rgb = rgb_buffer(&pic).unwrap();
+    let (x, y) = brightest_in_bitmap(&rgb, size);
+    let px = 2.0 / size as f64;
+    assert!((x + 0.3827).abs() < 2.0 * px, "x = {x}");
+    assert!(y.abs() < 2.0 * px, "y = {y}");
+}
+
+#[test]
+fn lambert_sphere_bitmap_is_brightest_at_the_light() {
+    let size = 96;
+    let img = sphere_radiance(model("lambert").as_ref(), &[1.0], 45.0, 1.0, size).unwrap();
+    let rgb = rgb_buffer(&SpherePicture {
+        image: img,
+        negative: false,
+        marks: false,
+    })
+    .unwrap();
+    let (x, y) = brightest_in_bitmap(&rgb, size);
+    let px = 2.0 / size as f64;
+    assert!((x + 45f64.to_radians().sin()).abs() < 2.0 * px, "x = {x}");
+    assert!(y.abs() < 2.0 * px, "y = {y}");
+}
+
+#[test]
+fn negative_inverts_the_plain_picture() {
+    let img = sphere_radiance(model("lambert").as_ref(), &[1.0], 45.0, 1.0, 64).unwrap();
+    let plain = img.to_rgb(false);
+    let neg = img.to_rgb(true);
+    assert!(plain
+        .iter()
+        .zip(&neg)
+        .all(|(a, b)| *a as u16 + *b as u16 == 255));
+}
+
+#[test]
+fn figure4_spheres_peak_at_the_specular_point_and_narrow_with_t_over_sigma() {
+    let spheres = figure4_spheres(80).unwrap();
+    assert_eq!(spheres.len(), 6);
+    let px = 2.0 / 80.0;
+    let mut lit_area = Vec::new();
+    for (img, caption) in &spheres[..5] {
+        let (x, y) = img.brightest_xy();
+        assert!((x + 0.3827).abs() <= 1.5 * px, "{caption}: x = {x}");
+        assert!(y.abs() <= 1.5 * px, "{caption}: y = {y}");
+        let max = img.max();
+        lit_area.push(img.radiance.iter().filter(|v| **v >= 0.5 * max).count());
+    }
+    for w in lit_area.windows(2) {
+        assert!(w[1] < w[0], "lobe narrows as T/σ grows: {lit_area:?}");
+    }
+    let (x, _) = spheres[5].0.brightest_xy();
+    assert!(
+        (x + std::f64::consts::FRAC_1_SQRT_2).abs() <= 1.5 * px,
+        "Lambertian: x = {x}"
+    );
+}
+
+#[test]
+fn figure5_curves_peak_at_the_marks_and_narrow() {
+    let curves = figure5_curves(361).unwrap();
+    assert_eq!(curves.len(), 6);
+    let mut widths = Vec::new();
+    for (c, r) in curves.iter().zip(T_OVER_SIGMA) {
+        assert_eq!(c.param, r);
+        let (x, y) = c.peak();
+        assert!((x + 22.5).abs() <= 0.5, "{}: peak at {x}", c.label);
+        assert!((y - 1.0).abs() < 1e-12, "normalised");
+        widths.push(c.width_at_half_max());
+    }
+    for w in widths.windows(2) {
+        assert!(w[1] < w[0], "half-max widths shrink: {widths:?}");
+    }
+    assert!(
+        (curves[5].peak().0 + 45.0).abs() <= 0.5,
+        "Lambertian at the light"
+    );
+    // The drawn figure: six labelled curves peaking at the specular mark (Lambert: light).
+    let fig = goniofit::plot::figures::figure5().unwrap();
+    assert_eq!(fig.series.len(), 6);
+    for (k, s) in fig.series.iter().enumerate() {
+        assert!(s.label.is_some());
+        let peak = s
+            .points
+            .iter()
+            .copied()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap();
+        let want = if k < 5 { -22.5 } else { -45.0 };
+        assert!((peak.0 - want).abs() <= 0.75, "{:?}: {peak:?}", s.label);
+    }
+}
+
+#[test]
+fn figure6_peaks_move_monotonically_from_the_mirror_to_the_normal() {
+    let curves = figure6_curves(721).unwrap();
+    assert_eq!(curves.len(), 9);
+    let peaks: Vec<f64> = curves.iter().map(|c| c.peak().0).collect();
+    assert!(
+        (peaks[0] - 45.0).abs() <= 0.125,
+        "φr = 0 peaks at the mirror: {peaks:?}"
+    );
+    assert!(
+        peaks[8].abs() <= 0.125,
+        "φr = 90° peaks at θr = 0: {peaks:?}"
+    );
+    for w in peaks.windows(2) {
+        assert!(w[1] < w[0], "peaks move toward 0: {peaks:?}");
+    }
+    // The φr = 90° curve's peak value is the φr = 0 curve's value at θr = 0.
+    let at_zero = curves[0].points[0].1;
+    assert!((curves[8].peak().1 - at_zero).abs() < 1e-12 * at_zero.max(1.0));
+    assert!(
+        (curves[0].peak().1 - 1.0).abs() < 1e-12,
+        "normalised to the φr = 0 peak"
+    );
+    // The same holds for the series the drawn figure plots.
+    let fig = goniofit::plot::figures::figure6().unwrap();
+    assert_eq!(fig.series.len(), 9);
+    let drawn: Vec<f64> = fig
+        .series
+        .iter()
+        .map(|s| {
+            s.points
+                .iter()
+                .copied()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap()
+                .0
+        })
+        .collect();
+    assert!(
+        (drawn[0] - 45.0).abs() < 1e-9 && drawn[8].abs() < 1e-9,
+        "{drawn:?}"
+    );
+    for w in drawn.windows(2) {
+        assert!(w[1] < w[0], "drawn peaks move toward 0: {drawn:?}");
+    }
+}
+
+#[test]
+fn figure7_grid_peaks_at_the_mirror_and_is_symmetric_in_phi() {
+    let g = figure7_grid(91, 181).unwrap();
+    let (k, _) =
+        g.z.iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .unwrap();
+    let (i, j) = (k % g.xs.len(), k / g.xs.len());
+    assert!((g.xs[i] - 45.0).abs() <= 1.0 && g.ys[j].abs() <= 2.0);
+    let nx = g.xs.len();
+    let ny = g.ys.len();
+    for j in 0..ny {
+        for i in 0..nx {
+            let a = g.at(i, j);
+            let b = g.at(i, ny - 1 - j);
+            assert!((a - b).abs() <= 1e-12 * a.abs().max(1e-300) + 1e-300);
+        }
+    }
+    // L(θr = 0) is 0.47 of the peak, so the 0.6 contour is a loop around the mirror
+    // direction, away from the normal and from the back half.
+    let segs = g.contour(0.6);
+    assert!(!segs.is_empty());
+    for (a, _) in segs {
+        assert!(a.0 > 2.0 && a.0 < 89.0 && a.1.abs() < 90.0, "{a:?}");
+    }
+}
+
+#[test]
+fn pictures_render_to_valid_svg_and_bitmaps() {
+    let fig4 = Figure4::new().unwrap();
+    let svg = svg_string(&fig4).unwrap();
+    assert_svg(&svg);
+    assert!(svg.contains("T/σ = 10") && svg.contains("Lambertian"));
+    assert!(
+        svg.contains("data:image/png;base64,"),
+        "spheres embedded as images"
+    );
+    let fig6 = goniofit::plot::figures::figure6().unwrap();
+    let svg = svg_string(&fig6).unwrap();
+    assert_svg(&svg);
+    assert!(
+        svg.contains("θr") && svg.contains("φr = π/2"),
+        "axis label and legend"
+    );
+    let rgb = rgb_buffer(&fig6).unwrap();
+    assert_eq!(rgb.len(), 900 * 600 * 3);
+    assert!(rgb.iter().any(|&b| b < 128), "something is drawn");
+}
+
+#[test]
+fn figures_command_writes_all_eight_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("figs");
+    Command::cargo_bin("goniofit")
+        .unwrap()
+        .args(["figures", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    for k in 4..=7 {
+        let png = std::fs::read(out.join(format!("figure{k}.png"))).unwrap();
+        let (w, h) = png_size(&png);
+        assert!(w >= 600 && h >= 500, "figure{k}: {w}×{h}");
+        let svg = std::fs::read_to_string(out.join(format!("figure{k}.svg"))).unwrap();
+        assert_svg(&svg);
+    }
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 8);
+}
+
+#[test]
+fn render_sphere_command_writes_png_and_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, extra) in [("s.png", vec![]), ("s.svg", vec!["--negative", "--marks"])] {
+        let path = dir.path().join(name);
+        Command::cargo_bin("goniofit")
+            .unwrap()
+            .args([
+                "render",
+                "sphere",
+                "--model",
+                "kbs-rough",
+                "--params",
+                "sigma=1,T=5,scale=1",
+                "--light-deg",
+                "45",
+                "--size",
+                "64",
+                "--out",
+            ])
+            .arg(&path)
+            .args(extra)
+            .assert()
+            .success();
+        let bytes = std::fs::read(&path).unwrap();
+        if name.ends_with(".png") {
+            assert_eq!(png_size(&bytes), (64, 64));
+        } else {
+            let text = String::from_utf8(bytes).unwrap();
+            assert!(text.starts_with("<svg") && text.contains("data:image/png;base64,"));
+        }
+    }
+    // Bad input: unknown extension, bad parameters -> exit 2.
+    Command::cargo_bin("goniofit")
+        .unwrap()
+        .args([
+            "render", "sphere", "--model", "lambert", "--params", "scale=1", "--out",
+        ])
+        .arg(dir.path().join("s.jpg"))
+        .assert()
+        .code(2);
+    Command::cargo_bin("goniofit")
+        .unwrap()
+        .args([
+            "render", "sphere", "--model", "kbs", "--params", "sigma=1", "--out",
+        ])
+        .arg(dir.path().join("s.png"))
+        .assert()
+        .code(2);
+}
+
+/// A synthetic in-plane + out-of-plane dataset with its exact model values.
+fn synthetic_fit() -> (Box<dyn Model>, Vec<f64>, Geometry, Vec<f64>) {
+    let m = model("kbs");
+    let params = vec![0.3, 2.0, 1.0];
+    let mut samples = Vec::new();
+    for ti in [20.0, 45.0, 60.0] {
+        for tr in (0..=80).step_by(5) {
+            samples.push(Sample::from_degrees(ti, tr as f64, 0.0));
+            if tr > 0 {
+                samples.push(Sample::from_degrees(ti, tr as f64, 180.0));
+            }
+        }
+    }
+    for tr in (10..=70).step_by(20) {
+        for phi in [30.0, 60.0, 120.0] {
+            samples.push(Sample::from_degrees(45.0, tr as f64, phi));
+        }
+    }
+    let geo = Geometry::new(&samples, &[0.5], Quantity::Radiance).unwrap();
+    let mut fitted = vec![0.0; geo.len()];
+    m.eval(&geo, &params, &mut fitted, None);
+    (m, params, geo, fitted)
+}
+
+#[test]
+fn fit_plots_write_twelve_valid_files() {
+    let (m, params, geo, fitted) = synthetic_fit();
+    let measured: Vec<f64> = fitted
+        .iter()
+        .enumerate()
+        .map(|(k, v)| v * (1.0 + 0.03 * ((k as f64) * 1.7).sin()))
+        .collect();
+    let res: Vec<f64> = measured
+        .iter()
+        .zip(&fitted)
+        .map(|(m, f)| (m - f) / (0.03 * f.abs().max(1e-12)))
+        .collect();
+    let input = FitPlotInput {
+        title: "kbs: sigma = 0.3, T = 2, scale = 1".into(),
+        model: m.as_ref(),
+        params: &params,
+        geo: &geo,
+        measured: &measured,
+        fitted: &fitted,
+        std_residuals: &res,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let paths = write_fit_plots(dir.path(), &input).unwrap();
+    assert_eq!(paths.len(), 12);
+    for stem in [
+        "fit_linear",
+        "fit_log",
+        "residuals_theta",
+        "residuals_phi",
+        "polar",
+        "contour",
+    ] {
+        let png = std::fs::read(dir.path().join(format!("{stem}.png"))).unwrap();
+        let (w, h) = png_size(&png);
+        assert!(w >= 800 && h >= 500);
+        let svg = std::fs::read_to_string(dir.path().join(format!("{stem}.svg"))).unwrap();
+        assert_svg(&svg);
+        assert!(
+            svg.contains("sigma = 0.3"),
+            "{stem}: title names the parameters"
+        );
+    }
+    // The polar plot's lobe peaks near the mirror direction of the busiest θi (45°).
+    let polar = goniofit::plot::fit::polar_plot(&input).unwrap();
+    assert!((polar.theta_i.to_degrees() - 45.0).abs() < 1e-9);
+    let peak = polar
+        .curve
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    assert!(peak.0 > 30.0 && peak.0 < 60.0, "peak at {peak:?}");
+    // Mismatched lengths are a usage error, not a panic.
+    let short = FitPlotInput {
+        measured: &measured[..3],
+        ..input
+    };
+    assert!(write_fit_plots(dir.path(), &short).is_err());
+}
+
+/// Writes the fit pictures of the synthetic dataset to $GONIOFIT_PLOT_DEMO (for looking at
+/// them); does nothing when the variable is unset.
+#[test]
+fn fit_plots_demo_output() {
+    let Ok(dir) = std::env::var("GONIOFIT_PLOT_DEMO") else {
+        return;
+    };
+    let (m, params, geo, fitted) = synthetic_fit();
+    let measured: Vec<f64> = fitted
+        .iter()
+        .enumerate()
+        .map(|(k, v)| v * (1.0 + 0.05 * ((k as f64) * 1.7).sin()))
+        .collect();
+    let res: Vec<f64> = measured
+        .iter()
+        .zip(&fitted)
+        .map(|(m, f)| (m - f) / (0.03 * f.abs().max(1e-12)))
+        .collect();
+    let input = FitPlotInput {
+        title: "kbs: sigma = 0.3, T = 2, scale = 1".into(),
+        model: m.as_ref(),
+        params: &params,
+        geo: &geo,
+        measured: &measured,
+        fitted: &fitted,
+        std_residuals: &res,
+    };
+    write_fit_plots(std::path::Path::new(&dir), &input).unwrap();
+}
+
+#[test]
+fn fit_plots_cope_with_awkward_data() {
+    // Out-of-plane samples only, a BRDF, a flat model, a NaN residual and zero values.
+    let m = model("lambert");
+    let params = vec![0.2];
+    let samples: Vec<Sample> = [(30.0, 10.0, 40.0), (30.0, 50.0, 45.0), (60.0, 20.0, 100.0)]
+        .iter()
+        .map(|&(a, b, c)| Sample::from_degrees(a, b, c))
+        .collect();
+    let geo = Geometry::new(&samples, &[1.0], Quantity::Brdf).unwrap();
+    let mut fitted = vec![0.0; geo.len()];
+    m.eval(&geo, &params, &mut fitted, None);
+    let measured = vec![0.0, 0.21, 0.19];
+    let res = vec![f64::NAN, 0.5, -0.5];
+    let input = FitPlotInput {
+        title: "lambert: scale = 0.2".into(),
+        model: m.as_ref(),
+        params: &params,
+        geo: &geo,
+        measured: &measured,
+        fitted: &fitted,
+        std_residuals: &res,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let paths = write_fit_plots(&dir.path().join("new/sub"), &input).unwrap();
+    assert_eq!(paths.len(), 12);
+    // Nearest-to-plane: the 30° group shows its sample at φr = 40° (nearest), not 45°.
+    let chart = goniofit::plot::fit::fit_chart(&input, false).unwrap();
+    let measured_pts: Vec<usize> = chart
+        .series
+        .iter()
+        .filter(|s| s.label.is_none())
+        .map(|s| s.points.len())
+        .collect();
+    assert_eq!(measured_pts, vec![1, 1]);
+}
