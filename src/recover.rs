@@ -7,7 +7,7 @@
 //!
 //! | verdict | scored quantities | truth |
 //! |---|---|---|
-//! | `full` | σ, T, scale | the drawn values |
+//! | `full` | σ, T, scale, T/σ | the drawn values |
 //! | `rough` | T/σ, amplitude | T/σ, s·(T/σ)² |
 //! | `smooth` | T, amplitude | T, s·(σ/λ)² |
 //! | `partial` | every parameter or derived quantity marked determined | as above |
@@ -335,7 +335,7 @@ pub fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
     let param = |name: &str| fit.params.iter().find(|p| p.name == name);
     let derived = |name: &str| fit.derived.iter().find(|d| d.name == name);
     let wanted: &[&str] = match fit.verdict {
-        Verdict::Full => &["sigma", "T", "scale"],
+        Verdict::Full => &["sigma", "T", "scale", "T/sigma"],
         Verdict::Rough => &["T/sigma", "amplitude"],
         Verdict::Smooth => &["T", "amplitude"],
         Verdict::Partial => &["sigma", "T", "scale", "T/sigma", "amplitude"],

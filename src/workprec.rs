@@ -336,7 +336,19 @@ pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkP
         ResidualKind::Absolute,
         1e-6 * max_y,
     )?;
-    let (p0, _) = init::initial_values(&problem, &input, &vec![None; layout.len()]);
+    let grid_model = model::by_name(
+        "kbs",
+        &ModelOptions {
+            tol: 1e-4,
+            ..ModelOptions::default()
+        },
+    )?;
+    let (p0, _) = init::initial_values(
+        &problem,
+        grid_model.as_ref(),
+        &input,
+        &vec![None; layout.len()],
+    );
     let x0 = layout.to_x(&p0);
     for (label, jac, lm_config) in solver_settings() {
         let fd = FiniteDifference {
