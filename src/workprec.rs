@@ -425,3 +425,186 @@ impl WorkPrecision {
         s
     }
 }
+
+/// Smallest error the plot shows (exact zeros are drawn here).
+pub const PLOT_ERROR_FLOOR: f64 = 1e-17;
+
+/// The log-log plot of error against run time: one point per row for the model error
+/// (evaluation rows) and the parameter error (every row), each labelled by its mode.
+#[derive(Debug, Clone)]
+pub struct WorkPrecisionPlot {
+    /// (label, seconds, error) for the model errors.
+    pub model: Vec<(String, f64, f64)>,
+    /// (label, seconds, error) for the parameter errors.
+    pub param: Vec<(String, f64, f64)>,
+}
+
+impl WorkPrecisionPlot {
+    /// The points of a table (non-finite errors are left out; zeros sit at the floor).
+    pub fn new(wp: &WorkPrecision) -> Self {
+        let pt = |r: &Row, e: f64| {
+            (e.is_finite() && r.seconds > 0.0)
+                .then(|| (r.mode.clone(), r.seconds, e.max(PLOT_ERROR_FLOOR)))
+        };
+        WorkPrecisionPlot {
+            model: wp
+                .rows
+                .iter()
+                .filter(|r| r.kind == "eval")
+                .filter_map(|r| pt(r, r.model_error))
+                .collect(),
+            param: wp
+                .rows
+                .iter()
+                .filter_map(|r| pt(r, r.param_error))
+                .collect(),
+        }
+    }
+
+    fn ranges(&self) -> ((f64, f64), (f64, f64)) {
+        let all = self.model.iter().chain(&self.param);
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
+        for (_, x, y) in all {
+            x0 = x0.min(*x);
+            x1 = x1.max(*x);
+            y0 = y0.min(*y);
+            y1 = y1.max(*y);
+        }
+        if !(x0.is_finite() && y0.is_finite()) {
+            return ((1e-4, 1.0), (1e-16, 1.0));
+        }
+        ((x0 / 2.0, x1 * 2.0), (y0 / 10.0, y1 * 10.0))
+    }
+}
+
+impl crate::plot::Picture for WorkPrecisionPlot {
+    fn size(&self) -> (u32, u32) {
+        (1000, 700)
+    }
+
+    fn draw<DB: plotters::prelude::DrawingBackend>(
+        &self,
+        root: &plotters::drawing::DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), crate::plot::DrawError<DB>> {
+        use crate::plot::{font, series_color};
+        use plotters::prelude::*;
+        let ((x0, x1), (y0, y1)) = self.ranges();
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                "goniofit work-precision: error against run time",
+                font(20.0),
+            )
+            .margin(15)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("run time (s)")
+            .y_desc("max relative error")
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .label_style(font(14.0))
+            .axis_desc_style(font(16.0))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .draw()?;
+        for (i, (name, pts, filled)) in [
+            ("model error (eval modes)", &self.model, true),
+            (
+                "parameter error (eval modes and solver settings)",
+                &self.param,
+                false,
+            ),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let color = series_color(i);
+            let style = if filled {
+                color.filled()
+            } else {
+                color.stroke_width(2)
+            };
+            chart
+                .draw_series(pts.iter().map(|(_, x, y)| Circle::new((*x, *y), 5, style)))?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, style));
+            // Labels beside the points: model points by eval mode; parameter points only
+            // for the solver rows (the eval rows' labels sit on their model points),
+            // staggered so that rows with equal error stay readable.
+            let labelled: Vec<&(String, f64, f64)> = if filled {
+                pts.iter().collect()
+            } else {
+                pts.iter()
+                    .filter(|(l, _, _)| l.starts_with("jac="))
+                    .collect()
+            };
+            chart.draw_series(labelled.into_iter().enumerate().map(|(k, (label, x, y))| {
+                let dy = if filled { -6 } else { 8 + 14 * (k as i32 % 3) };
+                EmptyElement::at((*x, *y))
+                    + Text::new(label.clone(), (8, dy), font(12.0).color(&color))
+            }))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font(font(14.0))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(180, 180, 180))
+            .draw()?;
+        Ok(())
+    }
+}
+
+/// Write the plot as `dir/work-precision.png` and `.svg`; returns the paths.
+pub fn write_plot(wp: &WorkPrecision, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
+    crate::plot::write_png_svg(&WorkPrecisionPlot::new(wp), dir, "work-precision")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(kind: &str, mode: &str, seconds: f64, model_error: f64, param_error: f64) -> Row {
+        Row {
+            kind: kind.into(),
+            mode: mode.into(),
+            seconds,
+            model_error,
+            param_error,
+            fit_seconds: seconds,
+            termination: "Xtol".into(),
+        }
+    }
+
+    #[test]
+    fn plot_shows_every_finite_row() {
+        let wp = WorkPrecision {
+            rows: vec![
+                row("eval", "series 1e-4", 2e-2, 5e-6, 3e-7),
+                row("eval", "rough", 5e-4, f64::INFINITY, 1.0),
+                row("fit", "jac=analytic tol=default", 5e-3, 7e-12, 0.0),
+            ],
+            reference: "series".into(),
+            eval_layout: EVAL_LAYOUT.into(),
+            fit_layout: FIT_LAYOUT.into(),
+            repeats: 1,
+        };
+        let pic = WorkPrecisionPlot::new(&wp);
+        assert_eq!(pic.model.len(), 1, "the infinite model error is left out");
+        assert_eq!(pic.param.len(), 3);
+        assert_eq!(pic.param[2].2, PLOT_ERROR_FLOOR);
+        let svg = crate::plot::svg_string(&pic).unwrap();
+        assert!(svg.contains("series 1e-4"));
+        assert!(svg.contains("jac=analytic tol=default"));
+        assert!(svg.contains("run time (s)"));
+    }
+
+    #[test]
+    fn relative_error_handles_zero_and_non_finite() {
+        assert_eq!(max_rel_error(&[1.0, 0.5], &[1.0, 0.0]), 0.5);
+        assert_eq!(max_rel_error(&[f64::NAN], &[1.0]), f64::INFINITY);
+        assert!((max_rel_error(&[1.1], &[1.0]) - 0.1).abs() < 1e-12);
+    }
+}

@@ -62,11 +62,15 @@ fn work_precision(args: WorkPrecisionArgs) -> anyhow::Result<u8> {
     )
     .context("work-precision benchmark")?;
     bar.finish_and_clear();
-    let _ = &args.out;
+    let paths = workprec::write_plot(&wp, &args.out)
+        .with_context(|| format!("writing the plot to {}", args.out.display()))?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&wp)?);
     } else {
         print!("{}", wp.table());
+    }
+    for p in &paths {
+        eprintln!("goniofit bench: wrote {}", p.display());
     }
     Ok(0)
 }
