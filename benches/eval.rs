@@ -8,9 +8,11 @@
 //! "lobe", keeps the view within 10° of the mirror direction (where a gonioreflectometer
 //! puts most samples of a glossy surface): b ≲ 0.2.
 //!
-//! Groups: `kbs/<regime>/<mode>` (whole-model radiance, values only), `kbs_jac/<regime>`
-//! (values + Jacobian, auto and rough), `lnq/<regime>/<mode>` (the sum alone), and
-//! `models/<name>` for the other models. Throughput is reported in samples/s.
+//! Groups: `kbs_hemi/<regime>/<mode>` and `kbs_lobe/<regime>/<mode>` (whole-model radiance;
+//! modes series, rough, smooth, auto, and rough+jac, auto+jac with the Jacobian),
+//! `lnq_hemi/<regime>/<mode>` (the sum ln Q alone), and `models/<name>/{values,jacobian}`
+//! for the other models. Throughput is reported in samples/s; the target is auto/rough ≤ 4
+//! in every regime.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use goniofit::geometry::{Geometry, Quantity, Sample};

@@ -20,6 +20,8 @@ pub enum Command {
     /// Fit a model to a measurement file (CSV or ASTM E1392) and report parameters with
     /// uncertainties, what the data determines, and residual statistics.
     Fit(Box<commands::fit::FitArgs>),
+    /// Redraw a fit's pictures from its saved JSON report (`goniofit fit --json > fit.json`).
+    Plot(commands::plot::PlotArgs),
     /// Generate synthetic measurements from known parameters, with seeded noise; writes the
     /// CSV and the truth beside it as JSON.
     Synth(Box<commands::synth::SynthArgs>),

@@ -134,8 +134,18 @@ pub struct FitArgs {
     /// Write the input rows with L_fit, residual, std_residual, mode.
     #[arg(long)]
     pub residuals: Option<PathBuf>,
-    /// The measurement file (CSV or ASTM E1392).
-    pub file: PathBuf,
+    /// Write the fit's pictures (PNG and SVG) into this folder.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Fit each group (a `group` column, or each ASTM channel) on its own.
+    #[arg(long)]
+    pub by_group: bool,
+    /// Threads for fitting several datasets in parallel (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// The measurement files (CSV or ASTM E1392); several files are fitted in parallel.
+    #[arg(required = true, num_args = 1..)]
+    pub file: Vec<PathBuf>,
 }
 
 /// Parse `X,Y`.
@@ -260,15 +270,22 @@ fn command_line() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
 }
 
-pub fn run(args: FitArgs) -> anyhow::Result<u8> {
-    let opts = ReadOptions {
-        radians: args.radians,
-        signed_theta_r: args.signed_theta_r,
-        columns: parse_columns(args.columns.as_deref())?,
-        require_value: true,
-        channel: args.channel.clone(),
-    };
-    let ds = io::read_dataset(&args.file, &opts)?;
+/// One dataset's fit: every candidate model, and the chosen one (lowest BIC).
+pub struct Outcome {
+    pub label: String,
+    pub dataset: Dataset,
+    pub input: FitInput,
+    pub candidates: Vec<FitResult>,
+    pub result: FitResult,
+}
+
+/// Fit one dataset with every candidate model; keep the lowest BIC.
+fn fit_dataset(
+    args: &FitArgs,
+    label: String,
+    ds: Dataset,
+    progress: bool,
+) -> anyhow::Result<Outcome> {
     let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
         AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect()
     } else {
@@ -278,11 +295,13 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
     let input = fit_input(&ds, args.quantity.into(), args.wavelength, needs_wavelength)?;
     let uncertainties = ds.sigma_l.is_some();
-
     let mut results: Vec<FitResult> = Vec::new();
     for m in &candidates {
-        let config = fit_config(&args, m, uncertainties)?;
-        results.push(driver::fit(&input, &config).with_context(|| format!("fitting model {m}"))?);
+        let mut config = fit_config(args, m, uncertainties)?;
+        config.lm.progress = progress && args.progress;
+        results.push(
+            driver::fit(&input, &config).with_context(|| format!("{label}: fitting model {m}"))?,
+        );
     }
     let best = results
         .iter()
@@ -292,50 +311,169 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .expect("at least one candidate");
     let mut result = results[best].clone();
     if input.channel_names.len() > 1 {
-        if let Some(note) = joint_narrowing(&args, &ds, &result)? {
+        if let Some(note) = joint_narrowing(args, &ds, &result)? {
             result.notes.push(note);
         }
     }
-    let info = RunInfo {
-        input: args.file.display().to_string(),
+    Ok(Outcome {
+        label,
+        dataset: ds,
+        input,
+        candidates: results,
+        result,
+    })
+}
+
+/// The report of one outcome as JSON.
+fn outcome_json(o: &Outcome, info: &RunInfo) -> serde_json::Value {
+    let mut v = report::json::to_json(&o.result, info);
+    v["replay"] = replay_json(&o.result);
+    if o.candidates.len() > 1 {
+        v["comparison"] = serde_json::json!(o
+            .candidates
+            .iter()
+            .map(|r| serde_json::json!({"model": r.model, "bic": r.bic, "aic": r.aic, "cost": r.cost, "converged": r.converged()}))
+            .collect::<Vec<_>>());
+    }
+    v
+}
+
+/// The report of one outcome as text.
+fn outcome_text(o: &Outcome, info: &RunInfo) -> String {
+    let mut s = String::new();
+    if o.candidates.len() > 1 {
+        s += "[[Model comparison]] (lowest BIC wins)\n";
+        for r in &o.candidates {
+            s += &format!(
+                "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}{}\n",
+                r.model,
+                r.bic,
+                r.aic,
+                r.cost,
+                if r.model == o.result.model {
+                    "  <- chosen"
+                } else {
+                    ""
+                }
+            );
+        }
+    }
+    s + &report::text::render(&o.result, info)
+}
+
+pub fn run(args: FitArgs) -> anyhow::Result<u8> {
+    let opts = ReadOptions {
+        radians: args.radians,
+        signed_theta_r: args.signed_theta_r,
+        columns: parse_columns(args.columns.as_deref())?,
+        require_value: true,
+        channel: args.channel.clone(),
+    };
+    // Every input is read (and checked) before any fit starts.
+    let mut jobs: Vec<(String, Dataset)> = Vec::new();
+    for file in &args.file {
+        let ds = io::read_dataset(file, &opts)?;
+        if args.by_group {
+            let names = ds.channel_names();
+            if names.is_empty() {
+                return Err(Error::Usage(format!(
+                    "{}: --by-group needs a group column (or ASTM channels)",
+                    file.display()
+                ))
+                .into());
+            }
+            for name in names {
+                let mut sub = ds.subset(&ds.channel_indices(&name));
+                sub.channel = None;
+                jobs.push((format!("{} [{name}]", file.display()), sub));
+            }
+        } else {
+            jobs.push((file.display().to_string(), ds));
+        }
+    }
+    let single = jobs.len() == 1;
+    if !single && (args.residuals.is_some() || args.plot.is_some()) {
+        return Err(Error::Usage(
+            "--residuals and --plot take one dataset; fit several files one at a time for those"
+                .into(),
+        )
+        .into());
+    }
+    let t0 = std::time::Instant::now();
+    let threads = args.threads.unwrap_or(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
+    let outcomes: Vec<anyhow::Result<Outcome>> = if single {
+        let (label, ds) = jobs.pop().expect("one job");
+        vec![fit_dataset(&args, label, ds, true)]
+    } else {
+        use rayon::prelude::*;
+        pool.install(|| {
+            jobs.into_par_iter()
+                .map(|(label, ds)| fit_dataset(&args, label, ds, false))
+                .collect()
+        })
+    };
+    let wall = t0.elapsed().as_secs_f64();
+    let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
+    let mut out = std::io::stdout().lock();
+    let info_for = |o: &Outcome| RunInfo {
+        input: o.label.clone(),
         command: command_line(),
         version: env!("CARGO_PKG_VERSION").to_string(),
     };
-    let mut out = std::io::stdout().lock();
     if args.json {
-        let mut v = report::json::to_json(&result, &info);
-        if results.len() > 1 {
-            v["comparison"] = serde_json::json!(results
-                .iter()
-                .map(|r| serde_json::json!({"model": r.model, "bic": r.bic, "aic": r.aic, "cost": r.cost, "converged": r.converged()}))
-                .collect::<Vec<_>>());
-        }
+        let values: Vec<serde_json::Value> = outcomes
+            .iter()
+            .map(|o| outcome_json(o, &info_for(o)))
+            .collect();
+        let v = if single {
+            values.into_iter().next().expect("one outcome")
+        } else {
+            serde_json::json!({
+                "fits": values,
+                "datasets": outcomes.len(),
+                "seconds": wall,
+                "threads": pool.current_num_threads(),
+            })
+        };
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
-        if results.len() > 1 {
-            writeln!(out, "[[Model comparison]] (lowest BIC wins)")?;
-            for r in &results {
-                writeln!(
-                    out,
-                    "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}{}",
-                    r.model,
-                    r.bic,
-                    r.aic,
-                    r.cost,
-                    if r.model == result.model {
-                        "  <- chosen"
-                    } else {
-                        ""
-                    }
-                )?;
-            }
+        for o in &outcomes {
+            write!(out, "{}", outcome_text(o, &info_for(o)))?;
         }
-        write!(out, "{}", report::text::render(&result, &info))?;
     }
-    if let Some(path) = &args.residuals {
-        write_residuals(path, &ds, &result)?;
+    if !single {
+        eprintln!(
+            "goniofit: fitted {} datasets in {:.3} s ({:.1} datasets/s) on {} threads",
+            outcomes.len(),
+            wall,
+            outcomes.len() as f64 / wall,
+            pool.current_num_threads()
+        );
     }
-    Ok(if result.converged() { 0 } else { 3 })
+    if single {
+        let o = &outcomes[0];
+        if let Some(path) = &args.residuals {
+            write_residuals(path, &o.dataset, &o.result)?;
+        }
+        if let Some(dir) = &args.plot {
+            let config = fit_config(&args, &o.result.model, o.dataset.sigma_l.is_some())?;
+            let written = plot_fit(dir, &config, &o.input, &o.result.layout, &o.result.values)?;
+            eprintln!(
+                "goniofit: wrote {} pictures to {}",
+                written.len(),
+                dir.display()
+            );
+        }
+    }
+    Ok(if outcomes.iter().all(|o| o.result.converged()) {
+        0
+    } else {
+        3
+    })
 }
 
 /// For a joint fit: how much narrower σ and T are than from the middle channel alone.
@@ -425,4 +563,74 @@ fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<(
         .collect();
     io::write_csv(path, &headers, &rows)?;
     Ok(())
+}
+
+/// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
+/// arguments and the fitted values of every parameter (layout order).
+fn replay_json(r: &FitResult) -> serde_json::Value {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    serde_json::json!({
+        "args": args,
+        "model": r.model,
+        "names": r.layout.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
+        "values": r.values,
+        "n_free": r.n_free,
+    })
+}
+
+/// Draw the pictures of a fit at parameter values `values` (layout order). For a joint fit
+/// the middle channel is drawn.
+pub fn plot_fit(
+    dir: &Path,
+    config: &FitConfig,
+    input: &FitInput,
+    layout: &goniofit::fit::problem::ParamLayout,
+    values: &[f64],
+) -> anyhow::Result<Vec<PathBuf>> {
+    use goniofit::fit::problem::FitProblem;
+    let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
+    let c = layout.index.len() / 2;
+    let idx: Vec<usize> = (0..input.y.len())
+        .filter(|&i| input.channel[i] == c)
+        .collect();
+    let sub = input.subset(&idx);
+    let max_y = input.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let floor = config.floor.unwrap_or(1e-6 * max_y);
+    let problem = FitProblem::new(model.as_ref(), layout.clone(), &sub, config.residual, floor)?;
+    let (fitted, _) = problem.model_values(values, false);
+    let residuals = problem.raw_residuals(&fitted);
+    let n_free = layout.free().len();
+    let sw = problem.sqrt_weight();
+    let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
+    let s_hat = (chi2 / (sub.y.len().saturating_sub(n_free).max(1)) as f64).sqrt();
+    let std_residuals: Vec<f64> = residuals
+        .iter()
+        .zip(sw)
+        .map(|(r, s)| {
+            if config.weights_are_uncertainties || s_hat == 0.0 {
+                r * s
+            } else {
+                r * s / s_hat
+            }
+        })
+        .collect();
+    let params = layout.model_params(values, c);
+    let specs = model.params();
+    let mut title = format!("{}:", model.name());
+    for (spec, v) in specs.iter().zip(&params) {
+        title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
+    }
+    if layout.channel_names.len() > 1 {
+        title += &format!(" [{}]", layout.channel_names[c]);
+    }
+    let plot_input = goniofit::plot::fit::FitPlotInput {
+        title,
+        model: model.as_ref(),
+        params: &params,
+        geo: &sub.geo,
+        measured: &sub.y,
+        fitted: &fitted,
+        std_residuals: &std_residuals,
+    };
+    Ok(goniofit::plot::fit::write_fit_plots(dir, &plot_input)?)
 }

@@ -5,6 +5,7 @@ pub mod eval;
 pub mod figures;
 pub mod fit;
 pub mod recover;
+pub mod plot;
 pub mod render;
 pub mod synth;
 
@@ -15,6 +16,7 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Eval(a) => eval::run(a),
         Command::Fit(a) => fit::run(*a),
+        Command::Plot(a) => plot::run(a),
         Command::Synth(a) => synth::run(*a),
         Command::Recover(a) => recover::run(*a),
         Command::Bench(a) => bench::run(*a),

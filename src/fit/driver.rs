@@ -13,7 +13,7 @@
 use super::init;
 use super::lm::{self, LmConfig, Termination};
 pub use super::problem::FitInput;
-use super::problem::{FitProblem, ParamLayout, ResidualKind};
+use super::problem::{FitProblem, ParamLayout, ResidualKind, Transform};
 use super::stats;
 use crate::error::{Error, Result};
 use crate::model::{self, Mode, Model, ModelOptions};
@@ -188,7 +188,10 @@ fn assign(layout: &ParamLayout, pairs: &[(String, f64)], out: &mut [Option<f64>]
         }
         for k in ks {
             let fp = &layout.params[k];
-            if !v.is_finite() || (fp.positive && *v <= 0.0) {
+            if !v.is_finite()
+                || (fp.transform == Transform::Log && *v <= 0.0)
+                || *v < 0.0 && fp.transform == Transform::NonNegative
+            {
                 return Err(Error::Param {
                     name: name.clone(),
                     message: format!("value {v} is outside its domain"),
@@ -279,8 +282,8 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
                 problem_used = problem_red;
             }
             notes.push(match v {
-                Verdict::Rough => "rough regime (g ≫ 1 on every sample): the data determines only T/σ and the amplitude s·(T/σ)²; σ was held at its estimate and σ, T, scale are reported as undetermined".to_string(),
-                Verdict::Smooth => "smooth regime (g ≪ 1 on every sample): the data determines only T and the amplitude s·σ²; σ was held at its estimate and σ, scale are reported as undetermined".to_string(),
+                Verdict::Rough => format!("rough regime (median g = {g_median:.3e}): the data determines only T/σ and the amplitude s·(T/σ)²; σ was held at its estimate and σ, T, scale are reported as undetermined"),
+                Verdict::Smooth => format!("smooth regime (median g = {g_median:.3e}): the data determines only T and the amplitude s·σ²; σ was held at its estimate and σ, scale are reported as undetermined"),
                 _ => "some parameter combinations are not determined by the data: see the singular values and correlations".to_string(),
             });
         }
@@ -319,18 +322,15 @@ fn uncertainty_of(problem: &FitProblem, run: &Run) -> stats::Uncertainty {
     stats::uncertainty(&run.lm.jacobian, run.lm.cost, problem.len(), RANK_THRESHOLD)
 }
 
-/// The covariance of the free parameters in log space: entries of parameters fitted
-/// linearly (the scales) are divided by their values, d ln p = dp / p.
+/// The covariance of the free parameters in log space, from the solver's x-space
+/// covariance: d ln p = (dp/dx) dx / p.
 fn log_covariance(layout: &ParamLayout, unc: &stats::Uncertainty, p: &[f64]) -> DMatrix<f64> {
     let free = layout.free();
     let f: Vec<f64> = free
         .iter()
         .map(|&k| {
-            if layout.params[k].positive {
-                1.0
-            } else {
-                1.0 / p[k]
-            }
+            let t = layout.params[k].transform;
+            t.dp_dx(t.to_x(p[k])) / p[k]
         })
         .collect();
     DMatrix::from_fn(free.len(), free.len(), |i, j| {
@@ -453,19 +453,24 @@ fn assemble(
         .collect();
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-    let y = &input.y;
+    // R² in the space the residuals live in: the data itself, or ln y for log residuals.
+    let space = |v: f64| match problem.kind() {
+        ResidualKind::Log => v.max(problem.floor).ln(),
+        _ => v,
+    };
+    let t: Vec<f64> = input.y.iter().map(|&v| space(v)).collect();
     let wsum: f64 = sw.iter().map(|s| s * s).sum();
-    let ybar = y.iter().zip(sw).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
-    let ss_tot: f64 = y
+    let tbar = t.iter().zip(sw).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
+    let ss_tot: f64 = t
         .iter()
         .zip(sw)
-        .map(|(v, s)| (s * (v - ybar)).powi(2))
+        .map(|(v, s)| (s * (v - tbar)).powi(2))
         .sum();
     let ss_res: f64 = fitted
         .iter()
-        .zip(y)
+        .zip(&t)
         .zip(sw)
-        .map(|((f, v), s)| (s * (f - v)).powi(2))
+        .map(|((f, v), s)| (s * (space(*f) - v)).powi(2))
         .sum();
     let r2 = if ss_tot > 0.0 {
         1.0 - ss_res / ss_tot
@@ -496,10 +501,24 @@ fn assemble(
             && (spec.name == "sigma"
                 || spec.name == "scale"
                 || (verdict == Verdict::Rough && spec.name == "T"));
-        let se = log_se(k).map(|s| if fp.positive { s * p[k] } else { s });
-        let loose = log_se(k).is_some_and(|s| fp.positive && s > DETERMINED_MAX_LOG_SE);
-        let determined =
-            fp.fixed.is_none() && !reduced_away && !in_null(k) && !loose && se.is_some();
+        // Standard error of p through the transform, dp = (dp/dx) dx.
+        let se = log_se(k).map(|s| s * fp.transform.dp_dx(fp.transform.to_x(p[k])).abs());
+        let loose =
+            log_se(k).is_some_and(|s| fp.transform == Transform::Log && s > DETERMINED_MAX_LOG_SE);
+        let at_bound = fp.transform == Transform::NonNegative
+            && se.is_some_and(|e| p[k] <= 1e-3 * e.max(f64::MIN_POSITIVE) || p[k] == 0.0);
+        if at_bound && fp.fixed.is_none() {
+            notes.push(format!(
+                "{} is at its lower bound 0: the data shows no such component",
+                fp.name
+            ));
+        }
+        let determined = fp.fixed.is_none()
+            && !reduced_away
+            && !in_null(k)
+            && !loose
+            && !at_bound
+            && se.is_some();
         params.push(ParamResult {
             name: fp.name.clone(),
             value: p[k],

@@ -141,10 +141,17 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
         let atb = a.tr_mul(&b);
         let svd = ata.svd(true, true);
         let coef = svd.solve(&atb, 1e-14 * svd.singular_values.max()).ok()?;
+        // Keep the amplitudes inside their domain (p ≥ 0), a little off the bound so the
+        // solver's transform has a gradient there.
+        let largest = coef.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let tiny = if largest > 0.0 { 1e-3 * largest } else { 1e-3 };
+        let clamped = coef
+            .iter()
+            .any(|v| v.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
         for (c, &k) in linear.iter().enumerate() {
-            p[k] = coef[c];
+            p[k] = if coef[c] > 0.0 { coef[c] } else { tiny };
         }
-        if problem.kind() != ResidualKind::Log {
+        if problem.kind() != ResidualKind::Log && !clamped {
             // The linearised residual is exact for absolute and relative residuals.
             let r = b - a * coef;
             let cost = 0.5 * r.norm_squared();

@@ -2,8 +2,11 @@
 //! (per channel, and in chunks for parallel evaluation), residuals of a chosen kind, and
 //! the mapping between the model's parameters and the solver's free variables.
 //!
-//! Free variables: every parameter that is not fixed; positive parameters enter as their
-//! logarithm (x = ln p), so the solver can never step to σ ≤ 0. Residuals are weighted,
+//! Free variables: every parameter that is not fixed, through a [`Transform`]: the positive
+//! nonlinear parameters (σ, T, w) as their logarithm, so the solver can never step to
+//! σ ≤ 0; the linear amplitudes (scales, lobe strength) through p = √(x² + 1) − 1 (lmfit's
+//! one-sided bound), which reaches the bound p = 0 at x = 0 instead of drifting towards
+//! ln 0 when the data shows no such component. Residuals are weighted,
 //! r̃ᵢ = √wᵢ rᵢ, so the solver's cost ½‖r̃‖² is the fit cost ½ Σ wᵢ rᵢ².
 //!
 //! Joint multi-channel fits share every parameter except the linear scales (`scale`,
@@ -36,11 +39,58 @@ pub enum ResidualKind {
     Log,
 }
 
-/// Whether a parameter is fitted as its logarithm: the positive nonlinear ones (σ, T, w).
-/// Linear amplitudes (scales, lobe strength) stay linear so that a component the data does
-/// not show converges to ≈ 0 (and is reported so) instead of drifting towards ln 0.
-pub fn fitted_in_log(spec: &crate::model::ParamSpec) -> bool {
-    spec.positive && !super::init::LINEAR.contains(&spec.name)
+/// How a parameter p maps to the solver variable x.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transform {
+    /// x = p (unbounded).
+    Identity,
+    /// x = ln p (p > 0).
+    Log,
+    /// p = √(x² + 1) − 1 ≥ 0, bounded below by 0.
+    NonNegative,
+}
+
+impl Transform {
+    /// The transform for a model parameter: log for positive nonlinear parameters,
+    /// non-negative for the linear amplitudes, identity otherwise.
+    pub fn for_spec(spec: &crate::model::ParamSpec) -> Self {
+        match (spec.positive, super::init::LINEAR.contains(&spec.name)) {
+            (true, false) => Transform::Log,
+            (true, true) => Transform::NonNegative,
+            _ => Transform::Identity,
+        }
+    }
+
+    /// x from p (p is clamped into the domain).
+    pub fn to_x(self, p: f64) -> f64 {
+        match self {
+            Transform::Identity => p,
+            Transform::Log => p.max(f64::MIN_POSITIVE).ln(),
+            Transform::NonNegative => {
+                let p = p.max(0.0);
+                (p * (p + 2.0)).sqrt()
+            }
+        }
+    }
+
+    /// p from x.
+    pub fn from_x(self, x: f64) -> f64 {
+        match self {
+            Transform::Identity => x,
+            Transform::Log => x.exp(),
+            // √(x²+1) − 1 without cancellation for small x.
+            Transform::NonNegative => x * x / ((x * x + 1.0).sqrt() + 1.0),
+        }
+    }
+
+    /// dp/dx at x.
+    pub fn dp_dx(self, x: f64) -> f64 {
+        match self {
+            Transform::Identity => 1.0,
+            Transform::Log => x.exp(),
+            Transform::NonNegative => x / (x * x + 1.0).sqrt(),
+        }
+    }
 }
 
 /// One parameter of the (possibly joint) fit.
@@ -52,8 +102,8 @@ pub struct FitParam {
     pub spec: usize,
     /// Channel index for per-channel copies, None when shared.
     pub channel: Option<usize>,
-    /// Fitted in log space (see [`fitted_in_log`]).
-    pub positive: bool,
+    /// How the solver sees it.
+    pub transform: Transform,
     /// Held at this value, not fitted.
     pub fixed: Option<f64>,
 }
@@ -83,7 +133,7 @@ impl ParamLayout {
                         name: format!("{}[{name}]", spec.name),
                         spec: j,
                         channel: Some(c),
-                        positive: fitted_in_log(spec),
+                        transform: Transform::for_spec(spec),
                         fixed: None,
                     });
                 }
@@ -95,7 +145,7 @@ impl ParamLayout {
                     name: spec.name.to_string(),
                     spec: j,
                     channel: None,
-                    positive: fitted_in_log(spec),
+                    transform: Transform::for_spec(spec),
                     fixed: None,
                 });
             }
@@ -140,18 +190,12 @@ impl ParamLayout {
             .collect()
     }
 
-    /// Solver variables from full parameter values (free parameters only, log for positive).
+    /// Solver variables from full parameter values (free parameters only).
     pub fn to_x(&self, p: &[f64]) -> DVector<f64> {
         let free = self.free();
         DVector::from_iterator(
             free.len(),
-            free.iter().map(|&k| {
-                if self.params[k].positive {
-                    p[k].ln()
-                } else {
-                    p[k]
-                }
-            }),
+            free.iter().map(|&k| self.params[k].transform.to_x(p[k])),
         )
     }
 
@@ -162,14 +206,9 @@ impl ParamLayout {
             .iter()
             .map(|fp| match fp.fixed {
                 Some(v) => v,
-                None => {
-                    let xi = *it.next().expect("x has one entry per free parameter");
-                    if fp.positive {
-                        xi.exp()
-                    } else {
-                        xi
-                    }
-                }
+                None => fp
+                    .transform
+                    .from_x(*it.next().expect("x has one entry per free parameter")),
             })
             .collect()
     }
@@ -393,21 +432,60 @@ impl<'a> FitProblem<'a> {
     }
 }
 
+/// Largest g a fit may step to: beyond it a trial step is rejected (σ ≫ λ is far past any
+/// scene the data could tell from the rough limit).
+pub const G_FIT_MAX: f64 = 1e7;
+
+/// Largest a = v_xy² T²/4 a fit may step to (T ≫ λ: the lobe is narrower than e^{-1e10}).
+pub const A_FIT_MAX: f64 = 1e10;
+
 impl FitProblem<'_> {
+    /// Whether full parameters `p` keep every sample inside the domain where the models are
+    /// evaluated at their stated cost and accuracy: finite values, σ, T > 0 and normal,
+    /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`]. Outside, the solver sees non-finite residuals
+    /// and rejects the step.
+    pub fn in_domain(&self, p: &[f64]) -> bool {
+        if !p.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        let specs = self.model.params();
+        let find = |name: &str| specs.iter().position(|s| s.name == name);
+        let (Some(js), Some(jt)) = (find("sigma"), find("T")) else {
+            return true;
+        };
+        self.blocks.iter().all(|b| {
+            let sigma = p[self.layout.index[b.channel][js]];
+            let corr = p[self.layout.index[b.channel][jt]];
+            if !(sigma.is_normal() && corr.is_normal() && sigma > 0.0 && corr > 0.0) {
+                return false;
+            }
+            let two_pi = 2.0 * std::f64::consts::PI;
+            (0..b.geo.len()).all(|i| {
+                let k = two_pi / b.geo.wavelength[i];
+                let g = (k * sigma * b.geo.c[i]).powi(2);
+                let a = b.geo.vxy2[i] * (k * corr).powi(2) * 0.25;
+                g <= G_FIT_MAX && a <= A_FIT_MAX
+            })
+        })
+    }
+
     /// Weighted residuals and their Jacobian with respect to the solver variables x.
     pub fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
         let p = self.layout.from_x(x);
+        if !self.in_domain(&p) {
+            let free = self.layout.free().len();
+            return (
+                DVector::from_element(self.n, f64::NAN),
+                DMatrix::from_element(self.n, free, f64::NAN),
+            );
+        }
         let (f, jac) = self.model_values(&p, true);
         let jac = jac.expect("requested");
         let r = self.raw_residuals(&f);
         let free = self.layout.free();
         let mut out = DMatrix::zeros(self.n, free.len());
         for (col, &k) in free.iter().enumerate() {
-            let chain = if self.layout.params[k].positive {
-                p[k]
-            } else {
-                1.0
-            };
+            let chain = self.layout.params[k].transform.dp_dx(x[col]);
             for i in 0..self.n {
                 out[(i, col)] = self.sqrt_w[i] * self.dr_df(i, f[i]) * jac[(i, k)] * chain;
             }

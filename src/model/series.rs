@@ -14,6 +14,8 @@
 //!   normalisation e^{−g} t_{m*} is formed with the large cancelling logarithms removed
 //!   analytically (Stirling, `ln_1p`), so ln Q keeps its accuracy up to g = 1e6 and beyond.
 //!   Cost: O(1) terms for small g, O(√g) for large g (one `exp` per term when a > 0).
+//!   For g < 10 and a < 600 it sums upward from m = 1 instead (no peak search, no lgamma,
+//!   no divisions: per-term constants tabulated at compile time).
 //! * [`smooth`]: m = 1 only (eq. 42). `auto` uses it when the bound on the rest,
 //!   u/(1−u) with u = t2/t1 = (g/4) e^{a/2}, is below `tol`; it then returns derivatives
 //!   corrected by the m = 2 term (exact to O(u)).
@@ -26,10 +28,17 @@
 //!   expansion of Ei at a = 0). The table of P_n is built at compile time. The series is
 //!   asymptotic: orders are added while they shrink; the error estimate is the first
 //!   omitted order (with its derivative weights), extrapolated from the last order by the
-//!   larger of the last two decay ratios; `auto` accepts it only when the orders decay by
-//!   at least 2× per step, the estimate is below tol/2, and g ≥ 40 (so the neglected e^{−g}-size effects of the M = 0 end are
-//!   below 1e-17). Work: about (n+1)² multiply-adds for n orders (n ≈ 3 at g = 1e4, ≈ 9 at
-//!   g = 100 and moderate b).
+//!   larger of the last two decay ratios. `auto` accepts it only when g ≥ 40 (so the
+//!   neglected e^{−g}-size effects of the M = 0 end are below 1e-17), a < g^1.5, the
+//!   orders decay by at least 2× per step, and the estimate is below 0.15 tol. Unlike the
+//!   series' tail bounds this estimate is not a proof; it is checked against the mpmath
+//!   grid (worst error found 0.13 of the claim) and against the series at 3000 random
+//!   (g, a) (`tests/model_props.rs`). Work: about 4(n+1) multiply-adds per order for n
+//!   orders (n ≈ 3 at g = 1e4, ≈ 8–9 at g = 100 and moderate b); it fails, and `auto` falls
+//!   back to the series, when b²/g is not small (far from the specular peak at moderate g).
+//!
+//! `auto`: smooth if its bound holds (possible only for g ≤ 2 tol); else the asymptotic completion if it is
+//! accepted; else the series.
 //!
 //! Accuracy (`series`, and `auto` at every switch): |Δ ln Q| ≤ tol (the relative error of
 //! Q, also when Q itself under- or overflows), |Δ(g ∂lnQ/∂g)| ≤ tol (1 + |g ∂lnQ/∂g|) and
@@ -147,11 +156,16 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     // Sums relative to the peak term: s0 = Σ t/t0, s_c = Σ (m−1−g) t/t0 (centred so that
     // g ∂lnQ/∂g = s_c/s0 has no cancellation at large g), s_inv = Σ (t/m)/t0.
     let (mut s0, mut s_c, mut s_inv) = (1.0, m0 - 1.0 - g, 1.0 / m0);
+    // The inline exp (≤ 2 ulp) is used while the accumulated rounding of the ratio
+    // products over the O(√g) terms stays far below tol; the libm exp otherwise.
+    let inline_exp = tol >= 1e-12 && g < 1e4;
     let ratio = |m: f64| -> f64 {
         let mp1 = m + 1.0;
         let base = g * m / (mp1 * mp1);
         if a == 0.0 {
             base
+        } else if inline_exp {
+            base * exp_tab(a / (m * mp1))
         } else {
             base * (a / (m * mp1)).exp()
         }
@@ -215,6 +229,103 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     }
 }
 
+/// 2^(j/64), j = 0..63, correctly rounded (generated with mpmath).
+#[allow(
+    clippy::excessive_precision,
+    clippy::unreadable_literal,
+    clippy::approx_constant
+)]
+const EXP2_TABLE: [f64; 64] = [
+    1.0,
+    1.0108892860517005,
+    1.0218971486541166,
+    1.0330248790212284,
+    1.0442737824274138,
+    1.0556451783605572,
+    1.0671404006768237,
+    1.0787607977571199,
+    1.0905077326652577,
+    1.102382583307841,
+    1.1143867425958924,
+    1.1265216186082418,
+    1.1387886347566916,
+    1.1511892299529827,
+    1.1637248587775775,
+    1.1763969916502812,
+    1.189207115002721,
+    1.202156731452703,
+    1.215247359980469,
+    1.22848053610687,
+    1.241857812073484,
+    1.255380757024691,
+    1.2690509571917332,
+    1.2828700160787783,
+    1.2968395546510096,
+    1.3109612115247644,
+    1.3252366431597413,
+    1.339667524053303,
+    1.3542555469368927,
+    1.3690024229745905,
+    1.383909881963832,
+    1.3989796725383112,
+    1.4142135623730951,
+    1.42961333839197,
+    1.4451808069770467,
+    1.460917794180647,
+    1.4768261459394993,
+    1.4929077282912648,
+    1.5091644275934228,
+    1.5255981507445384,
+    1.5422108254079407,
+    1.559004400237837,
+    1.5759808451078865,
+    1.593142151342267,
+    1.6104903319492543,
+    1.6280274218573478,
+    1.645755478153965,
+    1.6636765803267364,
+    1.681792830507429,
+    1.7001063537185235,
+    1.718619298122478,
+    1.7373338352737062,
+    1.7562521603732995,
+    1.7753764925265212,
+    1.7947090750031072,
+    1.8142521755003989,
+    1.8340080864093424,
+    1.8539791250833855,
+    1.8741676341103,
+    1.8945759815869656,
+    1.9152065613971474,
+    1.9360617934922943,
+    1.9571441241754002,
+    1.978456026387951,
+];
+
+/// e^x for x ∈ [−700, 700] (clamped), inline and branch-free: x = (64e + j) ln2/64 + r with
+/// |r| ≤ ln2/128, e^r by a degree-5 Taylor polynomial (truncation < 4e-17), times the
+/// tabulated 2^(j/64) and 2^e through the exponent bits. Error ≤ 2 ulp (unit-tested).
+#[inline(always)]
+fn exp_tab(x: f64) -> f64 {
+    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+    const INV_LN2_64: f64 = 92.33248261689366;
+    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+    const LN2_64_HI: f64 = 0.010830424667801708;
+    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+    const LN2_64_LO: f64 = 2.8447437476627285e-11;
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52: adding it rounds to an integer
+    let x = x.clamp(-700.0, 700.0);
+    let kd = x * INV_LN2_64 + MAGIC;
+    let k = kd - MAGIC;
+    let r = (x - k * LN2_64_HI) - k * LN2_64_LO;
+    let ki = (kd.to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64);
+    let j = (ki & 63) as usize;
+    let e = ki >> 6;
+    let r2 = r * r;
+    let p = 1.0 + r + r2 * (0.5 + r * (1.0 / 6.0)) + r2 * r2 * (1.0 / 24.0 + r * (1.0 / 120.0));
+    p * EXP2_TABLE[j] * f64::from_bits(((e + 1023) << 52) as u64)
+}
+
 /// Number of terms the small-g path tabulates its per-term constants for.
 const SMALL_M: usize = 96;
 
@@ -243,35 +354,43 @@ const fn small_table() -> [[f64; 3]; SMALL_M] {
 /// per term when a > 0). With a < 600 and g < 10, t_m/t_1 ≤ e^{a} e^{g} stays far from
 /// overflow, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
 fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
+    const BLOCK: usize = 8;
     let eps = 0.1 * tol.max(1e-17);
     let (mut s0, mut s_c, mut s_inv) = (1.0f64, -g, 1.0f64);
     let mut rel = 1.0f64;
     let mut m = 1.0f64;
-    for row in SMALL_TABLE.iter() {
-        let [m_over, inv_mm1, inv_mp1] = *row;
-        let mut r = g * m_over;
-        if a != 0.0 {
-            r *= (a * inv_mm1).exp();
-        }
-        // Σ_{j>m} t_j ≤ rel r/(1−r) once r_m < 1 (r_j decreases); the checks of the module
-        // doc multiplied through by (1−r) or (1−r)².
-        if r < 1.0 {
-            let om = 1.0 - r;
-            let tail_om = rel * r; // tail · (1−r)
-            if tail_om <= eps * s0 * om
-                && tail_om * ((m + g) * om + 1.0) <= eps * (s0 + s_c.abs()) * om * om
-                && a * tail_om * inv_mp1 <= eps * (s0 + a * s_inv) * om
-            {
-                break;
+    let mut rs = [0.0f64; BLOCK];
+    'blocks: for rows in SMALL_TABLE.chunks_exact(BLOCK) {
+        // The ratios of a block first (independent of each other, so they overlap), then
+        // the serial accumulation.
+        for (r, row) in rs.iter_mut().zip(rows) {
+            *r = g * row[0];
+            if a != 0.0 {
+                *r *= exp_tab(a * row[1]);
             }
         }
-        rel *= r;
-        m += 1.0;
-        s0 += rel;
-        s_c += (m - 1.0 - g) * rel;
-        s_inv += rel * inv_mp1;
-        if rel == 0.0 {
-            break;
+        for (&r, row) in rs.iter().zip(rows) {
+            let inv_mp1 = row[2];
+            // Σ_{j>m} t_j ≤ rel r/(1−r) once r_m < 1 (r_j decreases); the checks of the
+            // module doc multiplied through by (1−r) or (1−r)².
+            if r < 1.0 {
+                let om = 1.0 - r;
+                let tail_om = rel * r; // tail · (1−r)
+                if tail_om <= eps * s0 * om
+                    && tail_om * ((m + g) * om + 1.0) <= eps * (s0 + s_c.abs()) * om * om
+                    && a * tail_om * inv_mp1 <= eps * (s0 + a * s_inv) * om
+                {
+                    break 'blocks;
+                }
+            }
+            rel *= r;
+            m += 1.0;
+            s0 += rel;
+            s_c += (m - 1.0 - g) * rel;
+            s_inv += rel * inv_mp1;
+            if rel == 0.0 {
+                break 'blocks;
+            }
         }
     }
     LnQ {
@@ -289,6 +408,24 @@ const ASYM_K: usize = 2 * ASYM_ORDERS + 1;
 
 /// P_n(b) coefficients: `ASYM[n][i]` multiplies b^i g^{−n}.
 static ASYM: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_table();
+
+/// P_n'(b) coefficients: `ASYM_D[n][i] = (i+1) ASYM[n][i+1]`.
+static ASYM_D: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_deriv_table();
+
+const fn asym_deriv_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
+    let p = asym_table();
+    let mut d = [[0.0f64; ASYM_DEG]; ASYM_ORDERS + 1];
+    let mut n = 0;
+    while n <= ASYM_ORDERS {
+        let mut i = 0;
+        while i + 1 < ASYM_DEG {
+            d[n][i] = (i + 1) as f64 * p[n][i + 1];
+            i += 1;
+        }
+        n += 1;
+    }
+    d
+}
 
 /// Build the table of P_n (see the module doc) at compile time.
 const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
@@ -388,37 +525,26 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     // Sizes and error estimates of the previous two orders.
     let (mut prev, mut prev2) = (f64::INFINITY, f64::INFINITY);
     let (mut err_prev, mut err_prev2) = (f64::INFINITY, f64::INFINITY);
-    // Powers of b, extended two per order; P_n(b) and b P_n'(b) as dot products with
-    // independent partial sums (no serial Horner chain).
-    let mut bp = [0.0f64; ASYM_DEG];
-    let mut bd = [0.0f64; ASYM_DEG]; // bd[i] = i b^{i−1}
-    bp[0] = 1.0;
-    for (n, coef) in ASYM.iter().enumerate().skip(1) {
+    // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): four
+    // independent Horner chains in b², no arrays written and re-read.
+    let y = b * b;
+    for (n, (coef, dcoef)) in ASYM.iter().zip(ASYM_D.iter()).enumerate().skip(1) {
         gp *= x;
         let deg = 2 * n;
-        bp[deg - 1] = bp[deg - 2] * b;
-        bp[deg] = bp[deg - 1] * b;
-        bd[deg - 1] = (deg - 1) as f64 * bp[deg - 2];
-        bd[deg] = deg as f64 * bp[deg - 1];
-        let (mut p0, mut p1, mut p2, mut p3) = (0.0, 0.0, 0.0, 0.0);
-        let (mut d0, mut d1, mut d2, mut d3) = (0.0, 0.0, 0.0, 0.0);
-        let end = (deg + 4) & !3; // rows are zero-padded to a multiple of 4
-        let mut i = 0;
-        while i < end {
-            let (c0, c1, c2, c3) = (coef[i], coef[i + 1], coef[i + 2], coef[i + 3]);
-            let (b0, b1, b2, b3) = (bp[i], bp[i + 1], bp[i + 2], bp[i + 3]);
-            p0 += c0 * b0;
-            p1 += c1 * b1;
-            p2 += c2 * b2;
-            p3 += c3 * b3;
-            d0 += c0 * bd[i];
-            d1 += c1 * bd[i + 1];
-            d2 += c2 * bd[i + 2];
-            d3 += c3 * bd[i + 3];
-            i += 4;
+        let (mut pe, mut po, mut de, mut d_o) = (coef[deg], 0.0f64, 0.0f64, dcoef[deg - 1]);
+        let mut j = deg;
+        while j >= 2 {
+            // P: even index j−2, odd index j−1; P': even index j−2, odd index j−3.
+            pe = pe * y + coef[j - 2];
+            po = po * y + coef[j - 1];
+            de = de * y + dcoef[j - 2];
+            if j >= 3 {
+                d_o = d_o * y + dcoef[j - 3];
+            }
+            j -= 2;
         }
-        let p = (p0 + p1) + (p2 + p3);
-        let dp = (d0 + d1) + (d2 + d3);
+        let p = pe + b * po;
+        let dp = de + b * d_o;
         let term = gp * p;
         let term_b = gp * dp;
         r += term;
@@ -429,10 +555,18 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
         // The first omitted order is estimated from the last one and the larger of the
         // last two decay ratios (so that an order that happens to be small, P_n(b) near a
         // root, cannot stop the expansion early); accepted only in a clearly decaying phase.
-        let q = (err / err_prev).max(err_prev / err_prev2);
-        if n >= 3 && q < 0.5 && err * q <= 0.3 * target * r.abs() && r > 0.0 {
+        // (Written without divisions: q1 = err/err_prev, q2 = err_prev/err_prev2 < ½ and
+        // err·max(q1, q2) ≤ 0.3 target r.)
+        let t = 0.3 * target * r.abs();
+        if n >= 3
+            && err < 0.5 * err_prev
+            && err_prev < 0.5 * err_prev2
+            && err * err <= t * err_prev
+            && err * err_prev <= t * err_prev2
+            && r > 0.0
+        {
             return Some(LnQ {
-                ln_q: -b - 2.0 * g.ln() + r.ln(),
+                ln_q: -b + (r / g / g).ln(),
                 d_g: (b - 2.0 + (r_g - b * r_b) / r) * x,
                 d_a: (-1.0 + r_b / r) * x,
                 mode: Mode::Rough,
@@ -471,7 +605,19 @@ fn smooth_checked(g: f64, a: f64, tol: f64) -> Option<LnQ> {
 /// The cheapest evaluation whose error bound meets `tol`: smooth (m = 1 with its bound),
 /// the rough approximation's asymptotic completion, else the series.
 pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
-    if g < 0.5 {
+    if g > G_DOMAIN_MAX {
+        // Beyond the stated domain (a fit's trial step can go there): no O(√g) series;
+        // the asymptotic expansion where it applies, else the rough approximation, whose
+        // relative error is O(1/g) < 1e-6 here. Best effort, not held to `tol`.
+        if a < g * g.sqrt() {
+            if let Some(q) = asymptotic(g, a, tol.max(1e-6)) {
+                return q;
+            }
+        }
+        return rough(g, a);
+    }
+    // u = (g/4) e^{a/2} ≥ g/4, so smooth can only pass when g ≤ 2 tol.
+    if g <= 2.0 * tol {
         if let Some(q) = smooth_checked(g, a, tol) {
             return q;
         }
@@ -482,6 +628,9 @@ pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
     }
     series(g, a, tol)
 }
+
+/// Largest g of the stated domain; `auto` does not sum the series beyond it.
+pub const G_DOMAIN_MAX: f64 = 1e6;
 
 /// ln Q by the given evaluation mode.
 #[inline]
@@ -515,6 +664,21 @@ mod tests {
             );
         }
         assert_eq!(&ASYM[1][..3], &[1.0, -2.0, 0.5]);
+    }
+
+    #[test]
+    fn exp_tab_is_accurate() {
+        let mut x = -700.0;
+        while x <= 700.0 {
+            let (f, e) = (exp_tab(x), x.exp());
+            assert!(
+                (f / e - 1.0).abs() < 4.0 * f64::EPSILON,
+                "x={x}: {f} vs {e}"
+            );
+            x += 0.00731;
+        }
+        assert_eq!(exp_tab(0.0), 1.0);
+        assert_eq!(exp_tab(800.0), exp_tab(700.0));
     }
 
     #[test]

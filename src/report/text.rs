@@ -127,7 +127,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     if k > 1 {
         let _ = writeln!(
             s,
-            "[[Correlations]] (free parameters, ln-space for positive ones)"
+            "[[Correlations]] (free parameters, in the solver's variables: ln sigma, ln T, ln w)"
         );
         let w = r
             .corr_names

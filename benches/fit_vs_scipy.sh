@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Speed benchmark for `goniofit fit` (issue #4) against scipy.optimize.least_squares(method='lm')
+# on a vectorised numpy KBS model (benches/scipy_kbs_fit.py), measured side by side in one run.
+#
+# Data: a 10k-sample KBS hemisphere scan, sigma = 0.25 lambda, T = 2.5 lambda, 1 % relative
+# noise (goniofit synth, seed 1). goniofit starts from its automatic initial values (timed:
+# the whole fit including the starting-value search); scipy starts from the same values
+# (taken from goniofit with --max-iter 0), so both solve the same problem from the same start.
+# Needs python3 with numpy and scipy (pip install numpy scipy); not part of CI.
+#
+# Usage: bash benches/fit_vs_scipy.sh [repeats]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+repeats=${1:-7}
+cargo build --release --quiet
+G=target/release/goniofit
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+$G synth --model kbs --params sigma=0.25,T=2.5,scale=1 --wavelength 1 --layout hemisphere \
+  --grid 10x25x40 --noise 0.01 --seed 1 --out "$dir/h10k.csv" 2>/dev/null
+init=$($G fit --model kbs --wavelength 1 --max-iter 0 --json "$dir/h10k.csv" | python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+print(",".join("%s=%r" % (k, d["params"][k]["value"]) for k in ("sigma", "T", "scale")))' || true)
+python3 - "$G" "$dir/h10k.csv" "$init" "$repeats" <<'PY'
+import json, statistics, subprocess, sys
+g, data, init, repeats = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+ours, cost = [], None
+for _ in range(repeats):
+    out = subprocess.run([g, "fit", "--model", "kbs", "--wavelength", "1", "--json", data],
+                         capture_output=True, text=True)
+    d = json.loads(out.stdout)
+    ours.append(d["seconds"])
+    cost = d["cost"]
+sp = json.loads(subprocess.run([sys.executable, "benches/scipy_kbs_fit.py", data, "--wavelength", "1",
+                                "--init", init, "--repeats", str(repeats)],
+                               capture_output=True, text=True, check=True).stdout)
+m_ours = statistics.median(ours)
+print(f"samples            {sp['n']}")
+print(f"start              {init}")
+print(f"goniofit fit       median {m_ours*1e3:9.2f} ms  cost {cost:.15e}  (runs: {', '.join(f'{t*1e3:.1f}' for t in ours)})")
+print(f"scipy lm (numpy)   median {sp['seconds_median']*1e3:9.2f} ms  cost {sp['cost']:.15e}  nfev {sp['nfev']}")
+print(f"speed-up           {sp['seconds_median']/m_ours:.1f}x   cost ratio goniofit/scipy {cost/sp['cost']:.12f}")
+PY
