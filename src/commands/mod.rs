@@ -4,8 +4,8 @@ pub mod bench;
 pub mod eval;
 pub mod figures;
 pub mod fit;
-pub mod recover;
 pub mod plot;
+pub mod recover;
 pub mod render;
 pub mod synth;
 
