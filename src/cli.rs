@@ -25,6 +25,11 @@ pub enum Command {
     /// Generate synthetic measurements from known parameters, with seeded noise; writes the
     /// CSV and the truth beside it as JSON.
     Synth(Box<commands::synth::SynthArgs>),
+    /// Synthetic recovery: draw scenes across regimes, fit each, and report the recovery
+    /// error of what the data determines and the coverage of the reported uncertainties.
+    Recover(Box<commands::recover::RecoverArgs>),
+    /// Benchmarks with a table: `bench work-precision` (error against run time).
+    Bench(Box<commands::bench::BenchArgs>),
     /// Render a picture from a model (a lit sphere).
     Render(commands::render::RenderArgs),
     /// Regenerate the paper's Figures 4–7 (PNG and SVG) into a folder.

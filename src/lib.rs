@@ -10,7 +10,9 @@ pub mod geometry;
 pub mod io;
 pub mod model;
 pub mod plot;
+pub mod recover;
 pub mod report;
 pub mod synth;
+pub mod workprec;
 
 pub use error::{Error, Result};

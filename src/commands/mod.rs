@@ -1,9 +1,11 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
 
+pub mod bench;
 pub mod eval;
 pub mod figures;
 pub mod fit;
 pub mod plot;
+pub mod recover;
 pub mod render;
 pub mod synth;
 
@@ -16,6 +18,8 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Fit(a) => fit::run(*a),
         Command::Plot(a) => plot::run(a),
         Command::Synth(a) => synth::run(*a),
+        Command::Recover(a) => recover::run(*a),
+        Command::Bench(a) => bench::run(*a),
         Command::Render(a) => render::run(a),
         Command::Figures(a) => figures::run(a),
     }

@@ -1,0 +1,663 @@
+//! Synthetic recovery: draw KBS scenes across regimes, generate seeded noisy data with
+//! [`crate::synth::generate`], fit each with [`crate::fit::driver::fit`] from the default
+//! (data-driven) starting values, and compare what the fit reports with the truth.
+//!
+//! For every scene only the quantities the fit says the data determines are scored
+//! (MODEL.md, *Identifiability*):
+//!
+//! | verdict | scored quantities | truth |
+//! |---|---|---|
+//! | `full` | σ, T, scale, T/σ | the drawn values |
+//! | `rough` | T/σ, amplitude | T/σ, s·(T/σ)² |
+//! | `smooth` | T, amplitude | T, s·(σ/λ)² |
+//! | `partial` | every parameter or derived quantity marked determined | as above |
+//!
+//! Each scored quantity gives a relative error |v − t|/t and, when the fit reports a
+//! standard error, whether the truth lies inside v ± 2·se. The fraction of such truths is
+//! the *coverage*; for a calibrated fit it is close to 0.954 (a normal distribution's mass
+//! within two standard deviations).
+//!
+//! Scenes are drawn by a seeded `StdRng`, so a (`scenes`, `seed`) pair always gives the same
+//! scenes, data and — up to the parallel summation order inside the model — the same fits.
+//! The data carry their noise standard deviations as weights 1/σ_L², as a user with a
+//! `sigma_L` column would fit them.
+
+use crate::error::{Error, Result};
+use crate::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
+use crate::fit::lm::{LmConfig, Termination};
+use crate::geometry::{Geometry, Quantity};
+use crate::model::{self, ModelOptions};
+use crate::synth::{self, Layout, Noise, NoiseKind};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+/// Two-sided normal coverage of ±2 standard errors.
+pub const NOMINAL_COVERAGE: f64 = 0.9545;
+
+/// Width of the coverage interval, in standard errors.
+pub const COVERAGE_K: f64 = 2.0;
+
+/// Where a scene lives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Regime {
+    /// g ≪ 1 everywhere (σ/λ from 0.003 to 0.015).
+    Smooth,
+    /// g around 1 (σ/λ from 0.08 to 0.4): all of σ, T, scale are determined.
+    Intermediate,
+    /// g ≫ 1 everywhere (σ/λ from 4 to 10).
+    Rough,
+    /// Incidence from 70° to 89° (the grazing layout), intermediate roughness.
+    Grazing,
+}
+
+impl Regime {
+    /// All regimes, in report order.
+    pub const ALL: [Regime; 4] = [
+        Regime::Smooth,
+        Regime::Intermediate,
+        Regime::Rough,
+        Regime::Grazing,
+    ];
+
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Regime::Smooth => "smooth",
+            Regime::Intermediate => "intermediate",
+            Regime::Rough => "rough",
+            Regime::Grazing => "grazing",
+        }
+    }
+}
+
+/// One synthetic scene: truth, layout and noise.
+#[derive(Debug, Clone, Serialize)]
+pub struct Scene {
+    pub id: usize,
+    pub regime: Regime,
+    /// Whether the layout is the sparse or the dense one.
+    pub dense: bool,
+    /// The layout as [`Layout::describe`] writes it.
+    pub layout: String,
+    pub sigma: f64,
+    #[serde(rename = "T")]
+    pub corr_len: f64,
+    pub scale: f64,
+    pub wavelength: f64,
+    pub noise: Noise,
+}
+
+impl Scene {
+    fn layout_value(&self) -> Result<Layout> {
+        Layout::parse(&self.layout)
+    }
+}
+
+/// One scored quantity of one scene.
+#[derive(Debug, Clone, Serialize)]
+pub struct Check {
+    pub name: String,
+    pub truth: f64,
+    pub value: f64,
+    pub stderr: Option<f64>,
+    /// |value − truth| / truth.
+    pub rel_error: f64,
+    /// Whether |value − truth| ≤ 2·stderr (None without a standard error).
+    pub covered: Option<bool>,
+}
+
+/// The outcome of one scene.
+#[derive(Debug, Clone, Serialize)]
+pub struct SceneResult {
+    pub scene: Scene,
+    pub n: usize,
+    /// None when the fit returned an error (then `error` says why).
+    pub termination: Option<Termination>,
+    pub verdict: Option<Verdict>,
+    pub converged: bool,
+    pub seconds: f64,
+    pub checks: Vec<Check>,
+    pub error: Option<String>,
+}
+
+/// Error statistics of one quantity within a regime.
+#[derive(Debug, Clone, Serialize)]
+pub struct QuantitySummary {
+    pub name: String,
+    /// Scenes in which it was scored.
+    pub n: usize,
+    pub median_rel_error: f64,
+    pub max_rel_error: f64,
+    /// Fraction covered among those with a standard error (None if none had one).
+    pub coverage: Option<f64>,
+    pub n_with_stderr: usize,
+}
+
+/// Summary of one regime.
+#[derive(Debug, Clone, Serialize)]
+pub struct RegimeSummary {
+    pub regime: Regime,
+    pub scenes: usize,
+    pub verdicts: BTreeMap<String, usize>,
+    pub terminations: BTreeMap<String, usize>,
+    pub quantities: Vec<QuantitySummary>,
+    /// Fraction of scored truths (with a standard error) inside ±2 se.
+    pub coverage: Option<f64>,
+    pub n_with_stderr: usize,
+    pub median_seconds: f64,
+    pub errors: usize,
+}
+
+/// The whole recovery run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RecoverReport {
+    pub scenes: usize,
+    pub seed: u64,
+    /// Fraction of all scored truths (with a standard error) inside ±2 standard errors.
+    pub coverage: f64,
+    pub nominal_coverage: f64,
+    pub n_with_stderr: usize,
+    pub terminations: BTreeMap<String, usize>,
+    pub converged: usize,
+    pub errors: usize,
+    pub median_seconds: f64,
+    pub total_seconds: f64,
+    pub regimes: Vec<RegimeSummary>,
+    pub results: Vec<SceneResult>,
+}
+
+/// How to run a recovery.
+#[derive(Debug, Clone)]
+pub struct RecoverConfig {
+    pub scenes: usize,
+    pub seed: u64,
+    /// Noise level ε of every scene (the kind alternates relative / Poisson-like).
+    pub noise: f64,
+    /// Wall-clock limit of one fit's solver.
+    pub fit_timeout: Option<Duration>,
+}
+
+impl Default for RecoverConfig {
+    fn default() -> Self {
+        RecoverConfig {
+            scenes: 30,
+            seed: 11,
+            noise: 0.01,
+            fit_timeout: Some(Duration::from_secs(60)),
+        }
+    }
+}
+
+fn log_uniform(rng: &mut StdRng, lo: f64, hi: f64) -> f64 {
+    (rng.gen_range(lo.ln()..hi.ln())).exp()
+}
+
+/// The scenes of a run: regimes in turn (smooth, intermediate, rough, grazing), the layout
+/// alternating sparse/dense every full turn, parameters drawn log-uniformly.
+pub fn draw_scenes(n: usize, seed: u64, noise: f64) -> Vec<Scene> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    (0..n)
+        .map(|id| {
+            let regime = Regime::ALL[id % Regime::ALL.len()];
+            let dense = (id / Regime::ALL.len()) % 2 == 1;
+            let (sigma, ratio) = match regime {
+                Regime::Smooth => (log_uniform(&mut rng, 0.003, 0.015), 0.0),
+                Regime::Intermediate => (
+                    log_uniform(&mut rng, 0.08, 0.4),
+                    log_uniform(&mut rng, 2.0, 12.0),
+                ),
+                Regime::Rough => (
+                    log_uniform(&mut rng, 4.0, 10.0),
+                    log_uniform(&mut rng, 2.0, 12.0),
+                ),
+                Regime::Grazing => (
+                    log_uniform(&mut rng, 0.08, 0.4),
+                    log_uniform(&mut rng, 2.0, 12.0),
+                ),
+            };
+            // Smooth surfaces: T/λ from 0.3 to 3 (a lobe visible across the hemisphere).
+            let corr_len = if regime == Regime::Smooth {
+                log_uniform(&mut rng, 0.3, 3.0)
+            } else {
+                sigma * ratio
+            };
+            let scale = log_uniform(&mut rng, 0.1, 10.0);
+            let layout = match (regime, dense) {
+                (Regime::Grazing, false) => "grazing 4x9x12",
+                (Regime::Grazing, true) => "grazing 5x18x24",
+                (_, false) => "hemisphere 3x9x12",
+                (_, true) => "hemisphere 5x18x24",
+            }
+            .to_string();
+            let kind = if id % 2 == 0 {
+                NoiseKind::Relative
+            } else {
+                NoiseKind::Poisson
+            };
+            let noise = Noise {
+                kind,
+                level: noise,
+                seed: rng.gen(),
+            };
+            Scene {
+                id,
+                regime,
+                dense,
+                layout,
+                sigma,
+                corr_len,
+                scale,
+                wavelength: 1.0,
+                noise,
+            }
+        })
+        .collect()
+}
+
+/// The fit's data for a scene, with weights 1/σ_L² (σ_L floored at 1e-9 of its largest
+/// value so that an underflowed sample cannot get an infinite weight).
+pub fn scene_input(scene: &Scene) -> Result<FitInput> {
+    let model = model::by_name("kbs", &ModelOptions::default())?;
+    let params = [scene.sigma, scene.corr_len, scene.scale];
+    let angles = scene.layout_value()?.angles();
+    let data = synth::generate(
+        model.as_ref(),
+        &params,
+        &angles,
+        scene.wavelength,
+        Quantity::Radiance,
+        &scene.noise,
+    )?;
+    let max_sd = data.sigma_l.iter().fold(0.0f64, |m, v| m.max(*v));
+    let weight: Vec<f64> = if max_sd > 0.0 {
+        data.sigma_l
+            .iter()
+            .map(|s| 1.0 / s.max(1e-9 * max_sd).powi(2))
+            .collect()
+    } else {
+        vec![1.0; data.len()]
+    };
+    let geo = Geometry::new(&data.samples, &[data.wavelength], data.quantity)?;
+    Ok(FitInput {
+        geo,
+        y: data.value,
+        weight,
+        channel: vec![0; data.samples.len()],
+        channel_names: vec![String::new()],
+    })
+}
+
+/// The truth of the parameters and ratio quantities a KBS fit reports, by report name (the
+/// amplitude depends on the verdict: see [`score`]).
+pub fn truths(scene: &Scene) -> BTreeMap<&'static str, f64> {
+    let ratio = scene.corr_len / scene.sigma;
+    BTreeMap::from([
+        ("sigma", scene.sigma),
+        ("T", scene.corr_len),
+        ("scale", scene.scale),
+        ("T/sigma", ratio),
+        ("rms_slope", 2.0 / ratio),
+    ])
+}
+
+fn check(name: &str, truth: f64, value: f64, stderr: Option<f64>) -> Check {
+    let rel_error = if truth != 0.0 {
+        ((value - truth) / truth).abs()
+    } else {
+        value.abs()
+    };
+    let stderr = stderr.filter(|s| s.is_finite());
+    Check {
+        name: name.to_string(),
+        truth,
+        value,
+        stderr,
+        rel_error,
+        covered: stderr.map(|s| (value - truth).abs() <= COVERAGE_K * s),
+    }
+}
+
+/// Score a finished fit against its scene: the determined quantities, per the verdict.
+pub fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
+    let t = truths(scene);
+    let s_l = scene.sigma / scene.wavelength;
+    let ratio = scene.corr_len / scene.sigma;
+    let amp_truth = match fit.verdict {
+        Verdict::Rough => scene.scale * ratio * ratio,
+        _ => scene.scale * s_l * s_l,
+    };
+    let mut out = Vec::new();
+    let param = |name: &str| fit.params.iter().find(|p| p.name == name);
+    let derived = |name: &str| fit.derived.iter().find(|d| d.name == name);
+    let wanted: &[&str] = match fit.verdict {
+        Verdict::Full => &["sigma", "T", "scale", "T/sigma"],
+        Verdict::Rough => &["T/sigma", "amplitude"],
+        Verdict::Smooth => &["T", "amplitude"],
+        Verdict::Partial => &["sigma", "T", "scale", "T/sigma", "amplitude"],
+    };
+    for &name in wanted {
+        let truth = if name == "amplitude" {
+            amp_truth
+        } else {
+            t[name]
+        };
+        if let Some(p) = param(name) {
+            if p.determined || fit.verdict != Verdict::Partial {
+                out.push(check(name, truth, p.value, p.stderr));
+            }
+        } else if let Some(d) = derived(name) {
+            if d.determined || fit.verdict != Verdict::Partial {
+                out.push(check(name, truth, d.value, d.stderr));
+            }
+        }
+    }
+    out
+}
+
+/// Fit one scene.
+pub fn run_scene(scene: &Scene, config: &RecoverConfig) -> SceneResult {
+    let fail = |n: usize, e: Error| SceneResult {
+        scene: scene.clone(),
+        n,
+        termination: None,
+        verdict: None,
+        converged: false,
+        seconds: 0.0,
+        checks: Vec::new(),
+        error: Some(e.to_string()),
+    };
+    let input = match scene_input(scene) {
+        Ok(i) => i,
+        Err(e) => return fail(0, e),
+    };
+    let n = input.y.len();
+    let fit_config = FitConfig {
+        weights_are_uncertainties: true,
+        lm: LmConfig {
+            timeout: config.fit_timeout,
+            ..LmConfig::default()
+        },
+        ..FitConfig::default()
+    };
+    match driver::fit(&input, &fit_config) {
+        Ok(fit) => SceneResult {
+            scene: scene.clone(),
+            n,
+            termination: Some(fit.termination),
+            verdict: Some(fit.verdict),
+            converged: fit.converged(),
+            seconds: fit.seconds,
+            checks: score(scene, &fit),
+            error: None,
+        },
+        Err(e) => fail(n, e),
+    }
+}
+
+/// Median of a slice (NaN for an empty one).
+pub fn median(v: &[f64]) -> f64 {
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
+    if s.is_empty() {
+        return f64::NAN;
+    }
+    s.sort_by(|a, b| a.total_cmp(b));
+    let m = s.len() / 2;
+    if s.len() % 2 == 1 {
+        s[m]
+    } else {
+        0.5 * (s[m - 1] + s[m])
+    }
+}
+
+fn termination_name(r: &SceneResult) -> String {
+    match r.termination {
+        Some(t) => format!("{t:?}"),
+        None => "error".to_string(),
+    }
+}
+
+fn coverage_of<'a>(checks: impl Iterator<Item = &'a Check>) -> (Option<f64>, usize) {
+    let c: Vec<bool> = checks.filter_map(|c| c.covered).collect();
+    let n = c.len();
+    let inside = c.iter().filter(|&&b| b).count();
+    ((n > 0).then(|| inside as f64 / n as f64), n)
+}
+
+/// Summarise scene results.
+pub fn summarize(results: Vec<SceneResult>, seed: u64, total_seconds: f64) -> RecoverReport {
+    let mut regimes = Vec::new();
+    for regime in Regime::ALL {
+        let rs: Vec<&SceneResult> = results
+            .iter()
+            .filter(|r| r.scene.regime == regime)
+            .collect();
+        if rs.is_empty() {
+            continue;
+        }
+        let mut verdicts = BTreeMap::new();
+        let mut terminations = BTreeMap::new();
+        for r in &rs {
+            let v = r.verdict.map_or("error".to_string(), |v| {
+                serde_json::to_value(v)
+                    .ok()
+                    .and_then(|j| j.as_str().map(str::to_string))
+                    .unwrap_or_default()
+            });
+            *verdicts.entry(v).or_insert(0) += 1;
+            *terminations.entry(termination_name(r)).or_insert(0) += 1;
+        }
+        let mut names: Vec<String> = Vec::new();
+        for r in &rs {
+            for c in &r.checks {
+                if !names.contains(&c.name) {
+                    names.push(c.name.clone());
+                }
+            }
+        }
+        let order = ["sigma", "T", "scale", "T/sigma", "amplitude"];
+        names.sort_by_key(|n| order.iter().position(|o| o == n).unwrap_or(order.len()));
+        let quantities = names
+            .iter()
+            .map(|name| {
+                let cs: Vec<&Check> = rs
+                    .iter()
+                    .flat_map(|r| r.checks.iter())
+                    .filter(|c| &c.name == name)
+                    .collect();
+                let errs: Vec<f64> = cs.iter().map(|c| c.rel_error).collect();
+                let (coverage, n_with_stderr) = coverage_of(cs.iter().copied());
+                QuantitySummary {
+                    name: name.clone(),
+                    n: cs.len(),
+                    median_rel_error: median(&errs),
+                    max_rel_error: errs.iter().fold(0.0f64, |m, v| m.max(*v)),
+                    coverage,
+                    n_with_stderr,
+                }
+            })
+            .collect();
+        let (coverage, n_with_stderr) = coverage_of(rs.iter().flat_map(|r| r.checks.iter()));
+        let secs: Vec<f64> = rs
+            .iter()
+            .filter(|r| r.error.is_none())
+            .map(|r| r.seconds)
+            .collect();
+        regimes.push(RegimeSummary {
+            regime,
+            scenes: rs.len(),
+            verdicts,
+            terminations,
+            quantities,
+            coverage,
+            n_with_stderr,
+            median_seconds: median(&secs),
+            errors: rs.iter().filter(|r| r.error.is_some()).count(),
+        });
+    }
+    let (coverage, n_with_stderr) = coverage_of(results.iter().flat_map(|r| r.checks.iter()));
+    let mut terminations = BTreeMap::new();
+    for r in &results {
+        *terminations.entry(termination_name(r)).or_insert(0) += 1;
+    }
+    let secs: Vec<f64> = results
+        .iter()
+        .filter(|r| r.error.is_none())
+        .map(|r| r.seconds)
+        .collect();
+    RecoverReport {
+        scenes: results.len(),
+        seed,
+        coverage: coverage.unwrap_or(f64::NAN),
+        nominal_coverage: NOMINAL_COVERAGE,
+        n_with_stderr,
+        terminations,
+        converged: results.iter().filter(|r| r.converged).count(),
+        errors: results.iter().filter(|r| r.error.is_some()).count(),
+        median_seconds: median(&secs),
+        total_seconds,
+        regimes,
+        results,
+    }
+}
+
+/// Run a recovery: draw the scenes, fit them in parallel (rayon), summarise. `on_done` is
+/// called once per finished scene (e.g. to advance a progress bar).
+pub fn run(config: &RecoverConfig, on_done: &(dyn Fn(&SceneResult) + Sync)) -> RecoverReport {
+    let t0 = std::time::Instant::now();
+    let scenes = draw_scenes(config.scenes, config.seed, config.noise);
+    let mut results: Vec<SceneResult> = scenes
+        .par_iter()
+        .map(|s| {
+            let r = run_scene(s, config);
+            on_done(&r);
+            r
+        })
+        .collect();
+    results.sort_by_key(|r| r.scene.id);
+    summarize(results, config.seed, t0.elapsed().as_secs_f64())
+}
+
+/// Format a number for the table: 3 significant digits, or `-`.
+fn fmt_num(v: Option<f64>) -> String {
+    match v {
+        Some(x) if x.is_finite() => {
+            if x == 0.0 {
+                "0".to_string()
+            } else if (1e-3..1e4).contains(&x.abs()) {
+                format!("{x:.3}")
+            } else {
+                format!("{x:.2e}")
+            }
+        }
+        _ => "-".to_string(),
+    }
+}
+
+impl RecoverReport {
+    /// The report as a text table.
+    pub fn table(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{:<13} {:>6}  {:<18} {:<10} {:>3}  {:>12} {:>12}  {:>8}",
+            "regime", "scenes", "verdicts", "quantity", "n", "median|err|", "max|err|", "coverage"
+        );
+        for r in &self.regimes {
+            let verdicts = r
+                .verdicts
+                .iter()
+                .map(|(k, v)| format!("{k} {v}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let mut first = true;
+            for q in &r.quantities {
+                let (reg, sc, ver) = if first {
+                    (
+                        r.regime.name().to_string(),
+                        r.scenes.to_string(),
+                        verdicts.clone(),
+                    )
+                } else {
+                    (String::new(), String::new(), String::new())
+                };
+                first = false;
+                let _ = writeln!(
+                    s,
+                    "{:<13} {:>6}  {:<18} {:<10} {:>3}  {:>12} {:>12}  {:>8}",
+                    reg,
+                    sc,
+                    ver,
+                    q.name,
+                    q.n,
+                    fmt_num(Some(q.median_rel_error)),
+                    fmt_num(Some(q.max_rel_error)),
+                    fmt_num(q.coverage)
+                );
+            }
+            if first {
+                let _ = writeln!(
+                    s,
+                    "{:<13} {:>6}  {:<18} (nothing scored)",
+                    r.regime.name(),
+                    r.scenes,
+                    verdicts
+                );
+            }
+            let _ = writeln!(
+                s,
+                "{:<13} {:>6}  coverage {} ({} truths), median fit {} s, stops: {}",
+                "",
+                "",
+                fmt_num(r.coverage),
+                r.n_with_stderr,
+                fmt_num(Some(r.median_seconds)),
+                r.terminations
+                    .iter()
+                    .map(|(k, v)| format!("{k} {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        let _ = writeln!(
+            s,
+            "\ncoverage (truth within ±2 se): {} of {} scored truths (nominal {:.3})",
+            fmt_num(Some(self.coverage)),
+            self.n_with_stderr,
+            self.nominal_coverage
+        );
+        let _ = writeln!(
+            s,
+            "terminations: {}",
+            self.terminations
+                .iter()
+                .map(|(k, v)| format!("{k} {v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let _ = writeln!(
+            s,
+            "converged {}/{}, errors {}, median fit time {} s, total {} s",
+            self.converged,
+            self.scenes,
+            self.errors,
+            fmt_num(Some(self.median_seconds)),
+            fmt_num(Some(self.total_seconds))
+        );
+        for r in self.results.iter().filter(|r| r.error.is_some()) {
+            let _ = writeln!(
+                s,
+                "scene {} ({}): {}",
+                r.scene.id,
+                r.scene.regime.name(),
+                r.error.as_deref().unwrap_or("")
+            );
+        }
+        s
+    }
+}
