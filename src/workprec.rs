@@ -343,13 +343,13 @@ pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkP
             ..ModelOptions::default()
         },
     )?;
-    let (p0, _) = init::initial_values(
+    let candidates = init::initial_values(
         &problem,
         grid_model.as_ref(),
         &input,
         &vec![None; layout.len()],
     );
-    let x0 = layout.to_x(&p0);
+    let x0 = layout.to_x(&candidates[0].1);
     for (label, jac, lm_config) in solver_settings() {
         let fd = FiniteDifference {
             inner: &problem,

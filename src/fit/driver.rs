@@ -153,6 +153,8 @@ pub struct FitResult {
     /// Full parameter values in layout order (for plotting per channel).
     pub layout: ParamLayout,
     pub values: Vec<f64>,
+    /// The starting-value grid's best point (layout order), before any LM iteration.
+    pub start: Vec<f64>,
 }
 
 impl FitResult {
@@ -242,22 +244,28 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             ..config.model_opts
         },
     )?;
-    let (mut p0, _) = init::initial_values(&problem, grid_model.as_ref(), input, &given);
-    // Refine on a subsample before the full fit: the grid's best point can be a factor of a
-    // few off, and those LM iterations are cheap on REFINE_SAMPLES samples.
-    if n > 2 * init::REFINE_SAMPLES {
-        let sub = input.subset(&init::subsample(n, init::REFINE_SAMPLES));
-        if sub.y.len() > n_free {
-            let sub_problem = FitProblem::new(model, layout.clone(), &sub, config.residual, floor)?;
-            let coarse = LmConfig {
-                ftol: 1e-6,
-                xtol: 1e-6,
-                max_iters: 100,
-                progress: false,
-                ..config.lm.clone()
-            };
-            let refined = run_lm(&sub_problem, &p0, &coarse);
-            if refined.lm.cost.is_finite() && sub_problem.in_domain(&refined.values) {
+    let candidates = init::initial_values(&problem, grid_model.as_ref(), input, &given);
+    // Refine each candidate with a quick LM on a subsample and keep the lowest cost: the
+    // grid's best point can be a factor of a few off, or sit in the valley of the rough
+    // asymptote (σ → ∞ at fixed T/σ) while the truth is elsewhere; those iterations are
+    // cheap on REFINE_SAMPLES samples.
+    let sub = input.subset(&init::subsample(n, init::REFINE_SAMPLES));
+    let sub_problem = FitProblem::new(model, layout.clone(), &sub, config.residual, floor)?;
+    let coarse = LmConfig {
+        ftol: 1e-6,
+        xtol: 1e-6,
+        max_iters: 100,
+        progress: false,
+        ..config.lm.clone()
+    };
+    let grid_start = candidates[0].1.clone();
+    let mut p0 = grid_start.clone();
+    let mut best_cost = f64::INFINITY;
+    if sub.y.len() > n_free {
+        for (_, start) in &candidates {
+            let refined = run_lm(&sub_problem, start, &coarse);
+            if refined.lm.cost < best_cost && sub_problem.in_domain(&refined.values) {
+                best_cost = refined.lm.cost;
                 p0 = refined.values;
             }
         }
@@ -309,7 +317,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     }
     let unc = uncertainty_of(&problem_used, &report);
     let elapsed = t0.elapsed().as_secs_f64();
-    Ok(assemble(
+    let mut result = assemble(
         model,
         input,
         config,
@@ -320,7 +328,9 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         notes,
         elapsed,
         init_seconds,
-    ))
+    );
+    result.start = grid_start;
+    Ok(result)
 }
 
 /// An LM run in parameter space.
@@ -683,5 +693,6 @@ fn assemble(
         sample_modes,
         layout: layout.clone(),
         values: p.clone(),
+        start: Vec::new(),
     }
 }

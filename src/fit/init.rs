@@ -10,6 +10,9 @@ use nalgebra::{DMatrix, DVector};
 /// Largest number of samples the coarse grid is evaluated on.
 pub const GRID_SAMPLES: usize = 256;
 
+/// Grid points kept as starting candidates (best first, in distinct valleys).
+pub const CANDIDATES: usize = 3;
+
 /// Samples of the quick LM refinement between the grid and the full fit.
 pub const REFINE_SAMPLES: usize = 1024;
 
@@ -55,7 +58,7 @@ pub fn initial_values(
     grid_model: &dyn crate::model::Model,
     input: &FitInput,
     given: &[Option<f64>],
-) -> (Vec<f64>, f64) {
+) -> Vec<(f64, Vec<f64>)> {
     use crate::model::{by_name, EvalMode, ModelOptions};
     let layout = &problem.layout;
     let specs = problem.model.params();
@@ -119,7 +122,7 @@ pub fn initial_values(
         .filter(|&k| is_linear(layout, k, specs) && given[k].is_none())
         .collect();
 
-    let mut best = (f64::INFINITY, vec![1.0; layout.len()]);
+    let mut scored: Vec<(f64, Vec<f64>)> = Vec::new();
     let total: usize = axes.iter().map(Vec::len).product();
     for flat in 0..total {
         let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
@@ -135,13 +138,30 @@ pub fn initial_values(
             _ => &sub,
         };
         if let Some(cost) = solve_linear(grid_problem, &mut p, &linear) {
-            if cost < best.0 {
-                best = (cost, p);
+            scored.push((cost, p));
+        }
+    }
+    // The best points, at least a factor e^{0.7} ≈ 2 apart in some nonlinear parameter, so
+    // that the candidates sit in different valleys.
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut picked: Vec<(f64, Vec<f64>)> = Vec::new();
+    for (cost, p) in scored {
+        let distinct = picked.iter().all(|(_, q)| {
+            nonlinear
+                .iter()
+                .any(|&k| (p[k].abs().max(1e-300).ln() - q[k].abs().max(1e-300).ln()).abs() > 0.7)
+        });
+        if distinct {
+            picked.push((cost, p));
+            if picked.len() == CANDIDATES {
+                break;
             }
         }
     }
-    let (cost, p) = best;
-    (p, cost)
+    if picked.is_empty() {
+        picked.push((f64::INFINITY, vec![1.0; layout.len()]));
+    }
+    picked
 }
 
 /// Solve the linear parameters `linear` of `p` by least squares (with the other parameters

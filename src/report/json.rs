@@ -39,8 +39,16 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
     let correlation: Vec<Vec<Value>> = (0..k)
         .map(|i| (0..k).map(|j| num(r.correlation[(i, j)])).collect())
         .collect();
+    let start: Map<String, Value> = r
+        .layout
+        .params
+        .iter()
+        .zip(&r.start)
+        .map(|(p, v)| (p.name.clone(), num(*v)))
+        .collect();
     json!({
         "model": r.model,
+        "start": start,
         "params": params,
         "derived": derived,
         "verdict": r.verdict,

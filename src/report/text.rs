@@ -127,7 +127,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     if k > 1 {
         let _ = writeln!(
             s,
-            "[[Correlations]] (free parameters, in the solver's variables: ln sigma, ln T, ln w)"
+            "[[Correlations]] (free parameters; sigma, T, w as their logarithms)"
         );
         let w = r
             .corr_names
