@@ -218,7 +218,7 @@ fn a_fit_that_stops_early_exits_3_with_its_report() {
             "--wavelength",
             "1",
             "--max-iter",
-            "1",
+            "0",
             "data/synthetic/kbs_inplane.csv",
         ])
         .output()
