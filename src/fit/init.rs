@@ -14,7 +14,7 @@ pub const GRID_SAMPLES: usize = 256;
 pub const CANDIDATES: usize = 3;
 
 /// Samples of the quick LM refinement between the grid and the full fit.
-pub const REFINE_SAMPLES: usize = 1024;
+pub const REFINE_SAMPLES: usize = 512;
 
 /// Parameters that enter the model linearly (solved exactly at each grid point).
 pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
