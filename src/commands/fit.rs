@@ -1,5 +1,6 @@
 //! `goniofit fit`: a measurement file in, a fit report out.
 
+use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
@@ -7,7 +8,7 @@ use goniofit::fit::lm::LmConfig;
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::{Geometry, Quantity};
 use goniofit::io::{self, Dataset, ReadOptions};
-use goniofit::model::{parse_assignments, EvalMode, ModelOptions};
+use goniofit::model::{parse_assignments, ModelOptions};
 use goniofit::report::{self, RunInfo};
 use goniofit::Error;
 use std::io::Write as _;
@@ -15,40 +16,6 @@ use std::path::{Path, PathBuf};
 
 /// Candidate models for `--model auto`, compared by BIC.
 pub const AUTO_CANDIDATES: [&str; 4] = ["lambert", "lambert-specular", "kbs", "kbs+lambert"];
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum QuantityArg {
-    Radiance,
-    Brdf,
-}
-
-impl From<QuantityArg> for Quantity {
-    fn from(q: QuantityArg) -> Self {
-        match q {
-            QuantityArg::Radiance => Quantity::Radiance,
-            QuantityArg::Brdf => Quantity::Brdf,
-        }
-    }
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum ModeArg {
-    Auto,
-    Series,
-    Smooth,
-    Rough,
-}
-
-impl From<ModeArg> for EvalMode {
-    fn from(m: ModeArg) -> Self {
-        match m {
-            ModeArg::Auto => EvalMode::Auto,
-            ModeArg::Series => EvalMode::Series,
-            ModeArg::Smooth => EvalMode::Smooth,
-            ModeArg::Rough => EvalMode::Rough,
-        }
-    }
-}
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum ResidualArg {
@@ -146,25 +113,6 @@ pub struct FitArgs {
     /// The measurement files (CSV or ASTM E1392); several files are fitted in parallel.
     #[arg(required = true, num_args = 1..)]
     pub file: Vec<PathBuf>,
-}
-
-/// Parse `X,Y`.
-pub fn parse_patch(text: &str) -> anyhow::Result<(f64, f64)> {
-    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    let bad = || {
-        Error::Usage(format!(
-            "--patch '{text}': expected X,Y (two positive numbers)"
-        ))
-    };
-    if parts.len() != 2 {
-        return Err(bad().into());
-    }
-    let x: f64 = parts[0].parse().map_err(|_| bad())?;
-    let y: f64 = parts[1].parse().map_err(|_| bad())?;
-    if !(x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()) {
-        return Err(bad().into());
-    }
-    Ok((x, y))
 }
 
 /// Parse `role=name,...`.

@@ -1,5 +1,6 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
 
+pub mod args;
 pub mod bench;
 pub mod eval;
 pub mod figures;

@@ -5,10 +5,11 @@
 //! (temporary file in the same folder, then renamed). Without `--out` the CSV goes to
 //! standard output and the truth only where `--truth` says.
 
+use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::geometry::Quantity;
-use goniofit::model::{by_name, parse_params, EvalMode, ModelOptions};
+use goniofit::model::{by_name, parse_params, ModelOptions};
 use goniofit::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -111,33 +112,11 @@ pub enum NoiseKindArg {
     Poisson,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum ModeArg {
-    Auto,
-    Series,
-    Smooth,
-    Rough,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum QuantityArg {
-    Radiance,
-    Brdf,
-}
-
 fn usage(m: String) -> anyhow::Error {
     goniofit::Error::Usage(m).into()
 }
 
-/// `a,b` as two numbers.
-fn parse_pair(text: &str, what: &str) -> anyhow::Result<(f64, f64)> {
-    let v = parse_list(text, what)?;
-    match v[..] {
-        [x, y] => Ok((x, y)),
-        _ => Err(usage(format!("{what} '{text}': expected two numbers X,Y"))),
-    }
-}
-
+/// Comma-separated numbers.
 fn parse_list(text: &str, what: &str) -> anyhow::Result<Vec<f64>> {
     text.split(',')
         .map(|s| {
@@ -192,19 +171,9 @@ fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
 }
 
 pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
-    let patch = a
-        .patch
-        .as_deref()
-        .map(|p| parse_pair(p, "--patch"))
-        .transpose()?;
-    let mode = match a.mode {
-        ModeArg::Auto => EvalMode::Auto,
-        ModeArg::Series => EvalMode::Series,
-        ModeArg::Smooth => EvalMode::Smooth,
-        ModeArg::Rough => EvalMode::Rough,
-    };
+    let patch = a.patch.as_deref().map(parse_patch).transpose()?;
     let opts = ModelOptions {
-        mode,
+        mode: a.mode.into(),
         tol: a.tol,
         patch,
     };
@@ -215,10 +184,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     if let Some(n) = a.samples {
         angles = synth::subsample(&angles, n)?;
     }
-    let quantity = match a.quantity {
-        QuantityArg::Radiance => Quantity::Radiance,
-        QuantityArg::Brdf => Quantity::Brdf,
-    };
+    let quantity: Quantity = a.quantity.into();
     let noise = Noise {
         kind: match a.noise_kind {
             NoiseKindArg::Relative => NoiseKind::Relative,
@@ -254,7 +220,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         params: Truth::params_by_name(model.as_ref(), &params),
         wavelength: a.wavelength,
         quantity,
-        mode: synth::eval_mode_name(mode).to_string(),
+        mode: synth::eval_mode_name(opts.mode).to_string(),
         tol: a.tol,
         patch,
         layout: match &layout {
