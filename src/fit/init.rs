@@ -10,6 +10,10 @@ use nalgebra::{DMatrix, DVector};
 /// Largest number of samples the coarse grid is evaluated on.
 pub const GRID_SAMPLES: usize = 256;
 
+/// Median g above which a grid point is ranked with the rough approximation (below it, the
+/// smooth one): the grid only ranks candidates, the refinement uses the exact model.
+pub const GRID_ROUGH_G: f64 = 1.0;
+
 /// Grid points kept as starting candidates (best first, in distinct valleys).
 pub const CANDIDATES: usize = 3;
 
@@ -122,7 +126,8 @@ pub fn initial_values(
         .filter(|&k| is_linear(layout, k, specs) && given[k].is_none())
         .collect();
 
-    let mut scored: Vec<(f64, Vec<f64>)> = Vec::new();
+    // (cost, parameters, regime band of the point's median g).
+    let mut scored: Vec<(f64, Vec<f64>, usize)> = Vec::new();
     let total: usize = axes.iter().map(Vec::len).product();
     for flat in 0..total {
         let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
@@ -133,24 +138,37 @@ pub fn initial_values(
         }
         let g = sigma_k.map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * c2_lambda);
         let grid_problem = match (g, &sub_rough, &sub_smooth) {
-            (Some(g), Some(r), _) if g > 1e3 => r,
-            (Some(g), _, Some(s)) if g < 1e-4 => s,
+            (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
+            (Some(g), _, Some(s)) if g <= GRID_ROUGH_G => s,
             _ => &sub,
         };
+        let band = match g {
+            Some(g) if g < 0.1 => 0,
+            Some(g) if g <= 10.0 => 1,
+            Some(_) => 2,
+            None => 0,
+        };
         if let Some(cost) = solve_linear(grid_problem, &mut p, &linear) {
-            scored.push((cost, p));
+            scored.push((cost, p, band));
         }
     }
-    // The best points, at least a factor e^{0.7} ≈ 2 apart in some nonlinear parameter, so
-    // that the candidates sit in different valleys.
+    // The grid ranks with the limits' approximations, which can favour a wrong regime (the
+    // rough asymptote σ → ∞ at fixed T/σ is a valley of its own): for KBS keep the best
+    // point of each regime band (smooth, intermediate, rough); otherwise the best points at
+    // least a factor e^{0.7} ≈ 2 apart in some nonlinear parameter.
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut picked: Vec<(f64, Vec<f64>)> = Vec::new();
-    for (cost, p) in scored {
-        let distinct = picked.iter().all(|(_, q)| {
-            nonlinear
-                .iter()
-                .any(|&k| (p[k].abs().max(1e-300).ln() - q[k].abs().max(1e-300).ln()).abs() > 0.7)
-        });
+    let mut bands_taken = [false; 3];
+    for (cost, p, band) in scored {
+        let distinct = if is_kbs {
+            !std::mem::replace(&mut bands_taken[band], true)
+        } else {
+            picked.iter().all(|(_, q)| {
+                nonlinear.iter().any(|&k| {
+                    (p[k].abs().max(1e-300).ln() - q[k].abs().max(1e-300).ln()).abs() > 0.7
+                })
+            })
+        };
         if distinct {
             picked.push((cost, p));
             if picked.len() == CANDIDATES {
