@@ -153,7 +153,7 @@ pub struct FitResult {
     /// Full parameter values in layout order (for plotting per channel).
     pub layout: ParamLayout,
     pub values: Vec<f64>,
-    /// The starting-value grid's best point (layout order), before any LM iteration.
+    /// The grid point (layout order) whose quick refinement won, before any LM iteration.
     pub start: Vec<f64>,
 }
 
@@ -258,7 +258,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         progress: false,
         ..config.lm.clone()
     };
-    let grid_start = candidates[0].1.clone();
+    let mut grid_start = candidates[0].1.clone();
     let mut p0 = grid_start.clone();
     let mut best_cost = f64::INFINITY;
     if sub.y.len() > n_free {
@@ -267,6 +267,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             if refined.lm.cost < best_cost && sub_problem.in_domain(&refined.values) {
                 best_cost = refined.lm.cost;
                 p0 = refined.values;
+                grid_start = start.clone();
             }
         }
     }
