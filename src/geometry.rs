@@ -217,6 +217,18 @@ impl Geometry {
         self.theta_i.is_empty()
     }
 
+    /// g = (2πσ/λ)² (cos θi + cos θr)² of sample i (eq. 36).
+    #[inline]
+    pub fn g(&self, i: usize, sigma: f64) -> f64 {
+        (2.0 * std::f64::consts::PI * sigma / self.wavelength[i] * self.c[i]).powi(2)
+    }
+
+    /// a = v_xy² T²/4 of sample i (eq. 37).
+    #[inline]
+    pub fn a(&self, i: usize, corr_len: f64) -> f64 {
+        self.vxy2[i] * (2.0 * std::f64::consts::PI * corr_len / self.wavelength[i]).powi(2) * 0.25
+    }
+
     /// The sub-batch of the given sample indices (used for per-channel fits).
     pub fn subset(&self, idx: &[usize]) -> Geometry {
         let pick = |v: &Vec<f64>| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();

@@ -436,30 +436,8 @@ fn joint_narrowing(
     let names = &joint.layout.channel_names;
     let mid = &names[names.len() / 2];
     let idx: Vec<usize> = (0..labels.len()).filter(|&i| &labels[i] == mid).collect();
-    let single = Dataset {
-        path: ds.path.clone(),
-        headers: ds.headers.clone(),
-        rows: idx.iter().map(|&i| ds.rows[i].clone()).collect(),
-        lines: idx.iter().map(|&i| ds.lines[i]).collect(),
-        samples: idx.iter().map(|&i| ds.samples[i]).collect(),
-        value: ds
-            .value
-            .as_ref()
-            .map(|v| idx.iter().map(|&i| v[i]).collect()),
-        weight: ds
-            .weight
-            .as_ref()
-            .map(|v| idx.iter().map(|&i| v[i]).collect()),
-        sigma_l: ds
-            .sigma_l
-            .as_ref()
-            .map(|v| idx.iter().map(|&i| v[i]).collect()),
-        wavelength: ds
-            .wavelength
-            .as_ref()
-            .map(|v| idx.iter().map(|&i| v[i]).collect()),
-        channel: None,
-    };
+    let mut single = ds.subset(&idx);
+    single.channel = None;
     let input = fit_input(&single, args.quantity.into(), args.wavelength, true)?;
     let mut config = fit_config(args, &joint.model, ds.sigma_l.is_some())?;
     config.lm.progress = false;
@@ -542,26 +520,16 @@ pub fn plot_fit(
         .filter(|&i| input.channel[i] == c)
         .collect();
     let sub = input.subset(&idx);
-    let max_y = input.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let floor = config.floor.unwrap_or(1e-6 * max_y);
+    let floor = driver::residual_floor(config, &input.y);
     let problem = FitProblem::new(model.as_ref(), layout.clone(), &sub, config.residual, floor)?;
     let (fitted, _) = problem.model_values(values, false);
     let residuals = problem.raw_residuals(&fitted);
-    let n_free = layout.free().len();
-    let sw = problem.sqrt_weight();
-    let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
-    let s_hat = (chi2 / (sub.y.len().saturating_sub(n_free).max(1)) as f64).sqrt();
-    let std_residuals: Vec<f64> = residuals
-        .iter()
-        .zip(sw)
-        .map(|(r, s)| {
-            if config.weights_are_uncertainties || s_hat == 0.0 {
-                r * s
-            } else {
-                r * s / s_hat
-            }
-        })
-        .collect();
+    let std_residuals = driver::standardized_residuals(
+        &residuals,
+        problem.sqrt_weight(),
+        layout.free().len(),
+        config.weights_are_uncertainties,
+    );
     let params = layout.model_params(values, c);
     let specs = model.params();
     let mut title = format!("{}:", model.name());

@@ -232,8 +232,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             "every measured value is zero: nothing to fit".into(),
         ));
     }
-    let max_y = input.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let floor = config.floor.unwrap_or(1e-6 * max_y);
+    let floor = residual_floor(config, &input.y);
     let problem = FitProblem::new(model, layout.clone(), input, config.residual, floor)?;
     let mut given = fixed.clone();
     assign(&layout, &config.init, &mut given)?;
@@ -282,7 +281,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     // Identifiability: look at the log-space covariance of (σ, T, scale).
     let specs = model.params();
     let has_kbs = specs.iter().any(|s| s.name == "sigma");
-    let unc = uncertainty_of(&problem_used, &report);
+    let mut unc = uncertainty_of(&problem_used, &report);
     if has_kbs && config.reduce {
         let sig = problem_used.layout.find("sigma")[0];
         let g_median = median_g(input, report.values[sig]);
@@ -308,6 +307,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
                 report.lm.jacobian_evaluations += je;
                 report.lm.seconds += sec;
                 problem_used = problem_red;
+                unc = uncertainty_of(&problem_used, &report);
             }
             notes.push(match v {
                 Verdict::Rough => format!("rough regime (median g = {g_median:.3e}): the data determines only T/σ and the amplitude s·(T/σ)²; σ was held at its estimate and σ, T, scale are reported as undetermined"),
@@ -316,7 +316,6 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             });
         }
     }
-    let unc = uncertainty_of(&problem_used, &report);
     let elapsed = t0.elapsed().as_secs_f64();
     let mut result = assemble(
         model,
@@ -368,14 +367,46 @@ fn log_covariance(layout: &ParamLayout, unc: &stats::Uncertainty, p: &[f64]) -> 
     })
 }
 
-/// Median of g = (2πσ/λ)²(cos θi + cos θr)² over the samples at σ = `sigma`.
+/// Median of g over the samples at σ = `sigma`.
 fn median_g(input: &FitInput, sigma: f64) -> f64 {
     let g: Vec<f64> = (0..input.geo.len())
-        .map(|i| {
-            (2.0 * std::f64::consts::PI * sigma / input.geo.wavelength[i] * input.geo.c[i]).powi(2)
-        })
+        .map(|i| input.geo.g(i, sigma))
         .collect();
     init::median(&g)
+}
+
+/// The floor of relative and log residuals: `config.floor`, or 1e-6 × max |y|.
+pub fn residual_floor(config: &FitConfig, y: &[f64]) -> f64 {
+    config
+        .floor
+        .unwrap_or(1e-6 * y.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+}
+
+/// Standardized residuals √wᵢ rᵢ / s with s² = χ²/(n − p), or √wᵢ rᵢ when the weights are
+/// inverse variances from stated uncertainties (or s = 0).
+pub fn standardized_residuals(
+    residuals: &[f64],
+    sqrt_w: &[f64],
+    n_free: usize,
+    weights_are_uncertainties: bool,
+) -> Vec<f64> {
+    let chi2: f64 = residuals
+        .iter()
+        .zip(sqrt_w)
+        .map(|(r, s)| (r * s).powi(2))
+        .sum();
+    let dof = residuals.len().saturating_sub(n_free).max(1) as f64;
+    let s_hat = (chi2 / dof).sqrt();
+    let scale = if weights_are_uncertainties || s_hat == 0.0 {
+        1.0
+    } else {
+        1.0 / s_hat
+    };
+    residuals
+        .iter()
+        .zip(sqrt_w)
+        .map(|(r, s)| r * s * scale)
+        .collect()
 }
 
 /// Decide whether the (σ, T, scale) block is only partly determined, and which regime's
@@ -467,20 +498,8 @@ fn assemble(
     let sw = problem.sqrt_weight();
     let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
     let cost = 0.5 * chi2;
-    let s_hat = (chi2 / dof).sqrt();
-    let std_residuals: Vec<f64> = residuals
-        .iter()
-        .zip(sw)
-        .map(|(r, s)| {
-            if config.weights_are_uncertainties {
-                r * s
-            } else if s_hat > 0.0 {
-                r * s / s_hat
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let std_residuals =
+        standardized_residuals(&residuals, sw, n_free, config.weights_are_uncertainties);
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     // R² in the space the residuals live in: the data itself, or ln y for log residuals.
@@ -640,15 +659,11 @@ fn assemble(
         *modes.entry(m.name().to_string()).or_insert(0) += 1;
     }
     let g_range = first("sigma").map(|ks| {
-        let mut lo = f64::INFINITY;
-        let mut hi = 0.0f64;
-        for i in 0..n {
-            let g = (2.0 * std::f64::consts::PI * p[ks] / input.geo.wavelength[i] * input.geo.c[i])
-                .powi(2);
-            lo = lo.min(g);
-            hi = hi.max(g);
-        }
-        (lo, hi)
+        (0..n)
+            .map(|i| input.geo.g(i, p[ks]))
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), g| {
+                (lo.min(g), hi.max(g))
+            })
     });
     if !run.lm.termination.converged() {
         notes.push(format!(

@@ -459,13 +459,8 @@ impl FitProblem<'_> {
             if !(sigma.is_normal() && corr.is_normal() && sigma > 0.0 && corr > 0.0) {
                 return false;
             }
-            let two_pi = 2.0 * std::f64::consts::PI;
-            (0..b.geo.len()).all(|i| {
-                let k = two_pi / b.geo.wavelength[i];
-                let g = (k * sigma * b.geo.c[i]).powi(2);
-                let a = b.geo.vxy2[i] * (k * corr).powi(2) * 0.25;
-                g <= G_FIT_MAX && a <= A_FIT_MAX
-            })
+            (0..b.geo.len())
+                .all(|i| b.geo.g(i, sigma) <= G_FIT_MAX && b.geo.a(i, corr) <= A_FIT_MAX)
         })
     }
 
