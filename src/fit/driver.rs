@@ -16,8 +16,9 @@ pub use super::problem::FitInput;
 use super::problem::{FitProblem, ParamLayout, ResidualKind, Transform};
 use super::stats;
 use crate::error::{Error, Result};
-use crate::model::{self, Mode, Model, ModelOptions};
+use crate::model::{self, EvalMode, Mode, Model, ModelOptions};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -39,6 +40,10 @@ pub const SMOOTH_G: f64 = 0.3;
 
 /// Accuracy of the model on the starting-value grid (it only ranks candidates).
 pub const GRID_TOL: f64 = 1e-4;
+
+/// Model accuracy of the quick refinement on a subsample (it only has to land near the
+/// optimum; the full fit then works at the requested accuracy).
+pub const REFINE_TOL: f64 = 1e-6;
 
 /// Relative singular-value threshold below which a direction is undetermined.
 pub const RANK_THRESHOLD: f64 = 1e-9;
@@ -244,12 +249,48 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         },
     )?;
     let candidates = init::initial_values(&problem, grid_model.as_ref(), input, &given);
-    // Refine each candidate with a quick LM on a subsample and keep the lowest cost: the
-    // grid's best point can be a factor of a few off, or sit in the valley of the rough
-    // asymptote (σ → ∞ at fixed T/σ) while the truth is elsewhere; those iterations are
-    // cheap on REFINE_SAMPLES samples.
+    // Refine each candidate with a quick LM on a subsample (in parallel) and keep the lowest
+    // cost: the grid's best point can be a factor of a few off, or sit in the valley of the
+    // rough asymptote (σ → ∞ at fixed T/σ) while the truth is elsewhere. The refinement
+    // only has to land near the optimum (the full fit then works at the requested
+    // accuracy), so it uses the model at [`REFINE_TOL`], and a candidate in the rough band
+    // (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation, which is
+    // exact in that limit and avoids the O(√g) series far from the specular peak; its
+    // refined cost is then taken with the exact model.
+    let loose = |mode: Option<EvalMode>| {
+        model::by_name(
+            model.name(),
+            &ModelOptions {
+                tol: REFINE_TOL.max(config.model_opts.tol),
+                mode: mode.unwrap_or(config.model_opts.mode),
+                ..config.model_opts
+            },
+        )
+    };
+    let refine_model = loose(None)?;
+    let sigma_k = layout.find("sigma").first().copied();
+    let rough_model = match sigma_k {
+        Some(_) => Some(loose(Some(EvalMode::Rough))?),
+        None => None,
+    };
     let sub = input.subset(&init::subsample(n, init::REFINE_SAMPLES));
-    let sub_problem = FitProblem::new(model, layout.clone(), &sub, config.residual, floor)?;
+    let sub_exact = FitProblem::new(
+        refine_model.as_ref(),
+        layout.clone(),
+        &sub,
+        config.residual,
+        floor,
+    )?;
+    let sub_rough = match &rough_model {
+        Some(m) => Some(FitProblem::new(
+            m.as_ref(),
+            layout.clone(),
+            &sub,
+            config.residual,
+            floor,
+        )?),
+        None => None,
+    };
     let coarse = LmConfig {
         ftol: 1e-6,
         xtol: 1e-6,
@@ -259,15 +300,33 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     };
     let mut grid_start = candidates[0].1.clone();
     let mut p0 = grid_start.clone();
-    let mut best_cost = f64::INFINITY;
     if sub.y.len() > n_free {
-        for (_, start) in &candidates {
-            let refined = run_lm(&sub_problem, start, &coarse);
-            if refined.lm.cost < best_cost && sub_problem.in_domain(&refined.values) {
-                best_cost = refined.lm.cost;
-                p0 = refined.values;
-                grid_start = start.clone();
-            }
+        let refined: Vec<(f64, Vec<f64>)> = candidates
+            .par_iter()
+            .map(|(_, start)| {
+                let rough_band =
+                    sigma_k.is_some_and(|k| median_g(&sub, start[k]) > init::ROUGH_BAND_G);
+                match (&sub_rough, rough_band) {
+                    (Some(rough), true) => {
+                        let run = run_lm(rough, start, &coarse);
+                        let cost = 0.5 * sub_exact.weighted_residuals(&run.values).norm_squared();
+                        (cost, run.values)
+                    }
+                    _ => {
+                        let run = run_lm(&sub_exact, start, &coarse);
+                        (run.lm.cost, run.values)
+                    }
+                }
+            })
+            .collect();
+        let best = refined
+            .into_iter()
+            .zip(&candidates)
+            .filter(|((cost, values), _)| cost.is_finite() && sub_exact.in_domain(values))
+            .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
+        if let Some(((_, values), (_, start))) = best {
+            p0 = values;
+            grid_start = start.clone();
         }
     }
     let init_seconds = t0.elapsed().as_secs_f64();

@@ -6,6 +6,7 @@
 
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 
 /// Largest number of samples the coarse grid is evaluated on.
 pub const GRID_SAMPLES: usize = 256;
@@ -13,6 +14,12 @@ pub const GRID_SAMPLES: usize = 256;
 /// Median g above which a grid point is ranked with the rough approximation (below it, the
 /// smooth one): the grid only ranks candidates, the refinement uses the exact model.
 pub const GRID_ROUGH_G: f64 = 1.0;
+
+/// Median g below which a KBS grid point is in the smooth band.
+pub const SMOOTH_BAND_G: f64 = 0.1;
+
+/// Median g above which a KBS grid point is in the rough band.
+pub const ROUGH_BAND_G: f64 = 10.0;
 
 /// Grid points kept as starting candidates (best first, in distinct valleys).
 pub const CANDIDATES: usize = 3;
@@ -126,32 +133,32 @@ pub fn initial_values(
         .filter(|&k| is_linear(layout, k, specs) && given[k].is_none())
         .collect();
 
-    // (cost, parameters, regime band of the point's median g).
-    let mut scored: Vec<(f64, Vec<f64>, usize)> = Vec::new();
+    // (cost, parameters, regime band of the point's median g), grid points in parallel.
     let total: usize = axes.iter().map(Vec::len).product();
-    for flat in 0..total {
-        let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
-        let mut rem = flat;
-        for (axis, &k) in axes.iter().zip(&nonlinear) {
-            p[k] = axis[rem % axis.len()];
-            rem /= axis.len();
-        }
-        let g = sigma_k.map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * c2_lambda);
-        let grid_problem = match (g, &sub_rough, &sub_smooth) {
-            (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
-            (Some(g), _, Some(s)) if g <= GRID_ROUGH_G => s,
-            _ => &sub,
-        };
-        let band = match g {
-            Some(g) if g < 0.1 => 0,
-            Some(g) if g <= 10.0 => 1,
-            Some(_) => 2,
-            None => 0,
-        };
-        if let Some(cost) = solve_linear(grid_problem, &mut p, &linear) {
-            scored.push((cost, p, band));
-        }
-    }
+    let mut scored: Vec<(f64, Vec<f64>, usize)> = (0..total)
+        .into_par_iter()
+        .filter_map(|flat| {
+            let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
+            let mut rem = flat;
+            for (axis, &k) in axes.iter().zip(&nonlinear) {
+                p[k] = axis[rem % axis.len()];
+                rem /= axis.len();
+            }
+            let g = sigma_k.map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * c2_lambda);
+            let grid_problem = match (g, &sub_rough, &sub_smooth) {
+                (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
+                (Some(g), _, Some(s)) if g <= GRID_ROUGH_G => s,
+                _ => &sub,
+            };
+            let band = match g {
+                Some(g) if g < SMOOTH_BAND_G => 0,
+                Some(g) if g <= ROUGH_BAND_G => 1,
+                Some(_) => 2,
+                None => 0,
+            };
+            solve_linear(grid_problem, &mut p, &linear).map(|cost| (cost, p, band))
+        })
+        .collect();
     // The grid ranks with the limits' approximations, which can favour a wrong regime (the
     // rough asymptote σ → ∞ at fixed T/σ is a valley of its own): for KBS keep the best
     // point of each regime band (smooth, intermediate, rough); otherwise the best points at
