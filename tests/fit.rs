@@ -269,3 +269,77 @@ fn fixed_parameters_stay_fixed_and_too_few_samples_is_an_error() {
         .to_string()
         .contains("roughness"));
 }
+
+#[test]
+fn problem_jacobian_matches_central_differences() {
+    // The solver's Jacobian (√w ∂r/∂f ∂f/∂p dp/dx, assembled per block) against central
+    // differences of its residuals: every residual kind, two channels with per-channel
+    // scales, unequal weights, and one parameter held fixed.
+    use goniofit::fit::lm::{finite_difference_jacobian, LeastSquaresProblem};
+    use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
+    let model = by_name("kbs+lambert", &ModelOptions::default()).unwrap();
+    let angles = Layout::hemisphere().with_grid(3, 6, 8).unwrap().angles();
+    let mut samples = Vec::new();
+    let (mut y, mut lambda, mut channel) = (Vec::new(), Vec::new(), Vec::new());
+    for (c, (lam, s)) in [(0.8, 1.0), (1.2, 0.6)].into_iter().enumerate() {
+        let noise = Noise {
+            kind: NoiseKind::Relative,
+            level: 0.05,
+            seed: 7 + c as u64,
+        };
+        let d = generate(
+            model.as_ref(),
+            &[0.3, 2.0, s, 0.05],
+            &angles,
+            lam,
+            Quantity::Radiance,
+            &noise,
+        )
+        .unwrap();
+        lambda.extend(std::iter::repeat_n(lam, d.len()));
+        channel.extend(std::iter::repeat_n(c, d.len()));
+        samples.extend(d.samples);
+        y.extend(d.value);
+    }
+    let geo = Geometry::new(&samples, &lambda, Quantity::Radiance).unwrap();
+    let n = geo.len();
+    let input = FitInput {
+        geo,
+        y,
+        weight: (0..n).map(|i| 0.5 + (i % 3) as f64).collect(),
+        channel,
+        channel_names: vec!["a".into(), "b".into()],
+    };
+    for kind in [
+        ResidualKind::Absolute,
+        ResidualKind::Relative,
+        ResidualKind::Log,
+    ] {
+        let mut layout = ParamLayout::new(model.as_ref(), &input.channel_names);
+        let fixed = layout.find("scale_d[b]")[0];
+        layout.params[fixed].fixed = Some(0.04);
+        let problem = FitProblem::new(model.as_ref(), layout.clone(), &input, kind, 1e-9).unwrap();
+        // Off the data's parameters, so residuals are not small.
+        let x = layout.to_x(&[0.27, 2.3, 0.9, 0.04, 0.7, 0.04]);
+        let (r, jac) = problem.residuals_and_jacobian(&x);
+        assert_eq!(
+            jac.ncols(),
+            5,
+            "{kind:?}: the fixed scale_d[b] has no column"
+        );
+        assert_eq!(r, problem.residuals(&x));
+        let fd = finite_difference_jacobian(|z| problem.residuals(z), &x, None);
+        for j in 0..jac.ncols() {
+            let scale = jac.column(j).amax().max(1e-300);
+            for i in 0..n {
+                let err = (jac[(i, j)] - fd[(i, j)]).abs() / scale;
+                assert!(
+                    err < 1e-6,
+                    "{kind:?} column {j} row {i}: {} vs {}",
+                    jac[(i, j)],
+                    fd[(i, j)]
+                );
+            }
+        }
+    }
+}

@@ -372,10 +372,17 @@ impl<'a> FitProblem<'a> {
 
     /// Per-sample evaluation modes at full parameters `p`.
     pub fn modes(&self, p: &[f64]) -> Vec<Mode> {
+        let parts: Vec<Vec<Mode>> = self
+            .blocks
+            .par_iter()
+            .map(|b| {
+                self.model
+                    .modes(&b.geo, &self.layout.model_params(p, b.channel))
+            })
+            .collect();
         let mut modes = vec![Mode::Closed; self.n];
-        for b in &self.blocks {
-            let mp = self.layout.model_params(p, b.channel);
-            for (m, &i) in self.model.modes(&b.geo, &mp).into_iter().zip(&b.idx) {
+        for (b, part) in self.blocks.iter().zip(parts) {
+            for (m, &i) in part.into_iter().zip(&b.idx) {
                 modes[i] = m;
             }
         }
@@ -385,16 +392,24 @@ impl<'a> FitProblem<'a> {
     /// Unweighted residuals rᵢ of the chosen kind for model values f.
     pub fn raw_residuals(&self, f: &[f64]) -> Vec<f64> {
         f.iter()
-            .zip(&self.y)
-            .map(|(&fi, &yi)| match self.kind {
-                ResidualKind::Absolute => fi - yi,
-                ResidualKind::Relative => (fi - yi) / yi.abs().max(self.floor),
-                ResidualKind::Log => fi.max(self.floor).ln() - yi.max(self.floor).ln(),
-            })
+            .enumerate()
+            .map(|(i, &fi)| self.residual(i, fi))
             .collect()
     }
 
+    /// The unweighted residual of sample i for model value fi.
+    #[inline]
+    fn residual(&self, i: usize, fi: f64) -> f64 {
+        let yi = self.y[i];
+        match self.kind {
+            ResidualKind::Absolute => fi - yi,
+            ResidualKind::Relative => (fi - yi) / yi.abs().max(self.floor),
+            ResidualKind::Log => fi.max(self.floor).ln() - yi.max(self.floor).ln(),
+        }
+    }
+
     /// ∂rᵢ/∂fᵢ for the chosen residual kind.
+    #[inline]
     fn dr_df(&self, i: usize, fi: f64) -> f64 {
         match self.kind {
             ResidualKind::Absolute => 1.0,
@@ -464,28 +479,60 @@ impl FitProblem<'_> {
         })
     }
 
-    /// Weighted residuals and their Jacobian with respect to the solver variables x.
+    /// Weighted residuals and their Jacobian with respect to the solver variables x, in one
+    /// model pass per block (blocks in parallel): r̃ᵢ = √wᵢ rᵢ and
+    /// ∂r̃ᵢ/∂x_j = √wᵢ (∂rᵢ/∂fᵢ) (∂fᵢ/∂p_k) (dp_k/dx_j) for the free parameter k of column j.
     pub fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
         let p = self.layout.from_x(x);
+        let free = self.layout.free();
         if !self.in_domain(&p) {
-            let free = self.layout.free().len();
             return (
                 DVector::from_element(self.n, f64::NAN),
-                DMatrix::from_element(self.n, free, f64::NAN),
+                DMatrix::from_element(self.n, free.len(), f64::NAN),
             );
         }
-        let (f, jac) = self.model_values(&p, true);
-        let jac = jac.expect("requested");
-        let r = self.raw_residuals(&f);
-        let free = self.layout.free();
-        let mut out = DMatrix::zeros(self.n, free.len());
+        // Column of each layout parameter in the solver's Jacobian, with its chain factor.
+        let mut column = vec![None; self.layout.len()];
         for (col, &k) in free.iter().enumerate() {
-            let chain = self.layout.params[k].transform.dp_dx(x[col]);
-            for i in 0..self.n {
-                out[(i, col)] = self.sqrt_w[i] * self.dr_df(i, f[i]) * jac[(i, k)] * chain;
+            column[k] = Some((col, self.layout.params[k].transform.dp_dx(x[col])));
+        }
+        let n_spec = self.model.params().len();
+        let parts: Vec<(Vec<f64>, Vec<f64>)> = self
+            .blocks
+            .par_iter()
+            .map(|b| {
+                let mp = self.layout.model_params(&p, b.channel);
+                let m = b.geo.len();
+                let mut f = vec![0.0; m];
+                let mut jac = vec![0.0; m * n_spec];
+                self.model.eval(&b.geo, &mp, &mut f, Some(&mut jac));
+                // Residuals in place of f; the model Jacobian scaled in place by
+                // √w ∂r/∂f (the chain factor dp/dx is applied when scattering).
+                for (r, &i) in b.idx.iter().enumerate() {
+                    let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
+                    for s in 0..n_spec {
+                        jac[s * m + r] *= d;
+                    }
+                    f[r] = self.sqrt_w[i] * self.residual(i, f[r]);
+                }
+                (f, jac)
+            })
+            .collect();
+        let mut rw = DVector::zeros(self.n);
+        let mut out = DMatrix::zeros(self.n, free.len());
+        for (b, (r, bj)) in self.blocks.iter().zip(parts) {
+            let m = b.idx.len();
+            for (row, &i) in b.idx.iter().enumerate() {
+                rw[i] = r[row];
+            }
+            for s in 0..n_spec {
+                if let Some((col, chain)) = column[self.layout.index[b.channel][s]] {
+                    for (row, &i) in b.idx.iter().enumerate() {
+                        out[(i, col)] = bj[s * m + row] * chain;
+                    }
+                }
             }
         }
-        let rw = DVector::from_iterator(self.n, r.iter().zip(&self.sqrt_w).map(|(r, s)| r * s));
         (rw, out)
     }
 }
