@@ -54,6 +54,8 @@ def main():
     ap.add_argument("--wavelength", type=float, default=1.0)
     ap.add_argument("--init", required=True)
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--also", help="sigma=..,T=..,scale=..: also report the cost of these "
+                    "parameters under this script's model (to compare final costs on one model)")
     args = ap.parse_args()
     init = dict(kv.split("=") for kv in args.init.split(","))
     x0 = np.log([float(init["sigma"]), float(init["T"]), float(init["scale"])])
@@ -69,6 +71,11 @@ def main():
         res = least_squares(resid, x0, method="lm", xtol=1e-10, ftol=1e-10)
         times.append(time.perf_counter() - t0)
     p = np.exp(res.x)
+    also_cost = None
+    if args.also:
+        q = dict(kv.split("=") for kv in args.also.split(","))
+        x = np.log([float(q["sigma"]), float(q["T"]), float(q["scale"])])
+        also_cost = float(0.5 * np.sum(resid(x) ** 2))
     json.dump(
         {
             "seconds_median": float(np.median(times)),
@@ -78,6 +85,7 @@ def main():
             "status": int(res.status),
             "params": {"sigma": p[0], "T": p[1], "scale": p[2]},
             "n": int(len(y)),
+            "also_cost": also_cost,
         },
         sys.stdout,
     )

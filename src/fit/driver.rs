@@ -319,11 +319,18 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
                 }
             })
             .collect();
+        // The lowest cost wins; costs within the refinement's ftol count as a tie, won by
+        // the better-ranked grid point.
+        let ok = |(cost, values): &(f64, Vec<f64>)| cost.is_finite() && sub_exact.in_domain(values);
+        let lowest = refined
+            .iter()
+            .filter(|r| ok(r))
+            .map(|r| r.0)
+            .fold(f64::INFINITY, f64::min);
         let best = refined
             .into_iter()
             .zip(&candidates)
-            .filter(|((cost, values), _)| cost.is_finite() && sub_exact.in_domain(values))
-            .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
+            .find(|(r, _)| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
         if let Some(((_, values), (_, start))) = best {
             p0 = values;
             grid_start = start.clone();
