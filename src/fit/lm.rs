@@ -97,6 +97,10 @@ pub enum Termination {
     Xtol,
     /// Both `Ftol` and `Xtol` hold.
     FtolXtol,
+    /// The Gauss–Newton step from the current point predicts a relative cost reduction of
+    /// at most `ftol`, and the linear model predicted the last step well (see
+    /// [`LevenbergMarquardt::with_predicted_stop`]).
+    Predicted,
     /// Residual orthogonal to the columns of the Jacobian to within `gtol` (includes a zero
     /// residual or a zero gradient).
     Gtol,
@@ -123,7 +127,11 @@ impl Termination {
     pub fn converged(self) -> bool {
         matches!(
             self,
-            Termination::Ftol | Termination::Xtol | Termination::FtolXtol | Termination::Gtol
+            Termination::Ftol
+                | Termination::Xtol
+                | Termination::FtolXtol
+                | Termination::Gtol
+                | Termination::Predicted
         )
     }
 
@@ -136,6 +144,9 @@ impl Termination {
                 "converged: relative cost reduction below ftol and step size below xtol"
             }
             Termination::Gtol => "converged: gradient (residual-column cosine) below gtol",
+            Termination::Predicted => {
+                "converged: the Gauss–Newton step predicts a relative cost reduction below ftol"
+            }
             Termination::MaxIterations => "stopped: maximum number of iterations reached",
             Termination::MaxEvaluations => "stopped: maximum number of evaluations reached",
             Termination::Timeout => "stopped: time limit reached",
@@ -168,6 +179,7 @@ pub struct LevenbergMarquardt {
     interrupt: Option<Arc<AtomicBool>>,
     interrupt_generation: u64,
     polish: bool,
+    predicted_stop: bool,
     work: Option<Work>,
     termination: Option<Termination>,
 }
@@ -196,6 +208,8 @@ struct Work {
     cost_noise: f64,
     /// No step accepted yet (MINPACK's `iter == 1`).
     first: bool,
+    /// Ratio of actual to predicted reduction of the last accepted step.
+    last_ratio: f64,
     nfev: u64,
     njev: u64,
 }
@@ -268,6 +282,7 @@ impl LevenbergMarquardt {
             interrupt: None,
             interrupt_generation: 0,
             polish: false,
+            predicted_stop: false,
             work: None,
             termination: None,
         }
@@ -327,6 +342,18 @@ impl LevenbergMarquardt {
         }
         self.max_evals = v;
         Ok(self)
+    }
+
+    /// Stop before evaluating a trial step when it is the undamped Gauss–Newton step, its
+    /// predicted relative cost reduction ‖J p‖²/‖r‖² is at most `ftol`, and the last accepted
+    /// step's reduction matched its prediction (ratio in [0.75, 1.25], so the linear model
+    /// is trustworthy at this scale): `ftol`'s promise — less than `ftol` of relative
+    /// reduction left — then already holds, and MINPACK's rule would only confirm it with one
+    /// more residual evaluation. Reported as [`Termination::Predicted`]. Default off; ignored
+    /// while polishing is on.
+    pub fn with_predicted_stop(mut self, on: bool) -> Self {
+        self.predicted_stop = on;
+        self
     }
 
     /// Gauss–Newton polishing after convergence (default off). Once a stopping rule on
@@ -763,6 +790,7 @@ where
             polish: None,
             cost_noise: 0.0,
             first: true,
+            last_ratio: 0.0,
             nfev: 1,
             njev: 0,
         });
@@ -933,6 +961,26 @@ where
         let step = -step;
         let trial = &w.x + &step;
         let pnorm = enorm(w.diag.component_mul(&step).iter());
+        // Predicted reduction from the linear model: ‖J p‖² and the λ‖Dp‖² term.
+        let mut jp = DVector::zeros(n);
+        for j in 0..n {
+            let t = step[qr.ipvt[j]];
+            for i in 0..=j {
+                jp[i] += qr.r[(i, j)] * t;
+            }
+        }
+        let temp1 = enorm(jp.iter()) / w.fnorm;
+        if self.predicted_stop
+            && !self.polish
+            && !w.first
+            && w.par == 0.0
+            && (w.last_ratio - 1.0).abs() <= 0.25
+            && temp1 * temp1 <= ftol
+        {
+            self.termination = Some(Termination::Predicted);
+            let cost = 0.5 * w.fnorm * w.fnorm;
+            return Ok((state.param(w.x.clone()).cost(cost), None));
+        }
         if w.first {
             w.delta = w.delta.min(pnorm);
         }
@@ -956,15 +1004,6 @@ where
         } else {
             -1.0
         };
-        // Predicted reduction from the linear model: ‖J p‖² and the λ‖Dp‖² term.
-        let mut jp = DVector::zeros(n);
-        for j in 0..n {
-            let t = step[qr.ipvt[j]];
-            for i in 0..=j {
-                jp[i] += qr.r[(i, j)] * t;
-            }
-        }
-        let temp1 = enorm(jp.iter()) / w.fnorm;
         let temp2 = w.par.sqrt() * pnorm / w.fnorm;
         let prered = temp1 * temp1 + temp2 * temp2 / 0.5;
         let dirder = -(temp1 * temp1 + temp2 * temp2);
@@ -997,6 +1036,7 @@ where
             w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
             w.need_jac = true;
             w.first = false;
+            w.last_ratio = ratio;
         }
 
         // Convergence tests (MINPACK order).
@@ -1175,6 +1215,9 @@ pub struct LmConfig {
     /// already far more precise than their standard errors; turn it on when the last digits
     /// matter (the NIST suite runs with it).
     pub polish: bool,
+    /// See [`LevenbergMarquardt::with_predicted_stop`]. Default false (MINPACK's rules);
+    /// ignored with `polish`.
+    pub predicted_stop: bool,
 }
 
 impl Default for LmConfig {
@@ -1189,6 +1232,7 @@ impl Default for LmConfig {
             progress: false,
             interrupt: None,
             polish: false,
+            predicted_stop: false,
         }
     }
 }
@@ -1267,6 +1311,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         gtol: tol(config.gtol),
         max_evals: config.max_evals.max(1),
         polish: config.polish,
+        predicted_stop: config.predicted_stop,
         ..LevenbergMarquardt::new()
     };
     if let Some(flag) = &config.interrupt {
@@ -1690,6 +1735,45 @@ mod tests {
         assert_eq!(rep.termination, Termination::Ftol);
         assert!(rep.cost > 0.0);
         assert_relative_eq!(rep.x[1], 0.7, epsilon = 0.01);
+    }
+
+    #[test]
+    fn predicted_stop_saves_the_confirming_evaluation() {
+        // Same run with MINPACK's rules and with the predicted-reduction stop: the latter
+        // ends one or more evaluations earlier, at a point whose cost is within ftol
+        // (relative) of the fully converged one.
+        let ftol = 1e-10;
+        let plain = minimize(&decay(), v(&[1.0, 0.1]), &cfg(ftol, 0.0, 0.0));
+        let early = minimize(
+            &decay(),
+            v(&[1.0, 0.1]),
+            &LmConfig {
+                predicted_stop: true,
+                ..cfg(ftol, 0.0, 0.0)
+            },
+        );
+        assert_eq!(plain.termination, Termination::Ftol);
+        assert_eq!(early.termination, Termination::Predicted);
+        assert!(early.termination.converged());
+        assert!(early.evaluations < plain.evaluations);
+        assert!(early.cost >= plain.cost * (1.0 - 1e-15));
+        assert!(
+            early.cost <= plain.cost * (1.0 + ftol),
+            "{} vs {}",
+            early.cost,
+            plain.cost
+        );
+        // Ignored while polishing.
+        let polished = minimize(
+            &decay(),
+            v(&[1.0, 0.1]),
+            &LmConfig {
+                predicted_stop: true,
+                polish: true,
+                ..cfg(ftol, 0.0, 0.0)
+            },
+        );
+        assert_ne!(polished.termination, Termination::Predicted);
     }
 
     #[test]
