@@ -380,7 +380,7 @@ pub fn run_scene(scene: &Scene, config: &RecoverConfig) -> SceneResult {
         weights_are_uncertainties: true,
         lm: LmConfig {
             timeout: config.fit_timeout,
-            ..LmConfig::default()
+            ..FitConfig::default().lm
         },
         ..FitConfig::default()
     };

@@ -107,7 +107,8 @@ pub struct FitArgs {
     /// Fit each group (a `group` column, or each ASTM channel) on its own.
     #[arg(long)]
     pub by_group: bool,
-    /// Threads for fitting several datasets in parallel (default: all cores).
+    /// Threads (default: all cores): datasets are fitted in parallel, and one dataset's
+    /// evaluations are split over the threads.
     #[arg(long)]
     pub threads: Option<usize>,
     /// The measurement files (CSV or ASTM E1392); several files are fitted in parallel.
@@ -194,6 +195,7 @@ pub fn fit_config(
         max_iters: args.max_iter,
         timeout: args.timeout.map(std::time::Duration::from_secs_f64),
         progress: args.progress,
+        predicted_stop: true,
         ..LmConfig::default()
     };
     Ok(FitConfig {
@@ -355,7 +357,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
     let outcomes: Vec<anyhow::Result<Outcome>> = if single {
         let (label, ds) = jobs.pop().expect("one job");
-        vec![fit_dataset(&args, label, ds, true)]
+        vec![pool.install(|| fit_dataset(&args, label, ds, true))]
     } else {
         use rayon::prelude::*;
         pool.install(|| {

@@ -37,6 +37,11 @@
 //!   unless the last trial point had non-finite residuals: then `NoProgress`.
 //! * `Gtol`: the largest cosine between `r` and a column of `J` is at most `gtol` (info 4),
 //!   or machine epsilon (8).
+//! * `Predicted` (optional, [`LevenbergMarquardt::with_predicted_stop`]; goniofit's fits
+//!   use it): the next trial step is the undamped Gauss–Newton step, it predicts a relative
+//!   reduction of at most `ftol`, and the last accepted step's reduction matched its
+//!   prediction within 25 % — so the evaluation that would confirm `Ftol` is skipped. The
+//!   cost is then within about `ftol` (relative) of the converged one.
 //! * `MaxEvaluations`, `MaxIterations`, `Timeout`, `Interrupted` (Ctrl-C, SIGTERM, SIGHUP).
 //! * After `Ftol`/`Xtol` the solver polishes with a few Gauss–Newton steps (see
 //!   [`LevenbergMarquardt::with_polish`]) and then reports the rule that fired.

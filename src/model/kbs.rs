@@ -107,15 +107,20 @@ impl Kbs {
             None => 1.0,
         };
         let h = geo.h[i];
-        // One logarithm for the prefactor unless it leaves the normal range. s enters
-        // linearly (it may be ≤ 0 inside a fit's linear solve), outside the logarithm.
+        // pref · Q directly while both are comfortably normal; otherwise in logarithms (the
+        // product can be normal when a factor is not). s enters linearly (it may be ≤ 0
+        // inside a fit's linear solve), outside the logarithm.
         let pref = (PI * t * t / area) * (h * k_sigma) * (h * k_sigma);
-        let ln_pref = if pref.is_normal() {
-            pref.ln()
+        let unit = if pref.is_normal() && q.ln_q.abs() < 700.0 {
+            pref * q.ln_q.exp()
         } else {
-            (PI * t * t / area).ln() + 2.0 * h.ln() + 2.0 * k_sigma.ln()
+            let ln_pref = if pref.is_normal() {
+                pref.ln()
+            } else {
+                (PI * t * t / area).ln() + 2.0 * h.ln() + 2.0 * k_sigma.ln()
+            };
+            (ln_pref + q.ln_q).exp()
         };
-        let unit = (ln_pref + q.ln_q).exp();
         let inc = s * unit;
         let mut value = inc;
         let mut d_scale = unit;
