@@ -251,7 +251,6 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             ..config.model_opts
         },
     )?;
-    eprintln!("T setup {:?}", t0.elapsed());
     let candidates = init::initial_values(&problem, grid_model.as_ref(), input, &given);
     // Refine each candidate with a quick LM on a subsample (in parallel) and keep the lowest
     // cost: the grid's best point can be a factor of a few off, or sit in the valley of the
@@ -277,7 +276,6 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         Some(_) => Some(loose(Some(EvalMode::Rough))?),
         None => None,
     };
-    eprintln!("T grid {:?}", t0.elapsed());
     let sub = input.subset(&init::subsample(n, init::REFINE_SAMPLES));
     let sub_exact = FitProblem::new(
         refine_model.as_ref(),
@@ -344,9 +342,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     }
     let init_seconds = t0.elapsed().as_secs_f64();
 
-    eprintln!("T refine {:?}", t0.elapsed());
     let first = run_lm(&problem, &p0, &config.lm);
-    eprintln!("T full {:?}", t0.elapsed());
     let mut report = first;
     let mut problem_used = problem;
     let mut verdict = Verdict::Full;
@@ -391,7 +387,6 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         }
     }
     let elapsed = t0.elapsed().as_secs_f64();
-    eprintln!("T verdict {:?}", t0.elapsed());
     let mut result = assemble(
         model,
         input,
