@@ -149,8 +149,13 @@ pub struct FitResult {
     pub evaluations: u64,
     pub jacobian_evaluations: u64,
     pub termination: Termination,
+    /// Wall time of the whole fit (starting values, refinement, LM, verdict).
     pub seconds: f64,
+    /// Of which: up to the end of the starting-value refinement.
     pub init_seconds: f64,
+    /// Of which: up to the grid's candidates (the automatic starting values, before any
+    /// LM iteration).
+    pub start_seconds: f64,
     pub modes: BTreeMap<String, usize>,
     /// Range of g = (2πσ/λ)²(cos θi + cos θr)² over the samples (KBS models).
     pub g_range: Option<(f64, f64)>,
@@ -252,6 +257,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         },
     )?;
     let candidates = init::initial_values(&problem, grid_model.as_ref(), input, &given);
+    let start_seconds = t0.elapsed().as_secs_f64();
     // Refine each candidate with a quick LM on a subsample (in parallel) and keep the lowest
     // cost: the grid's best point can be a factor of a few off, or sit in the valley of the
     // rough asymptote (σ → ∞ at fixed T/σ) while the truth is elsewhere. The refinement
@@ -400,6 +406,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         init_seconds,
     );
     result.start = grid_start;
+    result.start_seconds = start_seconds;
     Ok(result)
 }
 
@@ -771,6 +778,7 @@ fn assemble(
         termination: run.lm.termination,
         seconds,
         init_seconds,
+        start_seconds: 0.0,
         modes,
         g_range,
         fitted,

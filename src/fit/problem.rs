@@ -547,10 +547,11 @@ impl LeastSquaresProblem for FitProblem<'_> {
     }
 
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
-        if let Ok(c) = self.cache.lock() {
-            if let Some((cx, cj)) = c.as_ref() {
-                if cx == x {
-                    return cj.clone();
+        // The solver asks once per accepted point: hand the cached matrix over.
+        if let Ok(mut c) = self.cache.lock() {
+            if c.as_ref().is_some_and(|(cx, _)| cx == x) {
+                if let Some((_, cj)) = c.take() {
+                    return cj;
                 }
             }
         }

@@ -73,6 +73,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "jacobian_evaluations": r.jacobian_evaluations,
         "seconds": r.seconds,
         "init_seconds": r.init_seconds,
+        "start_seconds": r.start_seconds,
         "modes": r.modes,
         "g_range": r.g_range.map(|(a, b)| vec![num(a), num(b)]),
         "input": info.input,

@@ -43,8 +43,10 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     );
     let _ = writeln!(
         s,
-        "    run time        = {:.4} s (starting values {:.4} s)",
-        r.seconds, r.init_seconds
+        "    run time        = {:.4} s (grid search for starting values {:.4} s, their refinement {:.4} s)",
+        r.seconds,
+        r.start_seconds,
+        r.init_seconds - r.start_seconds
     );
     let _ = writeln!(s, "    cost ½Σwr²      = {:.7e}", r.cost);
     let _ = writeln!(s, "    chi-square      = {:.7e}", r.chi2);
