@@ -53,7 +53,7 @@ pub(crate) const CORR_LEN: ParamSpec = ParamSpec {
 
 const PARAMS: [ParamSpec; 3] = [SIGMA, CORR_LEN, super::lambert::SCALE];
 
-/// Per-sample KBS value and its logarithmic derivatives, shared with the mixed model.
+/// Per-sample KBS value and its derivatives.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct KbsPoint {
     /// Radiance (incoherent + coherent).
@@ -62,7 +62,6 @@ pub(crate) struct KbsPoint {
     pub d_sigma: f64,
     pub d_corr: f64,
     pub d_scale: f64,
-    pub mode: Mode,
 }
 
 impl Kbs {
@@ -84,24 +83,47 @@ impl Kbs {
         Ok(Kbs { opts })
     }
 
-    /// Radiance at sample i for σ, T, s.
+    /// g and a of sample i (eq. 37).
     #[inline]
-    pub(crate) fn point(
+    fn g_a(geo: &Geometry, i: usize, sigma: f64, corr: f64) -> (f64, f64) {
+        let lambda = geo.wavelength[i];
+        let k_sigma = 2.0 * PI * sigma / lambda;
+        let k_t = 2.0 * PI * (corr / lambda);
+        ((k_sigma * geo.c[i]).powi(2), geo.vxy2[i] * k_t * k_t * 0.25)
+    }
+
+    /// ln Q of every sample (evaluated together, [`series::ln_q_batch`]), with g and a.
+    fn batch_ln_q(
+        &self,
+        geo: &Geometry,
+        sigma: f64,
+        corr: f64,
+    ) -> (Vec<f64>, Vec<f64>, Vec<series::LnQ>) {
+        let (g, a): (Vec<f64>, Vec<f64>) = (0..geo.len())
+            .map(|i| Self::g_a(geo, i, sigma, corr))
+            .unzip();
+        let mut q = vec![series::smooth(0.0, 0.0); geo.len()];
+        series::ln_q_batch(&g, &a, self.opts.mode, self.opts.tol, &mut q);
+        (g, a, q)
+    }
+
+    /// Radiance at sample i from its g, a and ln Q.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn point_from(
         &self,
         geo: &Geometry,
         i: usize,
         sigma: f64,
         corr: f64,
         s: f64,
+        g: f64,
+        a: f64,
+        q: series::LnQ,
     ) -> KbsPoint {
         let lambda = geo.wavelength[i];
         let k_sigma = 2.0 * PI * sigma / lambda;
         let t = corr / lambda;
-        let k_t = 2.0 * PI * t;
-        let c = geo.c[i];
-        let g = (k_sigma * c).powi(2);
-        let a = geo.vxy2[i] * k_t * k_t * 0.25;
-        let q = series::ln_q(g, a, self.opts.mode, self.opts.tol);
         let area = match self.opts.patch {
             Some((x, y)) => 4.0 * x * y / (lambda * lambda),
             None => 1.0,
@@ -140,7 +162,6 @@ impl Kbs {
             d_sigma,
             d_corr,
             d_scale,
-            mode: q.mode,
         }
     }
 }
@@ -171,17 +192,19 @@ impl Model for Kbs {
     fn radiance(&self, geo: &Geometry, p: &[f64], out: &mut [f64], jac: Option<&mut [f64]>) {
         let (sigma, corr, s) = (p[0], p[1], p[2]);
         let n = geo.len();
+        let (g, a, q) = self.batch_ln_q(geo, sigma, corr);
+        let point = |i: usize| self.point_from(geo, i, sigma, corr, s, g[i], a[i], q[i]);
         match jac {
             None => {
                 for (i, o) in out.iter_mut().enumerate() {
-                    *o = self.point(geo, i, sigma, corr, s).value;
+                    *o = point(i).value;
                 }
             }
             Some(j) => {
                 let (j_sigma, rest) = j.split_at_mut(n);
                 let (j_corr, j_s) = rest.split_at_mut(n);
                 for i in 0..n {
-                    let pt = self.point(geo, i, sigma, corr, s);
+                    let pt = point(i);
                     out[i] = pt.value;
                     j_sigma[i] = pt.d_sigma;
                     j_corr[i] = pt.d_corr;
@@ -192,8 +215,10 @@ impl Model for Kbs {
     }
 
     fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
-        (0..geo.len())
-            .map(|i| self.point(geo, i, p[0], p[1], p[2]).mode)
+        self.batch_ln_q(geo, p[0], p[1])
+            .2
+            .iter()
+            .map(|q| q.mode)
             .collect()
     }
 }
