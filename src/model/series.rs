@@ -40,10 +40,9 @@
 //! `auto`: smooth if its bound holds (possible only for g ≤ 2 tol); else the asymptotic
 //! completion if it is accepted; else the series.
 //!
-//! Batches ([`ln_q_batch`], what the models call): the same results bit for bit, but the
-//! samples that try the asymptotic expansion are evaluated four at a time in lock-step
-//! (the per-order polynomial work vectorises), and on x86-64 CPUs with AVX2 the batch runs
-//! in a copy of this code compiled for AVX2, chosen at run time.
+//! Batches ([`ln_q_batch`], what the models call): the same results bit for bit; on x86-64
+//! CPUs with AVX2 the batch runs in a copy of this code compiled for AVX2, chosen at run
+//! time.
 //!
 //! Accuracy (`series`, and `auto` at every switch): |Δ ln Q| ≤ tol (the relative error of
 //! Q, also when Q itself under- or overflows), |Δ(g ∂lnQ/∂g)| ≤ tol (1 + |g ∂lnQ/∂g|) and
@@ -149,7 +148,6 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
 
 /// The series, summed outward from its largest term until rigorous bounds on the omitted
 /// terms are below `tol`/10 relative to S and to the derivative sums (see the module doc).
-#[inline(always)]
 pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     if g < 10.0 && a < 600.0 {
         return series_from_one(g, a, tol);
@@ -523,101 +521,71 @@ const ASYM_G_MIN: f64 = 40.0;
 /// The asymptotic completion of the rough approximation (module doc), or `None` when its
 /// error estimate does not reach `tol` within [`ASYM_ORDERS`] orders.
 pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
-    asymptotic_lanes([g], [a], tol)[0]
-}
-
-/// [`asymptotic`] for `L` samples at once, in lock-step: every lane performs exactly the
-/// operations of the one-sample evaluation (so the results are identical), and the lanes'
-/// arithmetic is laid out for the compiler to vectorise. Runs until every lane has been
-/// accepted or rejected.
-#[inline(always)]
-fn asymptotic_lanes<const L: usize>(g: [f64; L], a: [f64; L], tol: f64) -> [Option<LnQ>; L] {
-    let b: [f64; L] = std::array::from_fn(|l| a[l] / g[l]);
-    let x: [f64; L] = std::array::from_fn(|l| 1.0 / g[l]);
+    let b = a / g;
+    let x = 1.0 / g;
     let target = 0.5 * tol;
-    let mut out = [None; L];
-    let mut open = L;
-    let mut decided = [false; L];
     // R = Σ g^{−n} P_n(b); r_g = g ∂R/∂g|_b = −Σ n g^{−n} P_n; r_b = ∂R/∂b.
-    let (mut r, mut r_g, mut r_b) = ([1.0f64; L], [0.0f64; L], [0.0f64; L]);
-    let mut gp = [1.0f64; L];
+    let (mut r, mut r_g, mut r_b) = (1.0f64, 0.0f64, 0.0f64);
+    let mut gp = 1.0;
     // Sizes and error estimates of the previous two orders.
-    let (mut prev, mut prev2) = ([f64::INFINITY; L], [f64::INFINITY; L]);
-    let (mut err_prev, mut err_prev2) = ([f64::INFINITY; L], [f64::INFINITY; L]);
+    let (mut prev, mut prev2) = (f64::INFINITY, f64::INFINITY);
+    let (mut err_prev, mut err_prev2) = (f64::INFINITY, f64::INFINITY);
     // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): four
     // independent Horner chains in b², no arrays written and re-read.
-    let y: [f64; L] = std::array::from_fn(|l| b[l] * b[l]);
+    let y = b * b;
     for (n, (coef, dcoef)) in ASYM.iter().zip(ASYM_D.iter()).enumerate().skip(1) {
+        gp *= x;
         let deg = 2 * n;
-        let mut pe = [coef[deg]; L];
-        let mut po = [0.0f64; L];
-        let mut de = [0.0f64; L];
-        let mut d_o = [dcoef[deg - 1]; L];
+        let (mut pe, mut po, mut de, mut d_o) = (coef[deg], 0.0f64, 0.0f64, dcoef[deg - 1]);
         let mut j = deg;
         while j >= 2 {
             // P: even index j−2, odd index j−1; P': even index j−2, odd index j−3.
-            for l in 0..L {
-                pe[l] = pe[l] * y[l] + coef[j - 2];
-                po[l] = po[l] * y[l] + coef[j - 1];
-                de[l] = de[l] * y[l] + dcoef[j - 2];
-            }
+            pe = pe * y + coef[j - 2];
+            po = po * y + coef[j - 1];
+            de = de * y + dcoef[j - 2];
             if j >= 3 {
-                for l in 0..L {
-                    d_o[l] = d_o[l] * y[l] + dcoef[j - 3];
-                }
+                d_o = d_o * y + dcoef[j - 3];
             }
             j -= 2;
         }
-        for l in 0..L {
-            gp[l] *= x[l];
-            let p = pe[l] + b[l] * po[l];
-            let dp = de[l] + b[l] * d_o[l];
-            let term = gp[l] * p;
-            let term_b = gp[l] * dp;
-            r[l] += term;
-            r_g[l] -= n as f64 * term;
-            r_b[l] += term_b;
-            if decided[l] {
-                continue;
-            }
-            let size = term.abs();
-            let err = size * (1.0 + n as f64) + b[l] * term_b.abs();
-            // The first omitted order is estimated from the last one and the larger of
-            // the last two decay ratios (so that an order that happens to be small, P_n(b)
-            // near a root, cannot stop the expansion early); accepted only in a clearly
-            // decaying phase. (Written without divisions: q1 = err/err_prev,
-            // q2 = err_prev/err_prev2 < ½ and err·max(q1, q2) ≤ 0.3 target r.)
-            let t = 0.3 * target * r[l].abs();
-            if n >= 3
-                && err < 0.5 * err_prev[l]
-                && err_prev[l] < 0.5 * err_prev2[l]
-                && err * err <= t * err_prev[l]
-                && err * err_prev[l] <= t * err_prev2[l]
-                && r[l] > 0.0
-            {
-                out[l] = Some(LnQ {
-                    ln_q: -b[l] + (r[l] / g[l] / g[l]).ln(),
-                    d_g: (b[l] - 2.0 + (r_g[l] - b[l] * r_b[l]) / r[l]) * x[l],
-                    d_a: (-1.0 + r_b[l] / r[l]) * x[l],
-                    mode: Mode::Rough,
-                });
-                decided[l] = true;
-                open -= 1;
-            } else if n >= 3 && size >= prev[l].max(prev2[l]) {
-                // The asymptotic series has started to diverge.
-                decided[l] = true;
-                open -= 1;
-            }
-            prev2[l] = prev[l];
-            prev[l] = size;
-            err_prev2[l] = err_prev[l];
-            err_prev[l] = err;
+        let p = pe + b * po;
+        let dp = de + b * d_o;
+        let term = gp * p;
+        let term_b = gp * dp;
+        r += term;
+        r_g -= n as f64 * term;
+        r_b += term_b;
+        let size = term.abs();
+        let err = size * (1.0 + n as f64) + b * term_b.abs();
+        // The first omitted order is estimated from the last one and the larger of the
+        // last two decay ratios (so that an order that happens to be small, P_n(b) near a
+        // root, cannot stop the expansion early); accepted only in a clearly decaying phase.
+        // (Written without divisions: q1 = err/err_prev, q2 = err_prev/err_prev2 < ½ and
+        // err·max(q1, q2) ≤ 0.3 target r.)
+        let t = 0.3 * target * r.abs();
+        if n >= 3
+            && err < 0.5 * err_prev
+            && err_prev < 0.5 * err_prev2
+            && err * err <= t * err_prev
+            && err * err_prev <= t * err_prev2
+            && r > 0.0
+        {
+            return Some(LnQ {
+                ln_q: -b + (r / g / g).ln(),
+                d_g: (b - 2.0 + (r_g - b * r_b) / r) * x,
+                d_a: (-1.0 + r_b / r) * x,
+                mode: Mode::Rough,
+            });
         }
-        if open == 0 {
-            break;
+        if n >= 3 && size >= prev.max(prev2) {
+            return None; // the asymptotic series has started to diverge
         }
+        prev2 = prev;
+        prev = size;
+        err_prev2 = err_prev;
+        err_prev = err;
     }
-    out
+    None
 }
 
 /// The smooth approximation with the m = 2 correction of its derivatives, when the bound
@@ -667,13 +635,10 @@ pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
     series(g, a, tol)
 }
 
-/// Samples the asymptotic expansion evaluates in lock-step in [`ln_q_batch`].
-const LANES: usize = 4;
-
 /// ln Q for a batch of samples: `out[i]` = [`ln_q`]`(g[i], a[i], mode, tol)`, identical
-/// results, faster: in `auto` mode the samples that try the asymptotic expansion are
-/// evaluated [`LANES`] at a time in lock-step, and on x86-64 CPUs with AVX2 the whole
-/// batch runs in code compiled for AVX2 (chosen at run time; the binary stays portable).
+/// results, faster: on x86-64 CPUs with AVX2 the batch runs in a copy of the evaluation
+/// compiled for AVX2 (chosen at run time; the binary stays portable), where the series'
+/// blocks of ratios vectorise four wide.
 /// Panics if the slices differ in length.
 pub fn ln_q_batch(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &mut [LnQ]) {
     assert!(g.len() == a.len() && g.len() == out.len());
@@ -694,42 +659,8 @@ unsafe fn ln_q_batch_avx2(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &
 
 #[inline(always)]
 fn ln_q_batch_body(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &mut [LnQ]) {
-    if mode != EvalMode::Auto {
-        for ((o, &gi), &ai) in out.iter_mut().zip(g).zip(a) {
-            *o = ln_q(gi, ai, mode, tol);
-        }
-        return;
-    }
-    // Samples for the asymptotic expansion wait in `lanes` until LANES of them are there.
-    let mut lanes = [0usize; LANES];
-    let mut waiting = 0;
-    let flush = |lanes: &[usize], out: &mut [LnQ]| {
-        // Unused lanes repeat the first sample.
-        let pick = |l: usize| lanes[if l < lanes.len() { l } else { 0 }];
-        let res = asymptotic_lanes(
-            std::array::from_fn::<f64, LANES, _>(|l| g[pick(l)]),
-            std::array::from_fn::<f64, LANES, _>(|l| a[pick(l)]),
-            tol,
-        );
-        for (&i, q) in lanes.iter().zip(res) {
-            out[i] = q.unwrap_or_else(|| series(g[i], a[i], tol));
-        }
-    };
-    for i in 0..g.len() {
-        let (gi, ai) = (g[i], a[i]);
-        if tries_asymptotic(gi, ai) {
-            lanes[waiting] = i;
-            waiting += 1;
-            if waiting == LANES {
-                flush(&lanes, out);
-                waiting = 0;
-            }
-        } else {
-            out[i] = auto(gi, ai, tol);
-        }
-    }
-    if waiting > 0 {
-        flush(&lanes[..waiting], out);
+    for ((o, &gi), &ai) in out.iter_mut().zip(g).zip(a) {
+        *o = ln_q(gi, ai, mode, tol);
     }
 }
 
@@ -778,8 +709,8 @@ mod tests {
 
     #[test]
     fn batch_equals_one_by_one() {
-        // Lock-step lanes (with padding), the AVX2 copy where the CPU has it and the generic
-        // body: bit-identical to the one-sample evaluation in every mode.
+        // The AVX2 copy where the CPU has it and the generic body: bit-identical to the
+        // one-sample evaluation in every mode, on every path of `auto`.
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut uniform = || {
             state ^= state << 13;
@@ -818,16 +749,21 @@ mod tests {
                 }
             }
         }
-        // The sample exercises the lock-step path, accepted and rejected lanes.
-        let lanes = (0..n).filter(|&i| tries_asymptotic(g[i], a[i])).count();
-        let rough = (0..n)
-            .filter(|&i| {
-                tries_asymptotic(g[i], a[i]) && auto(g[i], a[i], 1e-10).mode == Mode::Rough
-            })
-            .count();
+        // The sample exercises every path: smooth, asymptotic accepted and rejected, series.
+        let tried = (0..n).filter(|&i| tries_asymptotic(g[i], a[i])).count();
+        let count = |m: Mode| {
+            (0..n)
+                .filter(|&i| auto(g[i], a[i], 1e-10).mode == m)
+                .count()
+        };
+        let rough = count(Mode::Rough);
         assert!(
-            lanes > 100 && rough > 20 && rough < lanes,
-            "{lanes} {rough}"
+            count(Mode::Smooth) > 20 && count(Mode::Series) > 100,
+            "too few"
+        );
+        assert!(
+            tried > 100 && rough > 20 && rough < tried,
+            "{tried} {rough}"
         );
     }
 
