@@ -141,7 +141,13 @@ impl Kbs {
             } else {
                 (PI * t * t / area).ln() + 2.0 * h.ln() + 2.0 * k_sigma.ln()
             };
-            (ln_pref + q.ln_q).exp()
+            // Below e^−746 the result is 0 (and libm's exp takes a slow path to say so).
+            let ln_unit = ln_pref + q.ln_q;
+            if ln_unit < -746.0 {
+                0.0
+            } else {
+                ln_unit.exp()
+            }
         };
         let inc = s * unit;
         let mut value = inc;
