@@ -246,107 +246,20 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         ));
     }
     let floor = residual_floor(config, &input.y);
-    let problem = FitProblem::new(model, layout.clone(), input, config.residual, floor)?;
     let mut given = fixed.clone();
     assign(&layout, &config.init, &mut given)?;
-    let grid_model = model::by_name(
-        model.name(),
-        &ModelOptions {
-            tol: GRID_TOL.max(config.model_opts.tol),
-            ..config.model_opts
-        },
-    )?;
-    let candidates = init::initial_values(&problem, grid_model.as_ref(), input, &given);
-    let start_seconds = t0.elapsed().as_secs_f64();
-    // Refine each candidate with a quick LM on a subsample (in parallel) and keep the lowest
-    // cost: the grid's best point can be a factor of a few off, or sit in the valley of the
-    // rough asymptote (σ → ∞ at fixed T/σ) while the truth is elsewhere. The refinement
-    // only has to land near the optimum (the full fit then works at the requested
-    // accuracy), so it uses the model at [`REFINE_TOL`], and a candidate in the rough band
-    // (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation, which is
-    // exact in that limit and avoids the O(√g) series far from the specular peak; its
-    // refined cost is then taken with the exact model.
-    let loose = |mode: Option<EvalMode>| {
-        model::by_name(
-            model.name(),
-            &ModelOptions {
-                tol: REFINE_TOL.max(config.model_opts.tol),
-                mode: mode.unwrap_or(config.model_opts.mode),
-                ..config.model_opts
-            },
-        )
-    };
-    let refine_model = loose(None)?;
-    let sigma_k = layout.find("sigma").first().copied();
-    let rough_model = match sigma_k {
-        Some(_) => Some(loose(Some(EvalMode::Rough))?),
-        None => None,
-    };
-    let sub = input.subset(&init::subsample(n, init::REFINE_SAMPLES));
-    let sub_exact = FitProblem::new(
-        refine_model.as_ref(),
-        layout.clone(),
-        &sub,
-        config.residual,
-        floor,
-    )?;
-    let sub_rough = match &rough_model {
-        Some(m) => Some(FitProblem::new(
-            m.as_ref(),
-            layout.clone(),
-            &sub,
-            config.residual,
-            floor,
-        )?),
-        None => None,
-    };
-    let coarse = LmConfig {
-        ftol: 1e-6,
-        xtol: 1e-6,
-        max_iters: 100,
-        progress: false,
-        predicted_stop: true,
-        ..config.lm.clone()
-    };
-    let mut grid_start = candidates[0].1.clone();
-    let mut p0 = grid_start.clone();
-    if sub.y.len() > n_free {
-        let refined: Vec<(f64, Vec<f64>)> = candidates
-            .par_iter()
-            .map(|(_, start)| {
-                let rough_band =
-                    sigma_k.is_some_and(|k| median_g(&sub, start[k]) > init::ROUGH_BAND_G);
-                match (&sub_rough, rough_band) {
-                    (Some(rough), true) => {
-                        let run = run_lm(rough, start, &coarse);
-                        let cost = 0.5 * sub_exact.weighted_residuals(&run.values).norm_squared();
-                        (cost, run.values)
-                    }
-                    _ => {
-                        let run = run_lm(&sub_exact, start, &coarse);
-                        (run.lm.cost, run.values)
-                    }
-                }
-            })
-            .collect();
-        // The lowest cost wins; costs within the refinement's ftol count as a tie, won by
-        // the better-ranked grid point.
-        let ok = |(cost, values): &(f64, Vec<f64>)| cost.is_finite() && sub_exact.in_domain(values);
-        let lowest = refined
-            .iter()
-            .filter(|r| ok(r))
-            .map(|r| r.0)
-            .fold(f64::INFINITY, f64::min);
-        let best = refined
-            .into_iter()
-            .zip(&candidates)
-            .find(|(r, _)| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
-        if let Some(((_, values), (_, start))) = best {
-            p0 = values;
-            grid_start = start.clone();
-        }
-    }
-    let init_seconds = t0.elapsed().as_secs_f64();
+    // The full problem is built while the starting values are searched for on subsamples.
+    let (problem, start) = rayon::join(
+        || FitProblem::new(model, layout.clone(), input, config.residual, floor),
+        || starting_point(model, &layout, input, config, floor, &given, t0),
+    );
+    let problem = problem?;
+    let Start {
+        p0,
+        grid_start,
+        start_seconds,
+        init_seconds,
+    } = start?;
 
     let first = run_lm(&problem, &p0, &config.lm);
     let mut report = first;
@@ -408,6 +321,139 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     result.start = grid_start;
     result.start_seconds = start_seconds;
     Ok(result)
+}
+
+/// Where the full fit starts, and when the search for it ended.
+struct Start {
+    /// The refined starting point (layout order).
+    p0: Vec<f64>,
+    /// The grid point whose refinement won.
+    grid_start: Vec<f64>,
+    /// Seconds from the fit's start to the grid's candidates.
+    start_seconds: f64,
+    /// Seconds from the fit's start to the end of the refinement.
+    init_seconds: f64,
+}
+
+/// The starting point: the grid of [`init::initial_values`], then the quick refinement of
+/// its candidates, all on subsamples (so it runs beside the setup of the full problem).
+fn starting_point(
+    model: &dyn Model,
+    layout: &ParamLayout,
+    input: &FitInput,
+    config: &FitConfig,
+    floor: f64,
+    given: &[Option<f64>],
+    t0: Instant,
+) -> Result<Start> {
+    let n = input.geo.len();
+    let n_free = layout.free().len();
+    let grid_model = model::by_name(
+        model.name(),
+        &ModelOptions {
+            tol: GRID_TOL.max(config.model_opts.tol),
+            ..config.model_opts
+        },
+    )?;
+    // Refine each candidate with a quick LM on a subsample (in parallel) and keep the lowest
+    // cost: the grid's best point can be a factor of a few off, or sit in the valley of the
+    // rough asymptote (σ → ∞ at fixed T/σ) while the truth is elsewhere. The refinement
+    // only has to land near the optimum (the full fit then works at the requested
+    // accuracy), so it uses the model at [`REFINE_TOL`], and a candidate in the rough band
+    // (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation, which is
+    // exact in that limit and avoids the O(√g) series far from the specular peak; its
+    // refined cost is then taken with the exact model.
+    let loose = |mode: Option<EvalMode>| {
+        model::by_name(
+            model.name(),
+            &ModelOptions {
+                tol: REFINE_TOL.max(config.model_opts.tol),
+                mode: mode.unwrap_or(config.model_opts.mode),
+                ..config.model_opts
+            },
+        )
+    };
+    let refine_model = loose(None)?;
+    let sigma_k = layout.find("sigma").first().copied();
+    let rough_model = match sigma_k {
+        Some(_) => Some(loose(Some(EvalMode::Rough))?),
+        None => None,
+    };
+    let sub = input.subset(&init::subsample(n, init::REFINE_SAMPLES));
+    let sub_exact = FitProblem::new(
+        refine_model.as_ref(),
+        layout.clone(),
+        &sub,
+        config.residual,
+        floor,
+    )?;
+    let sub_rough = match &rough_model {
+        Some(m) => Some(FitProblem::new(
+            m.as_ref(),
+            layout.clone(),
+            &sub,
+            config.residual,
+            floor,
+        )?),
+        None => None,
+    };
+    // The grid runs on an evenly spaced part of the refinement's subsample (the same
+    // samples as an evenly spaced subsample of the whole data).
+    let candidates = init::initial_values(&sub_exact, grid_model.as_ref(), &sub, given);
+    let start_seconds = t0.elapsed().as_secs_f64();
+    let coarse = LmConfig {
+        ftol: 1e-6,
+        xtol: 1e-6,
+        max_iters: 100,
+        progress: false,
+        predicted_stop: true,
+        ..config.lm.clone()
+    };
+    let mut grid_start = candidates[0].1.clone();
+    let mut p0 = grid_start.clone();
+    if sub.y.len() > n_free {
+        let refined: Vec<(f64, Vec<f64>)> = candidates
+            .par_iter()
+            .map(|(_, start)| {
+                let rough_band =
+                    sigma_k.is_some_and(|k| median_g(&sub, start[k]) > init::ROUGH_BAND_G);
+                match (&sub_rough, rough_band) {
+                    (Some(rough), true) => {
+                        let run = run_lm(rough, start, &coarse);
+                        let cost = 0.5 * sub_exact.weighted_residuals(&run.values).norm_squared();
+                        (cost, run.values)
+                    }
+                    _ => {
+                        let run = run_lm(&sub_exact, start, &coarse);
+                        (run.lm.cost, run.values)
+                    }
+                }
+            })
+            .collect();
+        // The lowest cost wins; costs within the refinement's ftol count as a tie, won by
+        // the better-ranked grid point.
+        let ok = |(cost, values): &(f64, Vec<f64>)| cost.is_finite() && sub_exact.in_domain(values);
+        let lowest = refined
+            .iter()
+            .filter(|r| ok(r))
+            .map(|r| r.0)
+            .fold(f64::INFINITY, f64::min);
+        let best = refined
+            .into_iter()
+            .zip(&candidates)
+            .find(|(r, _)| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
+        if let Some(((_, values), (_, start))) = best {
+            p0 = values;
+            grid_start = start.clone();
+        }
+    }
+    let init_seconds = t0.elapsed().as_secs_f64();
+    Ok(Start {
+        p0,
+        grid_start,
+        start_seconds,
+        init_seconds,
+    })
 }
 
 /// An LM run in parameter space.

@@ -56,9 +56,10 @@ pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::Pa
     LINEAR.contains(&model_specs[layout.params[k].spec].name)
 }
 
-/// Starting values for every layout parameter. `given[k]` holds a user's `--init` or
-/// `--fix` value (used as is, and not searched over). Returns full parameter values and the
-/// grid's best cost.
+/// Starting values for every layout parameter, from the grid over `input` (which `problem`
+/// was built on; the fit passes its refinement subsample). `given[k]` holds a user's
+/// `--init` or `--fix` value (used as is, and not searched over). Returns the candidates,
+/// best first: (grid cost, full parameter values).
 ///
 /// `grid_model` is the model the grid is evaluated with: the fit's model at a loose
 /// tolerance (the grid only ranks candidates; LM then works at the requested one). For KBS
@@ -257,12 +258,31 @@ pub fn subsample(n: usize, max: usize) -> Vec<usize> {
     (0..n).step_by(stride).collect()
 }
 
-/// Median of a non-empty slice (NaN-free).
+/// Median of a non-empty slice (NaN-free; the upper median for an even length; NaN when
+/// empty), in linear time.
 pub fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(|a, b| a.total_cmp(b));
-    if s.is_empty() {
+    if v.is_empty() {
         return f64::NAN;
     }
-    s[s.len() / 2]
+    let mut s = v.to_vec();
+    let k = s.len() / 2;
+    *s.select_nth_unstable_by(k, |a, b| a.total_cmp(b)).1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_is_the_upper_middle_of_the_sorted_values() {
+        assert!(median(&[]).is_nan());
+        assert_eq!(median(&[3.0]), 3.0);
+        assert_eq!(median(&[4.0, 1.0]), 4.0);
+        assert_eq!(median(&[5.0, -1.0, 2.0, 2.0, 9.0]), 2.0);
+        let v: Vec<f64> = (0..1001)
+            .map(|i| ((i * 7919) % 1001) as f64 * 0.5)
+            .collect();
+        assert_eq!(median(&v), 250.0);
+        assert_eq!(subsample(10, 4), vec![0, 3, 6, 9]);
+    }
 }
