@@ -16,6 +16,7 @@
 mod problems;
 
 use goniofit::fit::lm::{minimize, LeastSquaresProblem as _, LmConfig};
+use goniofit::fit::stats::median;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use problems::{lre, Nist};
@@ -126,11 +127,6 @@ fn run_theirs(p: &Nist, start: &[f64]) -> Outcome {
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn main() {
     // `cargo bench` passes `--bench`; nothing else to parse.
     let repeats: usize = std::env::var("NIST_BENCH_REPEATS")
@@ -222,8 +218,8 @@ fn main() {
         t_theirs.push(acc[1]);
         t_plain.push(acc[2]);
     }
-    let mp = median(t_plain);
-    let (mo, mt) = (median(t_ours), median(t_theirs));
+    let mp = median(&t_plain);
+    let (mo, mt) = (median(&t_ours), median(&t_theirs));
 
     println!();
     println!(

@@ -43,6 +43,24 @@ pub enum Error {
 }
 
 impl Error {
+    /// [`Error::Input`]: `message` about the value in `column` at `line` of `path`.
+    pub fn input(path: &std::path::Path, line: usize, column: &str, message: String) -> Self {
+        Error::Input {
+            path: path.to_path_buf(),
+            line,
+            column: column.to_string(),
+            message,
+        }
+    }
+
+    /// [`Error::File`]: `message` about the whole of `path`.
+    pub fn file(path: &std::path::Path, message: String) -> Self {
+        Error::File {
+            path: path.to_path_buf(),
+            message,
+        }
+    }
+
     /// Whether the error is the user's input or usage (CLI exit code 2) rather than an
     /// internal failure (exit code 1).
     pub fn is_user_error(&self) -> bool {

@@ -25,6 +25,7 @@
 use crate::error::{Error, Result};
 use crate::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
 use crate::fit::lm::{LmConfig, Termination};
+use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
 use crate::model::{self, ModelOptions};
 use crate::synth::{self, Layout, Noise, NoiseKind};
@@ -396,21 +397,6 @@ pub fn run_scene(scene: &Scene, config: &RecoverConfig) -> SceneResult {
             error: None,
         },
         Err(e) => fail(n, e),
-    }
-}
-
-/// Median of a slice (NaN for an empty one).
-pub fn median(v: &[f64]) -> f64 {
-    let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
-    if s.is_empty() {
-        return f64::NAN;
-    }
-    s.sort_by(|a, b| a.total_cmp(b));
-    let m = s.len() / 2;
-    if s.len() % 2 == 1 {
-        s[m]
-    } else {
-        0.5 * (s[m - 1] + s[m])
     }
 }
 

@@ -678,14 +678,7 @@ pub fn generate(
 /// The model's values on a prepared batch, checked: right parameter count, every value
 /// finite.
 pub fn evaluate(model: &dyn Model, params: &[f64], geo: &Geometry) -> Result<Vec<f64>> {
-    if params.len() != model.params().len() {
-        return Err(Error::Usage(format!(
-            "model {} takes {} parameters, got {}",
-            model.name(),
-            model.params().len(),
-            params.len()
-        )));
-    }
+    crate::model::check_param_count(model, params)?;
     for (spec, v) in model.params().iter().zip(params) {
         crate::model::check_param_value(spec, *v)?;
     }

@@ -18,9 +18,9 @@ use crate::fit::driver::{self, FitConfig, FitInput};
 use crate::fit::init;
 use crate::fit::lm::{self, LeastSquaresProblem, LmConfig};
 use crate::fit::problem::{FitProblem, ParamLayout, ResidualKind};
+use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
 use crate::model::{self, EvalMode, Model, ModelOptions};
-use crate::recover::median;
 use crate::synth::{self, Layout, Noise};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -201,16 +201,21 @@ fn eval(model: &dyn Model, geo: &Geometry, p: &[f64]) -> Vec<f64> {
     out
 }
 
-/// Noise-free fit data from the reference model.
-pub fn fit_input() -> Result<FitInput> {
-    let reference = model::by_name(
+/// The reference: the KBS series at [`REFERENCE_TOL`].
+fn reference_model() -> Result<Box<dyn Model>> {
+    model::by_name(
         "kbs",
         &ModelOptions {
             mode: EvalMode::Series,
             tol: REFERENCE_TOL,
             patch: None,
         },
-    )?;
+    )
+}
+
+/// Noise-free fit data from the reference model.
+pub fn fit_input() -> Result<FitInput> {
+    let reference = reference_model()?;
     let angles = Layout::parse(FIT_LAYOUT)?.angles();
     let data = synth::generate(
         reference.as_ref(),
@@ -271,14 +276,7 @@ pub fn solver_settings() -> Vec<(String, u8, LmConfig)> {
 
 /// Run the whole table; `on_step(label)` is called after each row.
 pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkPrecision> {
-    let reference = model::by_name(
-        "kbs",
-        &ModelOptions {
-            mode: EvalMode::Series,
-            tol: REFERENCE_TOL,
-            patch: None,
-        },
-    )?;
+    let reference = reference_model()?;
     let geo = geometry(EVAL_LAYOUT)?;
     let refs: Vec<Vec<f64>> = regimes()
         .iter()

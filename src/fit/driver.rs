@@ -495,7 +495,7 @@ fn median_g(input: &FitInput, sigma: f64) -> f64 {
     let g: Vec<f64> = (0..input.geo.len())
         .map(|i| input.geo.g(i, sigma))
         .collect();
-    init::median(&g)
+    stats::median(&g)
 }
 
 /// The floor of relative and log residuals: `config.floor`, or 1e-6 × max |y|.

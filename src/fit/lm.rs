@@ -2027,6 +2027,7 @@ mod tests {
             Xtol,
             FtolXtol,
             Gtol,
+            Predicted,
             MaxIterations,
             MaxEvaluations,
             Timeout,

@@ -327,30 +327,35 @@ impl<'a> FitProblem<'a> {
         self.n == 0
     }
 
-    /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
-    pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
+    /// Every block's model values and, on request, its model Jacobian (column-major,
+    /// block rows × model parameters), evaluated in parallel; `finish(block, f, jac)` runs
+    /// on each block's result in the same task.
+    fn eval_blocks(
+        &self,
+        p: &[f64],
+        want_jac: bool,
+        finish: impl Fn(&Block, &mut [f64], &mut [f64]) + Sync,
+    ) -> Vec<(Vec<f64>, Vec<f64>)> {
         let n_spec = self.model.params().len();
-        let parts: Vec<(Vec<f64>, Vec<f64>)> = self
-            .blocks
+        self.blocks
             .par_iter()
             .map(|b| {
                 let mp = self.layout.model_params(p, b.channel);
                 let m = b.geo.len();
-                let mut out = vec![0.0; m];
-                let mut jac = if want_jac {
-                    vec![0.0; m * n_spec]
-                } else {
-                    Vec::new()
-                };
-                self.model.eval(
-                    &b.geo,
-                    &mp,
-                    &mut out,
-                    if want_jac { Some(&mut jac) } else { None },
-                );
-                (out, jac)
+                let mut f = vec![0.0; m];
+                let mut jac = vec![0.0; if want_jac { m * n_spec } else { 0 }];
+                self.model
+                    .eval(&b.geo, &mp, &mut f, want_jac.then_some(&mut jac[..]));
+                finish(b, &mut f, &mut jac);
+                (f, jac)
             })
-            .collect();
+            .collect()
+    }
+
+    /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
+    pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
+        let n_spec = self.model.params().len();
+        let parts = self.eval_blocks(p, want_jac, |_, _, _| {});
         let mut f = vec![0.0; self.n];
         let mut jac = want_jac.then(|| DMatrix::zeros(self.n, self.layout.len()));
         for (b, (out, bj)) in self.blocks.iter().zip(parts) {
@@ -497,27 +502,18 @@ impl FitProblem<'_> {
             column[k] = Some((col, self.layout.params[k].transform.dp_dx(x[col])));
         }
         let n_spec = self.model.params().len();
-        let parts: Vec<(Vec<f64>, Vec<f64>)> = self
-            .blocks
-            .par_iter()
-            .map(|b| {
-                let mp = self.layout.model_params(&p, b.channel);
-                let m = b.geo.len();
-                let mut f = vec![0.0; m];
-                let mut jac = vec![0.0; m * n_spec];
-                self.model.eval(&b.geo, &mp, &mut f, Some(&mut jac));
-                // Residuals in place of f; the model Jacobian scaled in place by
-                // √w ∂r/∂f (the chain factor dp/dx is applied when scattering).
-                for (r, &i) in b.idx.iter().enumerate() {
-                    let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
-                    for s in 0..n_spec {
-                        jac[s * m + r] *= d;
-                    }
-                    f[r] = self.sqrt_w[i] * self.residual(i, f[r]);
+        // Residuals in place of f; the model Jacobian scaled in place by √w ∂r/∂f (the
+        // chain factor dp/dx is applied when scattering).
+        let parts = self.eval_blocks(&p, true, |b, f, jac| {
+            let m = f.len();
+            for (r, &i) in b.idx.iter().enumerate() {
+                let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
+                for s in 0..n_spec {
+                    jac[s * m + r] *= d;
                 }
-                (f, jac)
-            })
-            .collect();
+                f[r] = self.sqrt_w[i] * self.residual(i, f[r]);
+            }
+        });
         let mut rw = DVector::zeros(self.n);
         let mut out = DMatrix::zeros(self.n, free.len());
         for (b, (r, bj)) in self.blocks.iter().zip(parts) {

@@ -85,16 +85,8 @@ impl Header {
 
 /// Parse an ASTM file (text already decoded, BOM removed).
 pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Dataset> {
-    let input_err = |line: usize, column: &str, message: String| Error::Input {
-        path: path.to_path_buf(),
-        line,
-        column: column.to_string(),
-        message,
-    };
-    let file_err = |message: String| Error::File {
-        path: path.to_path_buf(),
-        message,
-    };
+    let input_err = |line, column: &str, message| Error::input(path, line, column, message);
+    let file_err = |message| Error::file(path, message);
 
     let mut header = Header::default();
     let mut data: Vec<(usize, &str)> = Vec::new();

@@ -83,15 +83,6 @@ impl Kbs {
         Ok(Kbs { opts })
     }
 
-    /// g and a of sample i (eq. 37).
-    #[inline]
-    fn g_a(geo: &Geometry, i: usize, sigma: f64, corr: f64) -> (f64, f64) {
-        let lambda = geo.wavelength[i];
-        let k_sigma = 2.0 * PI * sigma / lambda;
-        let k_t = 2.0 * PI * (corr / lambda);
-        ((k_sigma * geo.c[i]).powi(2), geo.vxy2[i] * k_t * k_t * 0.25)
-    }
-
     /// ln Q of every sample (evaluated together, [`series::ln_q_batch`]), with g and a.
     fn batch_ln_q(
         &self,
@@ -100,7 +91,7 @@ impl Kbs {
         corr: f64,
     ) -> (Vec<f64>, Vec<f64>, Vec<series::LnQ>) {
         let (g, a): (Vec<f64>, Vec<f64>) = (0..geo.len())
-            .map(|i| Self::g_a(geo, i, sigma, corr))
+            .map(|i| (geo.g(i, sigma), geo.a(i, corr)))
             .unzip();
         let mut q = vec![series::smooth(0.0, 0.0); geo.len()];
         series::ln_q_batch(&g, &a, self.opts.mode, self.opts.tol, &mut q);

@@ -90,6 +90,20 @@ impl Default for ModelOptions {
     }
 }
 
+/// Checks that `params` has one value per parameter of `model`.
+pub fn check_param_count(model: &dyn Model, params: &[f64]) -> Result<()> {
+    if params.len() == model.params().len() {
+        Ok(())
+    } else {
+        Err(Error::Usage(format!(
+            "model {} takes {} parameters, got {}",
+            model.name(),
+            model.params().len(),
+            params.len()
+        )))
+    }
+}
+
 /// A reflectance model evaluated over a prepared batch of samples.
 pub trait Model: Send + Sync {
     /// The name the model is chosen by (`kbs`, `lambert`, ...).

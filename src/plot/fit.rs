@@ -164,26 +164,24 @@ fn check(input: &FitPlotInput) -> Result<()> {
             )));
         }
     }
-    if input.params.len() != input.model.params().len() {
-        return Err(Error::Usage(format!(
-            "fit plots: model {} takes {} parameters, got {}",
-            input.model.name(),
-            input.model.params().len(),
-            input.params.len()
-        )));
-    }
+    crate::model::check_param_count(input.model, input.params)?;
     if n == 0 {
         return Err(Error::Usage("fit plots: no samples".into()));
     }
     Ok(())
 }
 
+/// The input checked, and its samples grouped by (θi, λ).
+fn checked_groups(input: &FitPlotInput) -> Result<Vec<Group>> {
+    check(input)?;
+    Ok(groups(input.geo))
+}
+
 /// Measured vs fitted over signed θr for each θi (in-plane samples). `log_y` for the
 /// logarithmic version.
 pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
-    check(input)?;
+    let gs = checked_groups(input)?;
     let geo = input.geo;
-    let gs = groups(geo);
     let multi = gs.iter().any(|g| g.wavelength != gs[0].wavelength);
     let mut plot = XyPlot::new(
         format!(
@@ -324,9 +322,8 @@ fn dense_plane_curve(
 
 /// Standardized residuals over θr (`over_phi` false) or φr (true), coloured by θi.
 pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
-    check(input)?;
+    let gs = checked_groups(input)?;
     let geo = input.geo;
-    let gs = groups(geo);
     let multi = gs.iter().any(|g| g.wavelength != gs[0].wavelength);
     let mut plot = XyPlot::new(
         format!(
@@ -406,9 +403,8 @@ pub struct PolarPlot {
 
 /// The polar plot of the fit at the θi with the most samples.
 pub fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
-    check(input)?;
+    let gs = checked_groups(input)?;
     let geo = input.geo;
-    let gs = groups(geo);
     let g = busiest(&gs);
     let (xs, samples) = plane_curve_samples(g.theta_i, 361);
     let ys = eval_at(
@@ -568,9 +564,8 @@ impl Picture for PolarPlot {
 /// The fitted model over (θr, φr) at the θi with the most samples, with that θi's sample
 /// positions marked.
 pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
-    check(input)?;
+    let gs = checked_groups(input)?;
     let geo = input.geo;
-    let gs = groups(geo);
     let g = busiest(&gs);
     let xs = linspace(0.0, 90.0, 91);
     let ys = linspace(-180.0, 180.0, 181);

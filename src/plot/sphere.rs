@@ -42,14 +42,7 @@ pub fn sphere_radiance(
     wavelength: f64,
     size: u32,
 ) -> Result<SphereImage> {
-    if params.len() != model.params().len() {
-        return Err(Error::Usage(format!(
-            "model {} takes {} parameters, got {}",
-            model.name(),
-            model.params().len(),
-            params.len()
-        )));
-    }
+    crate::model::check_param_count(model, params)?;
     if !(light_deg.is_finite() && (0.0..=90.0).contains(&light_deg)) {
         return Err(Error::Usage(format!(
             "light angle {light_deg}° must lie in [0°, 90°]"
