@@ -14,8 +14,10 @@
 //!   normalisation e^{−g} t_{m*} is formed with the large cancelling logarithms removed
 //!   analytically (Stirling, `ln_1p`), so ln Q keeps its accuracy up to g = 1e6 and beyond.
 //!   Cost: O(1) terms for small g, O(√g) for large g (one `exp` per term when a > 0).
-//!   For g < 10 and a < 600 it sums upward from m = 1 instead (no peak search, no lgamma,
-//!   no divisions: per-term constants tabulated at compile time).
+//!   For g < 10 and a < 600 it sums upward from m = 1 instead: no peak search, no lgamma,
+//!   no divisions, and each term t_m = g^{m−1}/(m! m) e^{−a/m} computed on its own from
+//!   tabulated constants, eight terms at a time in independent lanes (vectorised in the
+//!   AVX2 copy, with a table-free `exp`).
 //! * [`smooth`]: m = 1 only (eq. 42). `auto` uses it when the bound on the rest,
 //!   u/(1−u) with u = t2/t1 = (g/4) e^{a/2}, is below `tol`; it then returns derivatives
 //!   corrected by the m = 2 term (exact to O(u)).
@@ -149,7 +151,7 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
 /// The series, summed outward from its largest term until rigorous bounds on the omitted
 /// terms are below `tol`/10 relative to S and to the derivative sums (see the module doc).
 pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
-    if g < 10.0 && a < 600.0 {
+    if g < SMALL_G_MAX && a < SMALL_A_MAX {
         return series_from_one(g, a, tol);
     }
     let ln_g = g.ln();
@@ -330,6 +332,57 @@ fn exp_tab(x: f64) -> f64 {
     p * EXP2_TABLE[j] * f64::from_bits(((e + 1023) << 52) as u64)
 }
 
+/// e^x for x ∈ [−700, 700] (clamped), without a table (so that it vectorises): x = k ln2 + r
+/// with |r| ≤ ln2/2, e^r by its degree-13 Taylor polynomial (truncation < 4e-18), times 2^k
+/// through the exponent bits. Error ≤ 2 ulp (unit-tested).
+#[inline(always)]
+fn exp_poly(x: f64) -> f64 {
+    const INV_LN2: f64 = std::f64::consts::LOG2_E;
+    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+    const LN2_HI: f64 = 0.6931471803691238;
+    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+    const LN2_LO: f64 = 1.9082149292705877e-10;
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52: adding it rounds to an integer
+    const C: [f64; 14] = {
+        let mut c = [1.0f64; 14];
+        let mut i = 2;
+        while i < 14 {
+            c[i] = c[i - 1] / i as f64;
+            i += 1;
+        }
+        c
+    };
+    let x = x.clamp(-700.0, 700.0);
+    let kd = x * INV_LN2 + MAGIC;
+    let k = kd - MAGIC;
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    let ki = (kd.to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64);
+    // Estrin's scheme in r² (shorter dependency chains than Horner).
+    let r2 = r * r;
+    let r4 = r2 * r2;
+    let r8 = r4 * r4;
+    let p01 = C[0] + r * C[1];
+    let p23 = C[2] + r * C[3];
+    let p45 = C[4] + r * C[5];
+    let p67 = C[6] + r * C[7];
+    let p89 = C[8] + r * C[9];
+    let p1011 = C[10] + r * C[11];
+    let p1213 = C[12] + r * C[13];
+    let q0 = p01 + r2 * p23;
+    let q1 = p45 + r2 * p67;
+    let q2 = p89 + r2 * p1011;
+    let lo = q0 + r4 * q1;
+    let hi = q2 + r4 * p1213;
+    let p = lo + r8 * hi;
+    // 2^k as two factors so that k down to −1010 stays normal.
+    let k1 = ki >> 1;
+    p * f64::from_bits(((k1 + 1023) << 52) as u64) * f64::from_bits(((ki - k1 + 1023) << 52) as u64)
+}
+
+/// Below these g and a the series is summed upward from m = 1 ([`series_from_one`]).
+const SMALL_G_MAX: f64 = 10.0;
+const SMALL_A_MAX: f64 = 600.0;
+
 /// Number of terms the small-g path tabulates its per-term constants for.
 const SMALL_M: usize = 96;
 
@@ -353,53 +406,179 @@ const fn small_table() -> [[f64; 3]; SMALL_M] {
     t
 }
 
+/// 1/(m! m) for m = 1..SMALL_M (index m − 1), correctly rounded (generated with Python's
+/// exact `fractions`).
+#[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+static SMALL_COEF: [f64; SMALL_M] = [
+    1.0,
+    0.25,
+    0.05555555555555555,
+    0.010416666666666666,
+    0.0016666666666666668,
+    0.0002314814814814815,
+    2.834467120181406e-05,
+    3.1001984126984127e-06,
+    3.0619243582206544e-07,
+    2.755731922398589e-08,
+    2.27746439867652e-09,
+    1.7397297489890083e-10,
+    1.2353110643708935e-11,
+    8.193389712664089e-13,
+    5.0981091545465446e-14,
+    2.9871733327421158e-15,
+    1.6537983849091297e-16,
+    8.677337204770125e-18,
+    4.326650129802279e-19,
+    2.0551588116560825e-20,
+    9.32044812542441e-22,
+    4.0439960874775335e-23,
+    1.6818131176655147e-24,
+    6.715573212900493e-26,
+    2.5787801137537893e-27,
+    9.53690870471076e-29,
+    3.401366616220572e-30,
+    1.1713890132392279e-31,
+    3.8999872022233505e-33,
+    1.2566625429386353e-34,
+    3.922984005011348e-36,
+    1.1876221108921073e-37,
+    3.489798672961197e-39,
+    9.962228045650476e-41,
+    2.7650265596091116e-42,
+    7.467278517462879e-44,
+    1.9636378862575867e-45,
+    5.031482118527058e-47,
+    1.257043527311165e-48,
+    3.0640435978209645e-50,
+    7.291002017420499e-52,
+    1.6946206503074855e-53,
+    3.849327599400454e-55,
+    8.549642911891504e-57,
+    1.8577001882628452e-58,
+    3.9506856555684327e-60,
+    8.22686917863956e-62,
+    1.6782241814065079e-63,
+    3.3550504251358757e-65,
+    6.575898833266316e-67,
+    1.264109733422975e-68,
+    2.3842306362637474e-70,
+    4.4136700991710524e-72,
+    8.022102717972078e-74,
+    1.432044782712371e-75,
+    2.5115581329458033e-77,
+    4.328939841334718e-79,
+    7.335005081928625e-81,
+    1.2221496545586332e-82,
+    2.0029674894155379e-84,
+    3.2297245193478165e-86,
+    5.125213207081603e-88,
+    8.006127962687312e-90,
+    1.231411283323488e-91,
+    1.865333068229662e-93,
+    2.783440069672361e-95,
+    4.092382370202179e-97,
+    5.9297062890040225e-99,
+    8.46922973434727e-101,
+    1.1926058197346155e-102,
+    1.6560683868562405e-104,
+    2.2681492181094343e-106,
+    3.0644913436644638e-108,
+    4.085242295242985e-110,
+    5.374363197297438e-112,
+    6.978484068512948e-114,
+    8.945265461409749e-116,
+    1.1321259706254943e-117,
+    1.414930711565271e-119,
+    1.746555097088381e-121,
+    2.1296206030646317e-123,
+    2.565426365976133e-125,
+    3.053635680215458e-127,
+    3.592003422022151e-129,
+    4.176170068510183e-131,
+    4.799546455156376e-133,
+    5.453309487956775e-135,
+    6.126522797678712e-137,
+    6.806388160531835e-139,
+    7.478624028238683e-141,
+    8.127957523746909e-143,
+    8.738706694954734e-145,
+    9.295421620254775e-147,
+    9.78354697469097e-149,
+    1.019006554704655e-150,
+    1.050408232388696e-152,
+];
+
+/// 1/m for m = 1..SMALL_M (index m − 1).
+static SMALL_INV: [f64; SMALL_M] = small_inv();
+
+const fn small_inv() -> [f64; SMALL_M] {
+    let mut t = [0.0f64; SMALL_M];
+    let mut i = 0;
+    while i < SMALL_M {
+        t[i] = 1.0 / (i + 1) as f64;
+        i += 1;
+    }
+    t
+}
+
 /// The series for small g and moderate a, summed upward from m = 1 with the same tail
-/// bounds as [`series`], written without divisions (no peak search, no lgamma, one `exp`
-/// per term when a > 0). With a < 600 and g < 10, t_m/t_1 ≤ e^{a} e^{g} stays far from
-/// overflow, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
+/// bounds as [`series`]: t_m = g^{m−1}/(m! m) e^{−a/m} relative to g, four terms at a time
+/// in independent lanes (powers of g by lane, tabulated 1/(m! m) and 1/m, one `exp` per
+/// term; no divisions, no serial product of ratios), the bounds checked after each group
+/// of four. With a < 600 and g < 10 the sum is ≥ e^{−600} and no relevant term under- or
+/// overflows, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
 #[inline(always)]
 fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
-    const BLOCK: usize = 8;
+    const L: usize = 8;
     let eps = 0.1 * tol.max(1e-17);
-    let (mut s0, mut s_c, mut s_inv) = (1.0f64, -g, 1.0f64);
-    let mut rel = 1.0f64;
-    let mut m = 1.0f64;
-    let mut rs = [0.0f64; BLOCK];
-    'blocks: for rows in SMALL_TABLE.chunks_exact(BLOCK) {
-        // The ratios of a block first (independent of each other, so they overlap), then
-        // the serial accumulation.
-        for (r, row) in rs.iter_mut().zip(rows) {
-            *r = g * row[0];
+    let (mut s0, mut s_c, mut s_inv) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
+    let g2 = g * g;
+    let g4 = g2 * g2;
+    let g3 = g2 * g;
+    let mut gp = [1.0, g, g2, g3, g4, g4 * g, g4 * g2, g4 * g3];
+    let g8 = g4 * g4;
+    let mut m0 = 1.0f64;
+    let lanes = |v: &[f64; L]| ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+    for ((coef, inv), rows) in SMALL_COEF
+        .chunks_exact(L)
+        .zip(SMALL_INV.chunks_exact(L))
+        .zip(SMALL_TABLE.chunks_exact(L))
+    {
+        let mut t = [0.0f64; L];
+        for l in 0..L {
+            t[l] = gp[l] * coef[l];
             if a != 0.0 {
-                *r *= exp_tab(a * row[1]);
+                t[l] *= exp_poly(-a * inv[l]);
+            }
+            s0[l] += t[l];
+            s_c[l] += (m0 + (l as f64 - 1.0) - g) * t[l];
+            s_inv[l] += t[l] * inv[l];
+            gp[l] *= g8;
+        }
+        // The last term added is t_m, m = m0 + L − 1, with ratio r = r_m = t_{m+1}/t_m; the
+        // tail bounds of the module doc, multiplied through by (1−r) or (1−r)².
+        let m = m0 + (L - 1) as f64;
+        let row = &rows[L - 1];
+        let mut r = g * row[0];
+        if a != 0.0 {
+            r *= exp_tab(a * row[1]);
+        }
+        if r < 1.0 {
+            let (s0, s_c, s_inv) = (lanes(&s0), lanes(&s_c), lanes(&s_inv));
+            let om = 1.0 - r;
+            let tail_om = t[L - 1] * r; // tail · (1−r)
+            if tail_om <= eps * s0 * om
+                && tail_om * ((m + g) * om + 1.0) <= eps * (s0 + s_c.abs()) * om * om
+                && a * tail_om * row[2] <= eps * (s0 + a * s_inv) * om
+            {
+                break;
             }
         }
-        for (&r, row) in rs.iter().zip(rows) {
-            let inv_mp1 = row[2];
-            // Σ_{j>m} t_j ≤ rel r/(1−r) once r_m < 1 (r_j decreases); the checks of the
-            // module doc multiplied through by (1−r) or (1−r)².
-            if r < 1.0 {
-                let om = 1.0 - r;
-                let tail_om = rel * r; // tail · (1−r)
-                if tail_om <= eps * s0 * om
-                    && tail_om * ((m + g) * om + 1.0) <= eps * (s0 + s_c.abs()) * om * om
-                    && a * tail_om * inv_mp1 <= eps * (s0 + a * s_inv) * om
-                {
-                    break 'blocks;
-                }
-            }
-            rel *= r;
-            m += 1.0;
-            s0 += rel;
-            s_c += (m - 1.0 - g) * rel;
-            s_inv += rel * inv_mp1;
-            if rel == 0.0 {
-                break 'blocks;
-            }
-        }
+        m0 += L as f64;
     }
+    let (s0, s_c, s_inv) = (lanes(&s0), lanes(&s_c), lanes(&s_inv));
     LnQ {
-        ln_q: -g - a + s0.ln(),
+        ln_q: -g + s0.ln(),
         d_g: s_c / (g * s0),
         d_a: -s_inv / s0,
         mode: Mode::Series,
@@ -412,11 +591,33 @@ const ASYM_DEG: usize = 2 * ASYM_ORDERS + 4; // ≥ 2n + 1, padded to a multiple
 const ASYM_K: usize = 2 * ASYM_ORDERS + 1;
 
 /// P_n(b) coefficients: `ASYM[n][i]` multiplies b^i g^{−n}.
+#[cfg(test)]
 static ASYM: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_table();
 
-/// P_n'(b) coefficients: `ASYM_D[n][i] = (i+1) ASYM[n][i+1]`.
-static ASYM_D: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_deriv_table();
+/// Interleaved for the four-lane Horner scheme: `ASYM4[n][4j..4j+4]` =
+/// [P_n[2j], P_n[2j+1], P_n'[2j], P_n'[2j+1]].
+static ASYM4: [[f64; 2 * ASYM_DEG]; ASYM_ORDERS + 1] = asym_interleaved();
 
+const fn asym_interleaved() -> [[f64; 2 * ASYM_DEG]; ASYM_ORDERS + 1] {
+    let p = asym_table();
+    let d = asym_deriv_table();
+    let mut t = [[0.0f64; 2 * ASYM_DEG]; ASYM_ORDERS + 1];
+    let mut n = 0;
+    while n <= ASYM_ORDERS {
+        let mut j = 0;
+        while 2 * j + 1 < ASYM_DEG {
+            t[n][4 * j] = p[n][2 * j];
+            t[n][4 * j + 1] = p[n][2 * j + 1];
+            t[n][4 * j + 2] = d[n][2 * j];
+            t[n][4 * j + 3] = d[n][2 * j + 1];
+            j += 1;
+        }
+        n += 1;
+    }
+    t
+}
+
+/// P_n'(b) coefficients: `[n][i] = (i+1) P_n[i+1]`.
 const fn asym_deriv_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
     let p = asym_table();
     let mut d = [[0.0f64; ASYM_DEG]; ASYM_ORDERS + 1];
@@ -521,6 +722,11 @@ const ASYM_G_MIN: f64 = 40.0;
 /// The asymptotic completion of the rough approximation (module doc), or `None` when its
 /// error estimate does not reach `tol` within [`ASYM_ORDERS`] orders.
 pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
+    asymptotic_body(g, a, tol)
+}
+
+#[inline(always)]
+fn asymptotic_body(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     let b = a / g;
     let x = 1.0 / g;
     let target = 0.5 * tol;
@@ -531,25 +737,18 @@ pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     let (mut prev, mut prev2) = (f64::INFINITY, f64::INFINITY);
     let (mut err_prev, mut err_prev2) = (f64::INFINITY, f64::INFINITY);
     // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): four
-    // independent Horner chains in b², no arrays written and re-read.
+    // Horner chains in b², run as one four-lane chain over the interleaved table.
     let y = b * b;
-    for (n, (coef, dcoef)) in ASYM.iter().zip(ASYM_D.iter()).enumerate().skip(1) {
+    for (n, row) in ASYM4.iter().enumerate().skip(1) {
         gp *= x;
-        let deg = 2 * n;
-        let (mut pe, mut po, mut de, mut d_o) = (coef[deg], 0.0f64, 0.0f64, dcoef[deg - 1]);
-        let mut j = deg;
-        while j >= 2 {
-            // P: even index j−2, odd index j−1; P': even index j−2, odd index j−3.
-            pe = pe * y + coef[j - 2];
-            po = po * y + coef[j - 1];
-            de = de * y + dcoef[j - 2];
-            if j >= 3 {
-                d_o = d_o * y + dcoef[j - 3];
+        let mut acc = [0.0f64; 4];
+        for c in row[..4 * (n + 1)].chunks_exact(4).rev() {
+            for l in 0..4 {
+                acc[l] = acc[l] * y + c[l];
             }
-            j -= 2;
         }
-        let p = pe + b * po;
-        let dp = de + b * d_o;
+        let p = acc[0] + b * acc[1];
+        let dp = acc[2] + b * acc[3];
         let term = gp * p;
         let term_b = gp * dp;
         r += term;
@@ -628,9 +827,12 @@ pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
             return q;
         }
     } else if tries_asymptotic(g, a) {
-        if let Some(q) = asymptotic(g, a, tol) {
+        if let Some(q) = asymptotic_body(g, a, tol) {
             return q;
         }
+    }
+    if g < SMALL_G_MAX && a < SMALL_A_MAX {
+        return series_from_one(g, a, tol);
     }
     series(g, a, tol)
 }
@@ -674,7 +876,7 @@ fn tries_asymptotic(g: f64, a: f64) -> bool {
 pub const G_DOMAIN_MAX: f64 = 1e6;
 
 /// ln Q by the given evaluation mode.
-#[inline]
+#[inline(always)]
 pub fn ln_q(g: f64, a: f64, mode: EvalMode, tol: f64) -> LnQ {
     match mode {
         EvalMode::Auto => auto(g, a, tol),
@@ -780,6 +982,21 @@ mod tests {
         }
         assert_eq!(exp_tab(0.0), 1.0);
         assert_eq!(exp_tab(800.0), exp_tab(700.0));
+    }
+
+    #[test]
+    fn exp_poly_is_accurate() {
+        let mut x = -700.0;
+        while x <= 700.0 {
+            let (f, e) = (exp_poly(x), x.exp());
+            assert!(
+                (f / e - 1.0).abs() < 4.0 * f64::EPSILON,
+                "x={x}: {f} vs {e}"
+            );
+            x += 0.00731;
+        }
+        assert_eq!(exp_poly(0.0), 1.0);
+        assert_eq!(exp_poly(-800.0), exp_poly(-700.0));
     }
 
     #[test]
