@@ -14,7 +14,7 @@
 //!   normalisation e^{−g} t_{m*} is formed with the large cancelling logarithms removed
 //!   analytically (Stirling, `ln_1p`), so ln Q keeps its accuracy up to g = 1e6 and beyond.
 //!   Cost: O(1) terms for small g, O(√g) for large g (one `exp` per term when a > 0).
-//!   For g < 10 and a < 600 it sums upward from m = 1 instead: no peak search, no lgamma,
+//!   For g < 60 and a < 600 it sums upward from m = 1 instead: no peak search, no lgamma,
 //!   no divisions, and each term t_m = g^{m−1}/(m! m) e^{−a/m} computed on its own from
 //!   tabulated constants, eight terms at a time in independent lanes (vectorised in the
 //!   AVX2 copy, with a table-free `exp`).
@@ -380,11 +380,11 @@ fn exp_poly(x: f64) -> f64 {
 }
 
 /// Below these g and a the series is summed upward from m = 1 ([`series_from_one`]).
-const SMALL_G_MAX: f64 = 10.0;
+const SMALL_G_MAX: f64 = 60.0;
 const SMALL_A_MAX: f64 = 600.0;
 
 /// Number of terms the small-g path tabulates its per-term constants for.
-const SMALL_M: usize = 96;
+const SMALL_M: usize = 168;
 
 /// Per-term constants of the ratio r_m = g m/(m+1)² e^{a/(m(m+1))} for m = 1..SMALL_M
 /// (index m − 1): m/(m+1)², 1/(m(m+1)), 1/(m+1). Built at compile time so that the
@@ -506,6 +506,78 @@ static SMALL_COEF: [f64; SMALL_M] = [
     9.78354697469097e-149,
     1.019006554704655e-150,
     1.050408232388696e-152,
+    1.0717312180817815e-154,
+    1.0824440665757268e-156,
+    1.0823336243691585e-158,
+    1.0715102881254669e-160,
+    1.0503973023482667e-162,
+    1.0197051858628887e-164,
+    9.803933354511702e-167,
+    9.336216119773533e-169,
+    8.80695216740542e-171,
+    8.230063880184844e-173,
+    7.6197639208629e-175,
+    6.990009769653037e-177,
+    6.354019485923138e-179,
+    5.723868793104315e-181,
+    5.110182349171939e-183,
+    4.521924750941368e-185,
+    3.9662900157054837e-187,
+    3.448682454406892e-189,
+    2.9727773141957326e-191,
+    2.5406464858242366e-193,
+    2.1529329560640765e-195,
+    1.8090574250179328e-197,
+    1.5074413964558723e-199,
+    1.2457328206822833e-201,
+    1.0210227339790588e-203,
+    8.300440124393047e-206,
+    6.693460871015611e-208,
+    5.3544204418244026e-210,
+    4.249268062631846e-212,
+    3.345669613435253e-214,
+    2.613642329300278e-216,
+    2.0259556629707965e-218,
+    1.5583337831876809e-220,
+    1.189497384800064e-222,
+    9.010818718256997e-225,
+    6.77466283340029e-227,
+    5.0554327209499594e-229,
+    3.7445564261881524e-231,
+    2.7531992379106304e-233,
+    2.0095258278435072e-235,
+    1.4561005519032287e-237,
+    1.0474993468322954e-239,
+    7.481750937469943e-242,
+    5.3059356138179694e-244,
+    3.736386428924681e-246,
+    2.612728062281194e-248,
+    1.8143057599096755e-250,
+    1.2511850099685745e-252,
+    8.569352743661105e-255,
+    5.829218182730625e-257,
+    3.9384786648094377e-259,
+    2.6431535962700296e-261,
+    1.7620230271067266e-263,
+    1.1668508046173434e-265,
+    7.676313349967173e-268,
+    5.016981110825152e-270,
+    3.2576407742552995e-272,
+    2.1016151056715335e-274,
+    1.3471330958310766e-276,
+    8.580112995308056e-279,
+    5.430230951633157e-281,
+    3.41510278563694e-283,
+    2.1343548124308234e-285,
+    1.3256344342832068e-287,
+    8.182612919459631e-290,
+    5.019816643930043e-292,
+    3.06074860294579e-294,
+    1.8549301839684852e-296,
+    1.1173867774869847e-298,
+    6.690695974936583e-301,
+    3.982414327654175e-303,
+    2.3563746907534265e-305,
 ];
 
 /// 1/m for m = 1..SMALL_M (index m − 1).
@@ -522,10 +594,10 @@ const fn small_inv() -> [f64; SMALL_M] {
 }
 
 /// The series for small g and moderate a, summed upward from m = 1 with the same tail
-/// bounds as [`series`]: t_m = g^{m−1}/(m! m) e^{−a/m} relative to g, four terms at a time
+/// bounds as [`series`]: t_m = g^{m−1}/(m! m) e^{−a/m} relative to g, eight terms at a time
 /// in independent lanes (powers of g by lane, tabulated 1/(m! m) and 1/m, one `exp` per
 /// term; no divisions, no serial product of ratios), the bounds checked after each group
-/// of four. With a < 600 and g < 10 the sum is ≥ e^{−600} and no relevant term under- or
+/// of eight. With a < 600 and g < 60 the sum is ≥ e^{−600} and no relevant term under- or
 /// overflows, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
 #[inline(always)]
 fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
