@@ -31,13 +31,15 @@
 //!   asymptotic: orders are added while they shrink; the error estimate is the first
 //!   omitted order (with its derivative weights), extrapolated from the last order by the
 //!   larger of the last two decay ratios. `auto` accepts it only when g ≥ 40 (so the
-//!   neglected e^{−g}-size effects of the M = 0 end are below 1e-17), a < g^1.5, the
+//!   neglected e^{−g}-size effects of the M = 0 end are below 1e-17), a < 3 g^1.5, the
 //!   orders decay by at least 2× per step, and the estimate is below 0.15 tol. Unlike the
 //!   series' tail bounds this estimate is not a proof; it is checked against the mpmath
 //!   grid (worst error found 0.13 of the claim) and against the series at 3000 random
-//!   (g, a) (`tests/model_props.rs`). Work: about 4(n+1) multiply-adds per order for n
-//!   orders (n ≈ 3 at g = 1e4, ≈ 8–9 at g = 100 and moderate b); it fails, and `auto` falls
-//!   back to the series, when b²/g is not small (far from the specular peak at moderate g).
+//!   (g, a) (`tests/model_props.rs`). Work: the orders are evaluated four at a time
+//!   (Horner in b² on sixteen independent lanes: even and odd parts of P_n and P_n'), about
+//!   4(4k+5) multiply-adds for the k-th group of four orders; n ≈ 3 orders at g = 1e4,
+//!   ≈ 8–9 at g = 100 and moderate b. It fails, and `auto` falls back to the series, when
+//!   b²/g is not small (far from the specular peak at moderate g).
 //!
 //! `auto`: smooth if its bound holds (possible only for g ≤ 2 tol); else the asymptotic
 //! completion if it is accepted; else the series.
@@ -666,25 +668,34 @@ const ASYM_K: usize = 2 * ASYM_ORDERS + 1;
 #[cfg(test)]
 static ASYM: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_table();
 
-/// Interleaved for the four-lane Horner scheme: `ASYM4[n][4j..4j+4]` =
-/// [P_n[2j], P_n[2j+1], P_n'[2j], P_n'[2j+1]].
-static ASYM4: [[f64; 2 * ASYM_DEG]; ASYM_ORDERS + 1] = asym_interleaved();
+/// Orders in blocks of four for the sixteen-lane Horner scheme: `ASYM_BLK[k][j]` holds,
+/// for the orders n = 4k+1..4k+4 (lane l = n − 4k − 1), [P_n[2j] (lanes 0–3), P_n[2j+1]
+/// (4–7), P_n'[2j] (8–11), P_n'[2j+1] (12–15)], the coefficients of b^{2j}, b^{2j+1};
+/// j runs to 4k + 4 (degree 2n ≤ 8k + 8), orders beyond [`ASYM_ORDERS`] are zero.
+static ASYM_BLK: [[[f64; 16]; ASYM_J]; ASYM_BLOCKS] = asym_blocks();
+const ASYM_BLOCKS: usize = ASYM_ORDERS.div_ceil(4);
+const ASYM_J: usize = 4 * ASYM_BLOCKS + 1;
 
-const fn asym_interleaved() -> [[f64; 2 * ASYM_DEG]; ASYM_ORDERS + 1] {
+const fn asym_blocks() -> [[[f64; 16]; ASYM_J]; ASYM_BLOCKS] {
     let p = asym_table();
     let d = asym_deriv_table();
-    let mut t = [[0.0f64; 2 * ASYM_DEG]; ASYM_ORDERS + 1];
-    let mut n = 0;
-    while n <= ASYM_ORDERS {
-        let mut j = 0;
-        while 2 * j + 1 < ASYM_DEG {
-            t[n][4 * j] = p[n][2 * j];
-            t[n][4 * j + 1] = p[n][2 * j + 1];
-            t[n][4 * j + 2] = d[n][2 * j];
-            t[n][4 * j + 3] = d[n][2 * j + 1];
-            j += 1;
+    let mut t = [[[0.0f64; 16]; ASYM_J]; ASYM_BLOCKS];
+    let mut k = 0;
+    while k < ASYM_BLOCKS {
+        let mut l = 0;
+        while l < 4 {
+            let n = 4 * k + l + 1;
+            let mut j = 0;
+            while n <= ASYM_ORDERS && j < ASYM_J && 2 * j + 1 < ASYM_DEG {
+                t[k][j][l] = p[n][2 * j];
+                t[k][j][4 + l] = p[n][2 * j + 1];
+                t[k][j][8 + l] = d[n][2 * j];
+                t[k][j][12 + l] = d[n][2 * j + 1];
+                j += 1;
+            }
+            l += 1;
         }
-        n += 1;
+        k += 1;
     }
     t
 }
@@ -808,19 +819,25 @@ fn asymptotic_body(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     // Sizes and error estimates of the previous two orders.
     let (mut prev, mut prev2) = (f64::INFINITY, f64::INFINITY);
     let (mut err_prev, mut err_prev2) = (f64::INFINITY, f64::INFINITY);
-    // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): four
-    // Horner chains in b², run as one four-lane chain over the interleaved table.
+    // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): Horner
+    // in b² for four orders at once, sixteen independent lanes (E, O, E', O' of each
+    // order; a lower order's leading coefficients are zero, which leaves its chain exact).
     let y = b * b;
-    for (n, row) in ASYM4.iter().enumerate().skip(1) {
-        gp *= x;
-        let mut acc = [0.0f64; 4];
-        for c in row[..4 * (n + 1)].chunks_exact(4).rev() {
-            for l in 0..4 {
-                acc[l] = acc[l] * y + c[l];
+    let mut vals = [0.0f64; 16];
+    for n in 1..=ASYM_ORDERS {
+        let lane = (n - 1) % 4;
+        if lane == 0 {
+            let k = (n - 1) / 4;
+            vals = [0.0f64; 16];
+            for row in ASYM_BLK[k][..4 * k + 5].iter().rev() {
+                for l in 0..16 {
+                    vals[l] = vals[l] * y + row[l];
+                }
             }
         }
-        let p = acc[0] + b * acc[1];
-        let dp = acc[2] + b * acc[3];
+        gp *= x;
+        let p = vals[lane] + b * vals[4 + lane];
+        let dp = vals[8 + lane] + b * vals[12 + lane];
         let term = gp * p;
         let term_b = gp * dp;
         r += term;
@@ -941,8 +958,12 @@ fn ln_q_batch_body(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &mut [Ln
 /// Whether `auto` tries the asymptotic expansion (at the requested `tol`) before the series.
 #[inline(always)]
 fn tries_asymptotic(g: f64, a: f64) -> bool {
-    (ASYM_G_MIN..=G_DOMAIN_MAX).contains(&g) && a < g * g.sqrt()
+    (ASYM_G_MIN..=G_DOMAIN_MAX).contains(&g) && a < ASYM_S_MAX * g * g.sqrt()
 }
+
+/// Largest a/g^1.5 for which `auto` tries the asymptotic expansion (beyond it the
+/// expansion needs more orders than tabulated even at g = 40, and is rejected).
+const ASYM_S_MAX: f64 = 3.0;
 
 /// Largest g of the stated domain; `auto` does not sum the series beyond it.
 pub const G_DOMAIN_MAX: f64 = 1e6;
