@@ -253,10 +253,30 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
     cost.is_finite().then_some(cost)
 }
 
-/// Evenly spaced indices of at most `max` of `n` samples.
+/// At most `max` of `n` sample indices, spread over the whole file: the multiples of a
+/// step near n(√5 − 1)/2 that is coprime to n, modulo n, sorted. A scan stored in nested
+/// loops (θi × θr × φr) is then covered in every loop; a plain stride aliases with the
+/// inner loops (a stride of 20 through 40 azimuths picks only two of them).
 pub fn subsample(n: usize, max: usize) -> Vec<usize> {
-    let stride = n.div_ceil(max).max(1);
-    (0..n).step_by(stride).collect()
+    if n <= max {
+        return (0..n).collect();
+    }
+    fn gcd(a: usize, b: usize) -> usize {
+        if b == 0 {
+            a
+        } else {
+            gcd(b, a % b)
+        }
+    }
+    let mut step = ((n as f64) * 0.618_033_988_749_894_9).round() as usize;
+    while gcd(step, n) != 1 {
+        step += 1;
+    }
+    let mut idx: Vec<usize> = (0..max)
+        .map(|k| ((k as u128 * step as u128) % n as u128) as usize)
+        .collect();
+    idx.sort_unstable();
+    idx
 }
 
 #[cfg(test)]
@@ -264,8 +284,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn subsample_is_evenly_spaced() {
-        assert_eq!(subsample(10, 4), vec![0, 3, 6, 9]);
+    fn subsample_covers_every_loop_of_a_scan() {
         assert_eq!(subsample(3, 10), vec![0, 1, 2]);
+        // A 10 θi × 25 θr × 40 φr scan stored φ fastest: 512 of its 10 000 samples.
+        let idx = subsample(10_000, 512);
+        assert_eq!(idx.len(), 512);
+        assert!(idx.windows(2).all(|w| w[0] < w[1]), "sorted and distinct");
+        let covered = |f: &dyn Fn(usize) -> usize, k: usize| {
+            let mut seen = vec![false; k];
+            for &i in &idx {
+                seen[f(i)] = true;
+            }
+            seen.iter().all(|&s| s)
+        };
+        assert!(covered(&|i| i % 40, 40), "every azimuth");
+        assert!(covered(&|i| (i / 40) % 25, 25), "every θr");
+        assert!(covered(&|i| i / 1000, 10), "every θi");
     }
 }
