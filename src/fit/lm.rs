@@ -427,21 +427,43 @@ impl LevenbergMarquardt {
     }
 }
 
+/// Length from which [`dot`] sums in four lanes.
+const LANE_SUM_MIN: usize = 1024;
+
 /// Euclidean norm without destructive overflow or underflow (MINPACK `enorm` in spirit):
 /// the plain sum of squares when that is safely in range, a scaled sum otherwise.
-fn enorm<'a>(v: impl IntoIterator<Item = &'a f64> + Clone) -> f64 {
+fn enorm(v: &[f64]) -> f64 {
     const SMALL: f64 = 1e-150;
     const LARGE: f64 = 1e150;
-    let s: f64 = v.clone().into_iter().map(|&x| x * x).sum();
+    let s = dot(v, v);
     if s.is_finite() && s > SMALL * SMALL && s < LARGE * LARGE {
         return s.sqrt();
     }
-    let amax = v.clone().into_iter().fold(0.0f64, |a, &x| a.max(x.abs()));
+    let amax = v.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
     if amax == 0.0 || !amax.is_finite() {
         return if s.is_nan() { f64::NAN } else { amax };
     }
-    let s: f64 = v.into_iter().map(|&x| (x / amax) * (x / amax)).sum();
+    let s: f64 = v.iter().map(|&x| (x / amax) * (x / amax)).sum();
     amax * s.sqrt()
+}
+
+/// Σ aᵢbᵢ over the common length. Long vectors (≥ [`LANE_SUM_MIN`]) are summed in four
+/// interleaved partial sums (independent chains, so a 10k-row column is not bound by the
+/// latency of one addition per element); shorter ones in order, as MINPACK does.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    if a.len().min(b.len()) < LANE_SUM_MIN {
+        return a.iter().zip(b).map(|(x, y)| x * y).sum();
+    }
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 fn pad_vec(v: DVector<f64>, rows: usize) -> DVector<f64> {
@@ -505,7 +527,7 @@ fn qrfac(a: &DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<f64>) {
             // Apply the reflector to the remaining columns and to f.
             for k in j + 1..n {
                 let ck = &mut tail[(k - j - 1) * m + j..(k - j) * m];
-                let sum: f64 = cj.iter().zip(ck.iter()).map(|(a, b)| a * b).sum();
+                let sum = dot(cj, ck);
                 let t = sum / ajj;
                 for (c, &a) in ck.iter_mut().zip(cj.iter()) {
                     *c -= t * a;
@@ -520,7 +542,7 @@ fn qrfac(a: &DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<f64>) {
                 }
             }
             let fj = &mut qtf[j..m];
-            let sum: f64 = cj.iter().zip(fj.iter()).map(|(a, b)| a * b).sum();
+            let sum = dot(cj, fj);
             let t = sum / ajj;
             for (v, &a) in fj.iter_mut().zip(cj.iter()) {
                 *v -= t * a;
@@ -650,7 +672,7 @@ fn lmpar(qr: &mut QrState, diag: &DVector<f64>, delta: f64, par: &mut f64, x: &m
     }
 
     let mut wa2 = diag.component_mul(x);
-    let mut dxnorm = enorm(wa2.iter());
+    let mut dxnorm = enorm(wa2.as_slice());
     let mut fp = dxnorm - delta;
     if fp <= 0.1 * delta {
         *par = 0.0;
@@ -671,7 +693,7 @@ fn lmpar(qr: &mut QrState, diag: &DVector<f64>, delta: f64, par: &mut f64, x: &m
             }
             wa1[j] = (wa1[j] - sum) / r[(j, j)];
         }
-        let t = enorm(wa1.iter());
+        let t = enorm(wa1.as_slice());
         parl = ((fp / delta) / t) / t;
         if !parl.is_finite() {
             parl = 0.0;
@@ -686,7 +708,7 @@ fn lmpar(qr: &mut QrState, diag: &DVector<f64>, delta: f64, par: &mut f64, x: &m
         }
         wa1[j] = sum / diag[ipvt[j]];
     }
-    let gnorm = enorm(wa1.iter());
+    let gnorm = enorm(wa1.as_slice());
     let mut paru = gnorm / delta;
     if paru == 0.0 {
         paru = dwarf / delta.min(0.1);
@@ -707,7 +729,7 @@ fn lmpar(qr: &mut QrState, diag: &DVector<f64>, delta: f64, par: &mut f64, x: &m
         let d = diag * s;
         qrsolv(r, ipvt, &d, qtb, x, &mut sdiag);
         wa2 = diag.component_mul(x);
-        dxnorm = enorm(wa2.iter());
+        dxnorm = enorm(wa2.as_slice());
         let temp = fp;
         fp = dxnorm - delta;
         if fp.abs() <= 0.1 * delta || (parl == 0.0 && fp <= temp && temp < 0.0) || iter == 10 {
@@ -725,7 +747,7 @@ fn lmpar(qr: &mut QrState, diag: &DVector<f64>, delta: f64, par: &mut f64, x: &m
                 wa1[i] -= r[(i, j)] * t;
             }
         }
-        let t = enorm(wa1.iter());
+        let t = enorm(wa1.as_slice());
         let parc = ((fp / delta) / t) / t;
         if fp > 0.0 {
             parl = parl.max(*par);
@@ -770,7 +792,7 @@ where
         let m = r.len();
         let rows = m.max(n);
         let r = pad_vec(r, rows);
-        let fnorm = enorm(r.iter());
+        let fnorm = enorm(r.as_slice());
         let cost = 0.5 * fnorm * fnorm;
         if !all_finite(&r) || !all_finite(&x) {
             self.termination = Some(Termination::NonFiniteStart);
@@ -837,7 +859,7 @@ where
                 for j in 0..n {
                     w.diag[j] = if acnorm[j] == 0.0 { 1.0 } else { acnorm[j] };
                 }
-                w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
+                w.xnorm = enorm(w.diag.component_mul(&w.x).as_slice());
                 w.delta = stepbound * w.xnorm;
                 if w.delta == 0.0 {
                     w.delta = stepbound;
@@ -863,9 +885,14 @@ where
             w.qr = Some(qr);
             w.need_jac = false;
             let grad = w.jac.tr_mul(&w.r);
-            state = state
-                .gradient(grad)
-                .jacobian(w.jac.rows(0, w.m).into_owned());
+            // The state's Jacobian: the previous one's storage is reused (a fresh matrix of
+            // this size is fresh memory from the system on every iteration).
+            let mut state_jac = state
+                .take_jacobian()
+                .filter(|j| j.shape() == (w.m, n))
+                .unwrap_or_else(|| DMatrix::zeros(w.m, n));
+            state_jac.copy_from(&w.jac.rows(0, w.m));
+            state = state.gradient(grad).jacobian(state_jac);
             // (While polishing, the polishing rules decide; they also end at a zero step.)
             if w.polish.is_none() && (gnorm <= gtol || gnorm <= EPSMCH) {
                 self.termination = Some(Termination::Gtol);
@@ -880,7 +907,7 @@ where
             let mut par = 0.0;
             lmpar(qr, &w.diag, f64::INFINITY, &mut par, &mut step);
             let step = -step;
-            let pnorm = enorm(w.diag.component_mul(&step).iter());
+            let pnorm = enorm(w.diag.component_mul(&step).as_slice());
             // Predicted relative reduction of the undamped step, ‖J p‖²/‖r‖².
             let mut jp = DVector::zeros(n);
             for j in 0..n {
@@ -889,7 +916,7 @@ where
                     jp[i] += qr.r[(i, j)] * t;
                 }
             }
-            let prered = (enorm(jp.iter()) / w.fnorm).powi(2);
+            let prered = (enorm(jp.as_slice()) / w.fnorm).powi(2);
             // The iterate with the smallest Gauss–Newton step is the one closest to
             // stationarity as far as the (noise-free) linear model can tell.
             if pol.best.as_ref().is_none_or(|b| pnorm < b.pnorm) {
@@ -916,7 +943,7 @@ where
                 let r1 = pad_vec(problem.apply(&trial)?, rows);
                 w.nfev += 1;
                 let fnorm1 = if all_finite(&r1) && r1.len() == rows {
-                    enorm(r1.iter())
+                    enorm(r1.as_slice())
                 } else {
                     f64::INFINITY
                 };
@@ -925,7 +952,7 @@ where
                     w.x = trial;
                     w.r = r1;
                     w.fnorm = fnorm1;
-                    w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
+                    w.xnorm = enorm(w.diag.component_mul(&w.x).as_slice());
                     w.need_jac = true;
                     pol.steps += 1;
                     accepted = true;
@@ -941,7 +968,7 @@ where
                         w.x = b.x;
                         w.r = b.r;
                         w.fnorm = b.fnorm;
-                        w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
+                        w.xnorm = enorm(w.diag.component_mul(&w.x).as_slice());
                         w.need_jac = true;
                     }
                 }
@@ -965,7 +992,7 @@ where
         lmpar(qr, &w.diag, w.delta, &mut w.par, &mut step);
         let step = -step;
         let trial = &w.x + &step;
-        let pnorm = enorm(w.diag.component_mul(&step).iter());
+        let pnorm = enorm(w.diag.component_mul(&step).as_slice());
         // Predicted reduction from the linear model: ‖J p‖² and the λ‖Dp‖² term.
         let mut jp = DVector::zeros(n);
         for j in 0..n {
@@ -974,7 +1001,7 @@ where
                 jp[i] += qr.r[(i, j)] * t;
             }
         }
-        let temp1 = enorm(jp.iter()) / w.fnorm;
+        let temp1 = enorm(jp.as_slice()) / w.fnorm;
         if self.predicted_stop
             && !self.polish
             && !w.first
@@ -992,7 +1019,7 @@ where
         let r1 = problem.apply(&trial)?;
         w.nfev += 1;
         let r1 = pad_vec(r1, rows);
-        let mut fnorm1 = enorm(r1.iter());
+        let mut fnorm1 = enorm(r1.as_slice());
         if !all_finite(&r1) || r1.len() != rows {
             fnorm1 = f64::INFINITY;
         }
@@ -1038,7 +1065,7 @@ where
             w.x = trial;
             w.r = r1;
             w.fnorm = fnorm1;
-            w.xnorm = enorm(w.diag.component_mul(&w.x).iter());
+            w.xnorm = enorm(w.diag.component_mul(&w.x).as_slice());
             w.need_jac = true;
             w.first = false;
             w.last_ratio = ratio;
@@ -1374,7 +1401,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         }
     };
     LmReport {
-        cost: 0.5 * enorm(residuals.iter()).powi(2),
+        cost: 0.5 * enorm(residuals.as_slice()).powi(2),
         x,
         residuals,
         jacobian,
