@@ -25,8 +25,10 @@ pub const ROUGH_BAND_G: f64 = 10.0;
 /// Grid points kept as starting candidates (best first, in distinct valleys).
 pub const CANDIDATES: usize = 3;
 
-/// Samples of the quick LM refinement between the grid and the full fit.
-pub const REFINE_SAMPLES: usize = 512;
+/// Samples of the quick LM refinement between the grid and the full fit (a golden-ratio
+/// subsample, [`subsample`]: 256 spread over every loop of a scan start the full fit as
+/// close as 512 did; with a plain stride, 256 could miss whole azimuth ranges).
+pub const REFINE_SAMPLES: usize = 256;
 
 /// Parameters that enter the model linearly (solved exactly at each grid point).
 pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
