@@ -13,7 +13,8 @@
 //!   tail is bounded by a geometric series and the lower terms fall monotonically). The
 //!   normalisation e^{−g} t_{m*} is formed with the large cancelling logarithms removed
 //!   analytically (Stirling, `ln_1p`), so ln Q keeps its accuracy up to g = 1e6 and beyond.
-//!   Cost: O(1) terms for small g, O(√g) for large g (one `exp` per term when a > 0).
+//!   Cost: O(1) terms for small g, O(√g) for large g (one `exp` per term when a > 0; the
+//!   ratios of eight consecutive terms are computed together, so their `exp`s vectorise).
 //!   For g < 60 and a < 600 it sums upward from m = 1 instead: no peak search, no lgamma,
 //!   no divisions, and each term t_m = g^{m−1}/(m! m) e^{−a/m} computed on its own from
 //!   tabulated constants, eight terms at a time in independent lanes (vectorised in the
@@ -152,6 +153,7 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
 
 /// The series, summed outward from its largest term until rigorous bounds on the omitted
 /// terms are below `tol`/10 relative to S and to the derivative sums (see the module doc).
+#[inline(always)]
 pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     if g < SMALL_G_MAX && a < SMALL_A_MAX {
         return series_from_one(g, a, tol);
@@ -167,67 +169,88 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     // The inline exp (≤ 2 ulp) is used while the accumulated rounding of the ratio
     // products over the O(√g) terms stays far below tol; the libm exp otherwise.
     let inline_exp = tol >= 1e-12 && g < 1e4;
-    let ratio = |m: f64| -> f64 {
-        let mp1 = m + 1.0;
-        let base = g * m / (mp1 * mp1);
-        if a == 0.0 {
-            base
-        } else if inline_exp {
-            base * exp_tab(a / (m * mp1))
-        } else {
-            base * (a / (m * mp1)).exp()
+    // The ratios r_m for eight consecutive m at a time, in independent lanes (the `exp`s
+    // vectorise in the AVX2 copy); m below 1 (past the bottom of the sum) gives unused lanes.
+    const L: usize = 8;
+    let ratios = |m_first: f64, step: f64| -> [f64; L] {
+        let mut e = [0.0f64; L];
+        let mut rs = [0.0f64; L];
+        for l in 0..L {
+            let m = (m_first + step * l as f64).max(1.0);
+            let mp1 = m + 1.0;
+            rs[l] = g * m / (mp1 * mp1);
+            e[l] = a / (m * mp1);
         }
+        if a != 0.0 {
+            if inline_exp {
+                for l in 0..L {
+                    rs[l] *= exp_poly(e[l]);
+                }
+            } else {
+                for l in 0..L {
+                    rs[l] *= e[l].exp();
+                }
+            }
+        }
+        rs
     };
     // Upward: after adding t_m (rel = t_m/t0) with r = r_m < 1, Σ_{j>m} t_j ≤ rel r/(1−r),
     // Σ_{j>m} |j−1−g| t_j ≤ rel [(m+g) r/(1−r) + r/(1−r)²], Σ_{j>m} t_j/j ≤ tail/(m+1).
     let mut m = m0;
     let mut rel = 1.0f64;
-    let mut r = ratio(m);
-    loop {
-        rel *= r;
-        m += 1.0;
-        s0 += rel;
-        s_c += (m - 1.0 - g) * rel;
-        s_inv += rel / m;
-        r = ratio(m);
-        if r < 1.0 {
-            let q = r / (1.0 - r);
-            let tail = rel * q;
-            let tail_c = rel * ((m + g) * q + q / (1.0 - r));
-            if tail <= eps * s0
-                && tail_c <= eps * (s0 + s_c.abs())
-                && a * tail / (m + 1.0) <= eps * (s0 + a * s_inv)
-            {
-                break;
+    let mut rs = ratios(m0, 1.0);
+    'up: loop {
+        let next = ratios(m + L as f64, 1.0);
+        for l in 0..L {
+            rel *= rs[l];
+            m += 1.0;
+            s0 += rel;
+            s_c += (m - 1.0 - g) * rel;
+            s_inv += rel / m;
+            let r = if l + 1 < L { rs[l + 1] } else { next[0] };
+            if r < 1.0 {
+                let q = r / (1.0 - r);
+                let tail = rel * q;
+                let tail_c = rel * ((m + g) * q + q / (1.0 - r));
+                if tail <= eps * s0
+                    && tail_c <= eps * (s0 + s_c.abs())
+                    && a * tail / (m + 1.0) <= eps * (s0 + a * s_inv)
+                {
+                    break 'up;
+                }
+            }
+            if rel == 0.0 || !rel.is_finite() {
+                break 'up;
             }
         }
-        if rel == 0.0 || !rel.is_finite() {
-            break;
-        }
+        rs = next;
     }
     // Downward: terms fall monotonically below the peak; after adding t_m, the m−1 terms
     // left are each ≤ t_{m−1} = rel/r_{m−1}.
     let mut m = m0;
     let mut rel = 1.0f64;
-    let mut r_below = if m > 1.0 { ratio(m - 1.0) } else { 1.0 };
-    while m > 1.0 {
-        rel /= r_below;
-        m -= 1.0;
-        s0 += rel;
-        s_c += (m - 1.0 - g) * rel;
-        s_inv += rel / m;
-        if m <= 1.0 || rel == 0.0 {
-            break;
+    let mut rs = ratios(m0 - 1.0, -1.0);
+    'down: while m > 1.0 {
+        let next = ratios(m - 1.0 - L as f64, -1.0);
+        for l in 0..L {
+            rel /= rs[l];
+            m -= 1.0;
+            s0 += rel;
+            s_c += (m - 1.0 - g) * rel;
+            s_inv += rel / m;
+            if m <= 1.0 || rel == 0.0 {
+                break 'down;
+            }
+            let r_below = if l + 1 < L { rs[l + 1] } else { next[0] };
+            let left = (m - 1.0) * (rel / r_below);
+            if left <= eps * s0
+                && left * (m + g) <= eps * (s0 + s_c.abs())
+                && a * left <= eps * (s0 + a * s_inv)
+            {
+                break 'down;
+            }
         }
-        r_below = ratio(m - 1.0);
-        let next = rel / r_below;
-        let left = (m - 1.0) * next;
-        if left <= eps * s0
-            && left * (m + g) <= eps * (s0 + s_c.abs())
-            && a * left <= eps * (s0 + a * s_inv)
-        {
-            break;
-        }
+        rs = next;
     }
     LnQ {
         ln_q: ln_t0 + s0.ln() - ln_g,
