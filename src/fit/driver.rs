@@ -259,7 +259,16 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         grid_start,
         start_seconds,
         init_seconds,
+        fallbacks,
     } = start?;
+    let (p0, grid_start) = if problem.in_domain(&p0) {
+        (p0, grid_start)
+    } else {
+        fallbacks
+            .into_iter()
+            .find(|(p, _)| problem.in_domain(p))
+            .unwrap_or((p0, grid_start))
+    };
 
     let first = run_lm(&problem, &p0, &config.lm);
     let mut report = first;
@@ -333,6 +342,12 @@ struct Start {
     start_seconds: f64,
     /// Seconds from the fit's start to the end of the refinement.
     init_seconds: f64,
+    /// Further (start, grid point) pairs in order of preference: the other refined
+    /// candidates by cost, then the grid's candidates themselves. The refinement checks
+    /// the model's domain on its subsample only; the full fit takes the first pair inside
+    /// the domain on every sample (a rough-valley candidate can drift to σ where some
+    /// sample outside the subsample has g beyond the domain).
+    fallbacks: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
 /// The starting point: the grid of [`init::initial_values`], then the quick refinement of
@@ -411,6 +426,7 @@ fn starting_point(
     };
     let mut grid_start = candidates[0].1.clone();
     let mut p0 = grid_start.clone();
+    let mut fallbacks = Vec::new();
     if sub.y.len() > n_free {
         let refined: Vec<(f64, Vec<f64>)> = candidates
             .par_iter()
@@ -439,20 +455,30 @@ fn starting_point(
             .map(|r| r.0)
             .fold(f64::INFINITY, f64::min);
         let best = refined
-            .into_iter()
-            .zip(&candidates)
-            .find(|(r, _)| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
-        if let Some(((_, values), (_, start))) = best {
-            p0 = values;
-            grid_start = start.clone();
+            .iter()
+            .position(|r| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
+        if let Some(b) = best {
+            p0 = refined[b].1.clone();
+            grid_start = candidates[b].1.clone();
         }
+        let mut others: Vec<usize> = (0..refined.len())
+            .filter(|&k| Some(k) != best && ok(&refined[k]))
+            .collect();
+        others.sort_by(|&i, &j| refined[i].0.total_cmp(&refined[j].0));
+        fallbacks.extend(
+            others
+                .into_iter()
+                .map(|k| (refined[k].1.clone(), candidates[k].1.clone())),
+        );
     }
+    fallbacks.extend(candidates.iter().map(|(_, c)| (c.clone(), c.clone())));
     let init_seconds = t0.elapsed().as_secs_f64();
     Ok(Start {
         p0,
         grid_start,
         start_seconds,
         init_seconds,
+        fallbacks,
     })
 }
 
