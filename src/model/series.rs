@@ -260,103 +260,6 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
     }
 }
 
-/// 2^(j/64), j = 0..63, correctly rounded (generated with mpmath).
-#[allow(
-    clippy::excessive_precision,
-    clippy::unreadable_literal,
-    clippy::approx_constant
-)]
-const EXP2_TABLE: [f64; 64] = [
-    1.0,
-    1.0108892860517005,
-    1.0218971486541166,
-    1.0330248790212284,
-    1.0442737824274138,
-    1.0556451783605572,
-    1.0671404006768237,
-    1.0787607977571199,
-    1.0905077326652577,
-    1.102382583307841,
-    1.1143867425958924,
-    1.1265216186082418,
-    1.1387886347566916,
-    1.1511892299529827,
-    1.1637248587775775,
-    1.1763969916502812,
-    1.189207115002721,
-    1.202156731452703,
-    1.215247359980469,
-    1.22848053610687,
-    1.241857812073484,
-    1.255380757024691,
-    1.2690509571917332,
-    1.2828700160787783,
-    1.2968395546510096,
-    1.3109612115247644,
-    1.3252366431597413,
-    1.339667524053303,
-    1.3542555469368927,
-    1.3690024229745905,
-    1.383909881963832,
-    1.3989796725383112,
-    1.4142135623730951,
-    1.42961333839197,
-    1.4451808069770467,
-    1.460917794180647,
-    1.4768261459394993,
-    1.4929077282912648,
-    1.5091644275934228,
-    1.5255981507445384,
-    1.5422108254079407,
-    1.559004400237837,
-    1.5759808451078865,
-    1.593142151342267,
-    1.6104903319492543,
-    1.6280274218573478,
-    1.645755478153965,
-    1.6636765803267364,
-    1.681792830507429,
-    1.7001063537185235,
-    1.718619298122478,
-    1.7373338352737062,
-    1.7562521603732995,
-    1.7753764925265212,
-    1.7947090750031072,
-    1.8142521755003989,
-    1.8340080864093424,
-    1.8539791250833855,
-    1.8741676341103,
-    1.8945759815869656,
-    1.9152065613971474,
-    1.9360617934922943,
-    1.9571441241754002,
-    1.978456026387951,
-];
-
-/// e^x for x ∈ [−700, 700] (clamped), inline and branch-free: x = (64e + j) ln2/64 + r with
-/// |r| ≤ ln2/128, e^r by a degree-5 Taylor polynomial (truncation < 4e-17), times the
-/// tabulated 2^(j/64) and 2^e through the exponent bits. Error ≤ 2 ulp (unit-tested).
-#[inline(always)]
-fn exp_tab(x: f64) -> f64 {
-    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
-    const INV_LN2_64: f64 = 92.33248261689366;
-    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
-    const LN2_64_HI: f64 = 0.010830424667801708;
-    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
-    const LN2_64_LO: f64 = 2.8447437476627285e-11;
-    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52: adding it rounds to an integer
-    let x = x.clamp(-700.0, 700.0);
-    let kd = x * INV_LN2_64 + MAGIC;
-    let k = kd - MAGIC;
-    let r = (x - k * LN2_64_HI) - k * LN2_64_LO;
-    let ki = (kd.to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64);
-    let j = (ki & 63) as usize;
-    let e = ki >> 6;
-    let r2 = r * r;
-    let p = 1.0 + r + r2 * (0.5 + r * (1.0 / 6.0)) + r2 * r2 * (1.0 / 24.0 + r * (1.0 / 120.0));
-    p * EXP2_TABLE[j] * f64::from_bits(((e + 1023) << 52) as u64)
-}
-
 /// e^x for x ∈ [−700, 700] (clamped), without a table (so that it vectorises): x = k ln2 + r
 /// with |r| ≤ ln2/2, e^r by its degree-13 Taylor polynomial (truncation < 4e-18), times 2^k
 /// through the exponent bits. Error ≤ 2 ulp (unit-tested).
@@ -658,7 +561,7 @@ fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
         let row = &rows[L - 1];
         let mut r = g * row[0];
         if a != 0.0 {
-            r *= exp_tab(a * row[1]);
+            r *= exp_poly(a * row[1]);
         }
         if r < 1.0 {
             let (s0, s_c, s_inv) = (lanes(&s0), lanes(&s_c), lanes(&s_inv));
@@ -1121,21 +1024,6 @@ mod tests {
             tried > 100 && rough > 20 && rough < tried,
             "{tried} {rough}"
         );
-    }
-
-    #[test]
-    fn exp_tab_is_accurate() {
-        let mut x = -700.0;
-        while x <= 700.0 {
-            let (f, e) = (exp_tab(x), x.exp());
-            assert!(
-                (f / e - 1.0).abs() < 4.0 * f64::EPSILON,
-                "x={x}: {f} vs {e}"
-            );
-            x += 0.00731;
-        }
-        assert_eq!(exp_tab(0.0), 1.0);
-        assert_eq!(exp_tab(800.0), exp_tab(700.0));
     }
 
     #[test]
