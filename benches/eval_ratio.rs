@@ -64,7 +64,7 @@ fn main() {
             for jac in [false, true] {
                 let mut out = vec![0.0; N];
                 let mut j = vec![0.0; 3 * N];
-                let mut time = |m: &Kbs, out: &mut [f64], j: &mut [f64]| {
+                let time = |m: &Kbs, out: &mut [f64], j: &mut [f64]| {
                     let t = Instant::now();
                     m.radiance(&geo, &p, out, jac.then_some(j));
                     t.elapsed().as_secs_f64() * 1e9 / N as f64
