@@ -15,38 +15,11 @@
 //! in every regime.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use goniofit::geometry::{Geometry, Quantity, Sample};
+mod common;
+
+use common::{geometry, sigma_for, N};
 use goniofit::model::{self, series, EvalMode, Model, ModelOptions};
-use rand::{Rng, SeedableRng};
 use std::time::Duration;
-
-const N: usize = 10_000;
-
-fn geometry(lobe: bool, seed: u64) -> Geometry {
-    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let samples: Vec<Sample> = (0..N)
-        .map(|_| {
-            if lobe {
-                let ti: f64 = rng.gen_range(10.0..50.0);
-                let tr = (ti + rng.gen_range(-10.0..10.0f64)).clamp(0.0, 90.0);
-                let pr: f64 = rng.gen_range(-10.0..10.0);
-                Sample::from_degrees(ti, tr, pr)
-            } else {
-                Sample::from_degrees(
-                    rng.gen_range(0.0..60.0),
-                    rng.gen_range(0.0..60.0),
-                    rng.gen_range(0.0..360.0),
-                )
-            }
-        })
-        .collect();
-    Geometry::new(&samples, &[1.0], Quantity::Radiance).unwrap()
-}
-
-/// σ (λ = 1) such that g = target at c = 1.5.
-fn sigma_for(g: f64) -> f64 {
-    g.sqrt() / 1.5 / (2.0 * std::f64::consts::PI)
-}
 
 const REGIMES: [(&str, f64); 4] = [
     ("g=0.01", 0.01),

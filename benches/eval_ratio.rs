@@ -9,33 +9,13 @@
 //! sample of each mode and the median and quartiles of the per-pair ratio, for values and
 //! with the Jacobian. The target of issue #2 is auto/rough ≤ 4 in every regime.
 
-use goniofit::geometry::{Geometry, Quantity, Sample};
+mod common;
+
+use common::{geometry, sigma_for, N};
 use goniofit::model::{kbs::Kbs, EvalMode, Model, ModelOptions};
-use rand::{Rng, SeedableRng};
 use std::time::Instant;
 
-const N: usize = 10_000;
 const PAIRS: usize = 301;
-
-fn geometry(lobe: bool, seed: u64) -> Geometry {
-    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let samples: Vec<Sample> = (0..N)
-        .map(|_| {
-            if lobe {
-                let ti: f64 = rng.gen_range(10.0..50.0);
-                let tr = (ti + rng.gen_range(-10.0..10.0f64)).clamp(0.0, 90.0);
-                Sample::from_degrees(ti, tr, rng.gen_range(-10.0..10.0))
-            } else {
-                Sample::from_degrees(
-                    rng.gen_range(0.0..60.0),
-                    rng.gen_range(0.0..60.0),
-                    rng.gen_range(0.0..360.0),
-                )
-            }
-        })
-        .collect();
-    Geometry::new(&samples, &[1.0], Quantity::Radiance).unwrap()
-}
 
 fn quartiles(mut v: Vec<f64>) -> [f64; 3] {
     v.sort_by(f64::total_cmp);
@@ -59,7 +39,7 @@ fn main() {
     for (set, lobe) in [("hemisphere", false), ("lobe", true)] {
         let geo = geometry(lobe, 7);
         for g in [0.01, 1.0, 100.0, 1e4] {
-            let sigma = f64::sqrt(g) / 1.5 / (2.0 * std::f64::consts::PI);
+            let sigma = sigma_for(g);
             let p = [sigma, 5.0 * sigma, 1.0];
             for jac in [false, true] {
                 let mut out = vec![0.0; N];

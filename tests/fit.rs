@@ -42,6 +42,45 @@ fn synthetic(
     }
 }
 
+/// Several channels of synthetic data in one input (unit weights): channel c, named
+/// `names[c]`, at wavelength `lambdas[c]` with model parameters `params[c]` and relative
+/// noise `noise` (seed `seed0 + c`), on the same angles.
+fn joint_synthetic(
+    model: &str,
+    params: &[Vec<f64>],
+    lambdas: &[f64],
+    names: &[&str],
+    layout: Layout,
+    noise: f64,
+    seed0: u64,
+) -> FitInput {
+    let m = by_name(model, &ModelOptions::default()).unwrap();
+    let angles = layout.angles();
+    let mut samples = Vec::new();
+    let (mut y, mut lambda, mut channel) = (Vec::new(), Vec::new(), Vec::new());
+    for (c, (p, &lam)) in params.iter().zip(lambdas).enumerate() {
+        let noise = Noise {
+            kind: NoiseKind::Relative,
+            level: noise,
+            seed: seed0 + c as u64,
+        };
+        let d = generate(m.as_ref(), p, &angles, lam, Quantity::Radiance, &noise).unwrap();
+        lambda.extend(std::iter::repeat_n(lam, d.len()));
+        channel.extend(std::iter::repeat_n(c, d.len()));
+        samples.extend(d.samples);
+        y.extend(d.value);
+    }
+    let geo = Geometry::new(&samples, &lambda, Quantity::Radiance).unwrap();
+    let n = geo.len();
+    FitInput {
+        geo,
+        y,
+        weight: vec![1.0; n],
+        channel,
+        channel_names: names.iter().map(|s| s.to_string()).collect(),
+    }
+}
+
 fn config(model: &str) -> FitConfig {
     FitConfig {
         model: model.into(),
@@ -166,41 +205,15 @@ fn joint_fit_shares_sigma_and_t_across_channels() {
     let truth = [0.25, 2.5];
     let scales = [1.0, 0.7, 0.4];
     let lambdas = [0.8, 1.0, 1.25];
-    let model = by_name("kbs", &ModelOptions::default()).unwrap();
-    let angles = Layout::hemisphere().with_grid(4, 12, 24).unwrap().angles();
-    let mut samples = Vec::new();
-    let mut y = Vec::new();
-    let mut lambda = Vec::new();
-    let mut channel = Vec::new();
-    for c in 0..3 {
-        let noise = Noise {
-            kind: NoiseKind::Relative,
-            level: 0.01,
-            seed: 100 + c as u64,
-        };
-        let d = generate(
-            model.as_ref(),
-            &[truth[0], truth[1], scales[c]],
-            &angles,
-            lambdas[c],
-            Quantity::Radiance,
-            &noise,
-        )
-        .unwrap();
-        lambda.extend(std::iter::repeat_n(lambdas[c], d.len()));
-        channel.extend(std::iter::repeat_n(c, d.len()));
-        samples.extend(d.samples);
-        y.extend(d.value);
-    }
-    let geo = Geometry::new(&samples, &lambda, Quantity::Radiance).unwrap();
-    let n = geo.len();
-    let input = FitInput {
-        geo,
-        y,
-        weight: vec![1.0; n],
-        channel,
-        channel_names: vec!["800nm".into(), "1000nm".into(), "1250nm".into()],
-    };
+    let input = joint_synthetic(
+        "kbs",
+        &scales.map(|s| vec![truth[0], truth[1], s]),
+        &lambdas,
+        &["800nm", "1000nm", "1250nm"],
+        Layout::hemisphere().with_grid(4, 12, 24).unwrap(),
+        0.01,
+        100,
+    );
     let r = fit(&input, &config("kbs")).unwrap();
     assert!(r.converged());
     assert_eq!(r.params.len(), 5, "sigma, T and three scales");
@@ -278,38 +291,17 @@ fn problem_jacobian_matches_central_differences() {
     use goniofit::fit::lm::{finite_difference_jacobian, LeastSquaresProblem};
     use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
     let model = by_name("kbs+lambert", &ModelOptions::default()).unwrap();
-    let angles = Layout::hemisphere().with_grid(3, 6, 8).unwrap().angles();
-    let mut samples = Vec::new();
-    let (mut y, mut lambda, mut channel) = (Vec::new(), Vec::new(), Vec::new());
-    for (c, (lam, s)) in [(0.8, 1.0), (1.2, 0.6)].into_iter().enumerate() {
-        let noise = Noise {
-            kind: NoiseKind::Relative,
-            level: 0.05,
-            seed: 7 + c as u64,
-        };
-        let d = generate(
-            model.as_ref(),
-            &[0.3, 2.0, s, 0.05],
-            &angles,
-            lam,
-            Quantity::Radiance,
-            &noise,
-        )
-        .unwrap();
-        lambda.extend(std::iter::repeat_n(lam, d.len()));
-        channel.extend(std::iter::repeat_n(c, d.len()));
-        samples.extend(d.samples);
-        y.extend(d.value);
-    }
-    let geo = Geometry::new(&samples, &lambda, Quantity::Radiance).unwrap();
-    let n = geo.len();
-    let input = FitInput {
-        geo,
-        y,
-        weight: (0..n).map(|i| 0.5 + (i % 3) as f64).collect(),
-        channel,
-        channel_names: vec!["a".into(), "b".into()],
-    };
+    let mut input = joint_synthetic(
+        "kbs+lambert",
+        &[vec![0.3, 2.0, 1.0, 0.05], vec![0.3, 2.0, 0.6, 0.05]],
+        &[0.8, 1.2],
+        &["a", "b"],
+        Layout::hemisphere().with_grid(3, 6, 8).unwrap(),
+        0.05,
+        7,
+    );
+    let n = input.geo.len();
+    input.weight = (0..n).map(|i| 0.5 + (i % 3) as f64).collect();
     for kind in [
         ResidualKind::Absolute,
         ResidualKind::Relative,

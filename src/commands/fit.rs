@@ -195,8 +195,7 @@ pub fn fit_config(
         max_iters: args.max_iter,
         timeout: args.timeout.map(std::time::Duration::from_secs_f64),
         progress: args.progress,
-        predicted_stop: true,
-        ..LmConfig::default()
+        ..FitConfig::default().lm
     };
     Ok(FitConfig {
         model: model.to_string(),

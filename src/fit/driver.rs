@@ -259,16 +259,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         grid_start,
         start_seconds,
         init_seconds,
-        fallbacks,
     } = start?;
-    let (p0, grid_start) = if problem.in_domain(&p0) {
-        (p0, grid_start)
-    } else {
-        fallbacks
-            .into_iter()
-            .find(|(p, _)| problem.in_domain(p))
-            .unwrap_or((p0, grid_start))
-    };
 
     let first = run_lm(&problem, &p0, &config.lm);
     let mut report = first;
@@ -342,12 +333,6 @@ struct Start {
     start_seconds: f64,
     /// Seconds from the fit's start to the end of the refinement.
     init_seconds: f64,
-    /// Further (start, grid point) pairs in order of preference: the other refined
-    /// candidates by cost, then the grid's candidates themselves. The refinement checks
-    /// the model's domain on its subsample only; the full fit takes the first pair inside
-    /// the domain on every sample (a rough-valley candidate can drift to σ where some
-    /// sample outside the subsample has g beyond the domain).
-    fallbacks: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
 /// The starting point: the grid of [`init::initial_values`], then the quick refinement of
@@ -412,8 +397,7 @@ fn starting_point(
         )?),
         None => None,
     };
-    // The grid runs on an evenly spaced part of the refinement's subsample (the same
-    // samples as an evenly spaced subsample of the whole data).
+    // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
     let candidates = init::initial_values(&sub_exact, grid_model.as_ref(), &sub, given);
     let start_seconds = t0.elapsed().as_secs_f64();
     let coarse = LmConfig {
@@ -424,9 +408,14 @@ fn starting_point(
         predicted_stop: true,
         ..config.lm.clone()
     };
-    let mut grid_start = candidates[0].1.clone();
+    // A start must lie inside the models' domain on every sample, not only on the
+    // subsample: a rough-valley candidate can drift to a σ where a sample outside the
+    // subsample has g beyond the fit's limit. Without any refined start inside, the first
+    // grid candidate inside is taken.
+    let inside = |p: &[f64]| input.in_domain(model, layout, p);
+    let first_grid = candidates.iter().position(|(_, c)| inside(c)).unwrap_or(0);
+    let mut grid_start = candidates[first_grid].1.clone();
     let mut p0 = grid_start.clone();
-    let mut fallbacks = Vec::new();
     if sub.y.len() > n_free {
         let refined: Vec<(f64, Vec<f64>)> = candidates
             .par_iter()
@@ -448,37 +437,27 @@ fn starting_point(
             .collect();
         // The lowest cost wins; costs within the refinement's ftol count as a tie, won by
         // the better-ranked grid point.
-        let ok = |(cost, values): &(f64, Vec<f64>)| cost.is_finite() && sub_exact.in_domain(values);
+        let ok = |(cost, values): &(f64, Vec<f64>)| cost.is_finite() && inside(values);
         let lowest = refined
             .iter()
             .filter(|r| ok(r))
             .map(|r| r.0)
             .fold(f64::INFINITY, f64::min);
         let best = refined
-            .iter()
-            .position(|r| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
-        if let Some(b) = best {
-            p0 = refined[b].1.clone();
-            grid_start = candidates[b].1.clone();
+            .into_iter()
+            .zip(&candidates)
+            .find(|(r, _)| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
+        if let Some(((_, values), (_, start))) = best {
+            p0 = values;
+            grid_start = start.clone();
         }
-        let mut others: Vec<usize> = (0..refined.len())
-            .filter(|&k| Some(k) != best && ok(&refined[k]))
-            .collect();
-        others.sort_by(|&i, &j| refined[i].0.total_cmp(&refined[j].0));
-        fallbacks.extend(
-            others
-                .into_iter()
-                .map(|k| (refined[k].1.clone(), candidates[k].1.clone())),
-        );
     }
-    fallbacks.extend(candidates.iter().map(|(_, c)| (c.clone(), c.clone())));
     let init_seconds = t0.elapsed().as_secs_f64();
     Ok(Start {
         p0,
         grid_start,
         start_seconds,
         init_seconds,
-        fallbacks,
     })
 }
 

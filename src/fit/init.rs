@@ -1,8 +1,9 @@
 //! Starting values found from the data: a coarse grid over the nonlinear parameters
 //! (σ/λ and T/λ for KBS, the lobe width w for the specular lobe), with the linear
 //! parameters (scales, lobe strength) solved exactly by linear least squares at every grid
-//! point (variable projection). The grid runs on an evenly spaced subsample of at most
-//! [`GRID_SAMPLES`] samples, so its cost does not grow with the dataset.
+//! point (variable projection). The grid runs on a subsample spread over the whole file
+//! ([`subsample`]) of at most [`GRID_SAMPLES`] samples, so its cost does not grow with the
+//! dataset.
 
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
 use super::stats::median;

@@ -466,6 +466,19 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
+/// ‖J p‖ for a step p, from the pivoted QR of J (‖Q R Pᵀ p‖ = ‖R Pᵀ p‖).
+fn jp_norm(qr: &QrState, step: &DVector<f64>) -> f64 {
+    let n = step.len();
+    let mut jp = DVector::zeros(n);
+    for j in 0..n {
+        let t = step[qr.ipvt[j]];
+        for i in 0..=j {
+            jp[i] += qr.r[(i, j)] * t;
+        }
+    }
+    enorm(jp.as_slice())
+}
+
 fn pad_vec(v: DVector<f64>, rows: usize) -> DVector<f64> {
     if v.len() >= rows {
         v
@@ -909,14 +922,7 @@ where
             let step = -step;
             let pnorm = enorm(w.diag.component_mul(&step).as_slice());
             // Predicted relative reduction of the undamped step, ‖J p‖²/‖r‖².
-            let mut jp = DVector::zeros(n);
-            for j in 0..n {
-                let t = step[qr.ipvt[j]];
-                for i in 0..=j {
-                    jp[i] += qr.r[(i, j)] * t;
-                }
-            }
-            let prered = (enorm(jp.as_slice()) / w.fnorm).powi(2);
+            let prered = (jp_norm(qr, &step) / w.fnorm).powi(2);
             // The iterate with the smallest Gauss–Newton step is the one closest to
             // stationarity as far as the (noise-free) linear model can tell.
             if pol.best.as_ref().is_none_or(|b| pnorm < b.pnorm) {
@@ -994,14 +1000,7 @@ where
         let trial = &w.x + &step;
         let pnorm = enorm(w.diag.component_mul(&step).as_slice());
         // Predicted reduction from the linear model: ‖J p‖² and the λ‖Dp‖² term.
-        let mut jp = DVector::zeros(n);
-        for j in 0..n {
-            let t = step[qr.ipvt[j]];
-            for i in 0..=j {
-                jp[i] += qr.r[(i, j)] * t;
-            }
-        }
-        let temp1 = enorm(jp.as_slice()) / w.fnorm;
+        let temp1 = jp_norm(qr, &step) / w.fnorm;
         if self.predicted_stop
             && !self.polish
             && !w.first

@@ -234,6 +234,16 @@ pub struct FitInput {
 }
 
 impl FitInput {
+    /// [`FitProblem::in_domain`] for these samples, without building the problem.
+    pub fn in_domain(&self, model: &dyn Model, layout: &ParamLayout, p: &[f64]) -> bool {
+        samples_in_domain(
+            model,
+            layout,
+            p,
+            (0..self.geo.len()).map(|i| (&self.geo, i, self.channel[i])),
+        )
+    }
+
     /// The samples at the given indices.
     pub fn subset(&self, idx: &[usize]) -> FitInput {
         FitInput {
@@ -459,29 +469,48 @@ pub const G_FIT_MAX: f64 = 1e7;
 /// Largest a = v_xy² T²/4 a fit may step to (T ≫ λ: the lobe is narrower than e^{-1e10}).
 pub const A_FIT_MAX: f64 = 1e10;
 
+/// The domain check of [`FitProblem::in_domain`] over samples given as (geometry, sample
+/// index, channel).
+fn samples_in_domain<'g>(
+    model: &dyn Model,
+    layout: &ParamLayout,
+    p: &[f64],
+    mut samples: impl Iterator<Item = (&'g Geometry, usize, usize)>,
+) -> bool {
+    if !p.iter().all(|v| v.is_finite()) {
+        return false;
+    }
+    let specs = model.params();
+    let find = |name: &str| specs.iter().position(|s| s.name == name);
+    let (Some(js), Some(jt)) = (find("sigma"), find("T")) else {
+        return true;
+    };
+    samples.all(|(geo, i, c)| {
+        let sigma = p[layout.index[c][js]];
+        let corr = p[layout.index[c][jt]];
+        sigma.is_normal()
+            && corr.is_normal()
+            && sigma > 0.0
+            && corr > 0.0
+            && geo.g(i, sigma) <= G_FIT_MAX
+            && geo.a(i, corr) <= A_FIT_MAX
+    })
+}
+
 impl FitProblem<'_> {
     /// Whether full parameters `p` keep every sample inside the domain where the models are
     /// evaluated at their stated cost and accuracy: finite values, σ, T > 0 and normal,
     /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`]. Outside, the solver sees non-finite residuals
     /// and rejects the step.
     pub fn in_domain(&self, p: &[f64]) -> bool {
-        if !p.iter().all(|v| v.is_finite()) {
-            return false;
-        }
-        let specs = self.model.params();
-        let find = |name: &str| specs.iter().position(|s| s.name == name);
-        let (Some(js), Some(jt)) = (find("sigma"), find("T")) else {
-            return true;
-        };
-        self.blocks.iter().all(|b| {
-            let sigma = p[self.layout.index[b.channel][js]];
-            let corr = p[self.layout.index[b.channel][jt]];
-            if !(sigma.is_normal() && corr.is_normal() && sigma > 0.0 && corr > 0.0) {
-                return false;
-            }
-            (0..b.geo.len())
-                .all(|i| b.geo.g(i, sigma) <= G_FIT_MAX && b.geo.a(i, corr) <= A_FIT_MAX)
-        })
+        samples_in_domain(
+            self.model,
+            &self.layout,
+            p,
+            self.blocks
+                .iter()
+                .flat_map(|b| (0..b.geo.len()).map(move |i| (&b.geo, i, b.channel))),
+        )
     }
 
     /// Weighted residuals and their Jacobian with respect to the solver variables x, in one
