@@ -236,12 +236,11 @@ pub struct FitInput {
 impl FitInput {
     /// [`FitProblem::in_domain`] for these samples, without building the problem.
     pub fn in_domain(&self, model: &dyn Model, layout: &ParamLayout, p: &[f64]) -> bool {
-        samples_in_domain(
-            model,
-            layout,
-            p,
-            (0..self.geo.len()).map(|i| (&self.geo, i, self.channel[i])),
-        )
+        let Some(sc) = channel_roughness(model, layout, p) else {
+            return false;
+        };
+        sc.is_empty()
+            || (0..self.geo.len()).all(|i| sample_in_domain(&self.geo, i, sc[self.channel[i]]))
     }
 
     /// The samples at the given indices.
@@ -469,32 +468,35 @@ pub const G_FIT_MAX: f64 = 1e7;
 /// Largest a = v_xy² T²/4 a fit may step to (T ≫ λ: the lobe is narrower than e^{-1e10}).
 pub const A_FIT_MAX: f64 = 1e10;
 
-/// The domain check of [`FitProblem::in_domain`] over samples given as (geometry, sample
-/// index, channel).
-fn samples_in_domain<'g>(
+/// The (σ, T) of each channel under full parameters `p` (empty for models without them),
+/// or None when `p` is not finite or some σ, T is not a positive normal number: the part of
+/// [`FitProblem::in_domain`] that does not depend on the samples.
+fn channel_roughness(
     model: &dyn Model,
     layout: &ParamLayout,
     p: &[f64],
-    mut samples: impl Iterator<Item = (&'g Geometry, usize, usize)>,
-) -> bool {
+) -> Option<Vec<(f64, f64)>> {
     if !p.iter().all(|v| v.is_finite()) {
-        return false;
+        return None;
     }
     let specs = model.params();
     let find = |name: &str| specs.iter().position(|s| s.name == name);
     let (Some(js), Some(jt)) = (find("sigma"), find("T")) else {
-        return true;
+        return Some(Vec::new());
     };
-    samples.all(|(geo, i, c)| {
-        let sigma = p[layout.index[c][js]];
-        let corr = p[layout.index[c][jt]];
-        sigma.is_normal()
-            && corr.is_normal()
-            && sigma > 0.0
-            && corr > 0.0
-            && geo.g(i, sigma) <= G_FIT_MAX
-            && geo.a(i, corr) <= A_FIT_MAX
-    })
+    let good = |v: f64| v.is_normal() && v > 0.0;
+    layout
+        .index
+        .iter()
+        .map(|ix| (p[ix[js]], p[ix[jt]]))
+        .map(|(sigma, corr)| (good(sigma) && good(corr)).then_some((sigma, corr)))
+        .collect()
+}
+
+/// Whether sample i of `geo` stays within the fit's limits of g and a at σ, T.
+#[inline]
+fn sample_in_domain(geo: &Geometry, i: usize, (sigma, corr): (f64, f64)) -> bool {
+    geo.g(i, sigma) <= G_FIT_MAX && geo.a(i, corr) <= A_FIT_MAX
 }
 
 impl FitProblem<'_> {
@@ -503,14 +505,14 @@ impl FitProblem<'_> {
     /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`]. Outside, the solver sees non-finite residuals
     /// and rejects the step.
     pub fn in_domain(&self, p: &[f64]) -> bool {
-        samples_in_domain(
-            self.model,
-            &self.layout,
-            p,
-            self.blocks
+        let Some(sc) = channel_roughness(self.model, &self.layout, p) else {
+            return false;
+        };
+        sc.is_empty()
+            || self
+                .blocks
                 .iter()
-                .flat_map(|b| (0..b.geo.len()).map(move |i| (&b.geo, i, b.channel))),
-        )
+                .all(|b| (0..b.geo.len()).all(|i| sample_in_domain(&b.geo, i, sc[b.channel])))
     }
 
     /// Weighted residuals and their Jacobian with respect to the solver variables x, in one
