@@ -5,6 +5,7 @@
 
 pub mod kbs;
 pub mod lambert;
+mod lanes;
 pub mod mixed;
 pub mod series;
 pub mod specular;

@@ -36,18 +36,21 @@
 //!   orders decay by at least 2× per step, and the estimate is below 0.15 tol. Unlike the
 //!   series' tail bounds this estimate is not a proof; it is checked against the mpmath
 //!   grid (worst error found 0.13 of the claim) and against the series at 3000 random
-//!   (g, a) (`tests/model_props.rs`). Work: the orders are evaluated four at a time
-//!   (Horner in b² on sixteen independent lanes: even and odd parts of P_n and P_n'), about
-//!   4(4k+5) multiply-adds for the k-th group of four orders; n ≈ 3 orders at g = 1e4,
-//!   ≈ 8–9 at g = 100 and moderate b. It fails, and `auto` falls back to the series, when
-//!   b²/g is not small (far from the specular peak at moderate g).
+//!   (g, a) (`tests/model_props.rs`). Work: the orders are evaluated four at a time, in
+//!   four-lane vectors ([`super::lanes`]): Horner in b² on four vectors (even and odd parts
+//!   of P_n and P_n'), 4k+4 fused multiply-adds of four lanes for the k-th group of four
+//!   orders, then the group's sums and acceptance tests as vector operations (no branch
+//!   per order); n ≈ 3 orders at g = 1e4, ≈ 6–9 at g = 100 and moderate b. It fails, and
+//!   `auto` falls back to the series, when b²/g is not small (far from the specular peak
+//!   at moderate g).
 //!
 //! `auto`: smooth if its bound holds (possible only for g ≤ 2 tol); else the asymptotic
 //! completion if it is accepted; else the series.
 //!
-//! Batches ([`ln_q_batch`], what the models call): the same results bit for bit; on x86-64
-//! CPUs with AVX2 the batch runs in a copy of this code compiled for AVX2, chosen at run
-//! time.
+//! Batches ([`ln_q_batch`], what the models call): the same results bit for bit as one
+//! sample at a time; on x86-64 CPUs with AVX2 and FMA both run in a copy of this code
+//! compiled for them, chosen at run time, which gives the same bits as the portable code
+//! (unit-tested).
 //!
 //! Accuracy (`series`, and `auto` at every switch): |Δ ln Q| ≤ tol (the relative error of
 //! Q, also when Q itself under- or overflows), |Δ(g ∂lnQ/∂g)| ≤ tol (1 + |g ∂lnQ/∂g|) and
@@ -56,6 +59,7 @@
 //! uses (∂ln L/∂ln σ = 2 + 2g ∂lnQ/∂g, ∂ln L/∂ln T = 2 + 2a ∂lnQ/∂a). Verified against the
 //! 60-digit mpmath reference in `tests/ref/` (g 1e-12..1e6, a 0..1e8).
 
+use super::lanes::{F64x4, Portable};
 use super::{EvalMode, Mode};
 
 /// ln Q(g, a) and its partial derivatives.
@@ -600,37 +604,38 @@ const ASYM_K: usize = 2 * ASYM_ORDERS + 1;
 #[cfg(test)]
 static ASYM: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_table();
 
-/// Orders in blocks of four for the sixteen-lane Horner scheme: `ASYM_BLK[k][j]` holds,
-/// for the orders n = 4k+1..4k+4 (lane l = n − 4k − 1), [P_n[2j] (lanes 0–3), P_n[2j+1]
-/// (4–7), P_n'[2j] (8–11), P_n'[2j+1] (12–15)], the coefficients of b^{2j}, b^{2j+1};
-/// j runs to 4k + 4 (degree 2n ≤ 8k + 8), orders beyond [`ASYM_ORDERS`] are zero.
-static ASYM_BLK: [[[f64; 16]; ASYM_J]; ASYM_BLOCKS] = asym_blocks();
+/// Orders in blocks of four for the Horner scheme on four vectors of four lanes:
+/// `ASYM_BLK[k][j]` holds, for the orders n = 4k+1..4k+4 (lane l = n − 4k − 1), the
+/// vectors [P_n[2j], P_n[2j+1], P_n'[2j], P_n'[2j+1]]: the coefficients of b^{2j} and
+/// b^{2j+1}; j runs to 4k + 4 (degree 2n ≤ 8k + 8), orders beyond [`ASYM_ORDERS`] are zero.
+static ASYM_BLK: [[[[f64; 4]; 4]; ASYM_J]; ASYM_BLOCKS] = asym_blocks();
 const ASYM_BLOCKS: usize = ASYM_ORDERS.div_ceil(4);
 const ASYM_J: usize = 4 * ASYM_BLOCKS + 1;
 
-/// The first two blocks of [`ASYM_BLK`] side by side, nine rows (block 0's rows 5–8 zero).
-static ASYM_BLK01: [[f64; 32]; 9] = {
+/// The first two blocks of [`ASYM_BLK`] side by side (eight vectors), nine rows (block 0's
+/// rows 5–8 zero).
+static ASYM_BLK01: [[[f64; 4]; 8]; 9] = {
     let blk = asym_blocks();
-    let mut t = [[0.0f64; 32]; 9];
+    let mut t = [[[0.0f64; 4]; 8]; 9];
     let mut j = 0;
     while j < 9 {
-        let mut l = 0;
-        while l < 16 {
+        let mut v = 0;
+        while v < 4 {
             if j < 5 {
-                t[j][l] = blk[0][j][l];
+                t[j][v] = blk[0][j][v];
             }
-            t[j][16 + l] = blk[1][j][l];
-            l += 1;
+            t[j][4 + v] = blk[1][j][v];
+            v += 1;
         }
         j += 1;
     }
     t
 };
 
-const fn asym_blocks() -> [[[f64; 16]; ASYM_J]; ASYM_BLOCKS] {
+const fn asym_blocks() -> [[[[f64; 4]; 4]; ASYM_J]; ASYM_BLOCKS] {
     let p = asym_table();
     let d = asym_deriv_table();
-    let mut t = [[[0.0f64; 16]; ASYM_J]; ASYM_BLOCKS];
+    let mut t = [[[[0.0f64; 4]; 4]; ASYM_J]; ASYM_BLOCKS];
     let mut k = 0;
     while k < ASYM_BLOCKS {
         let mut l = 0;
@@ -638,10 +643,10 @@ const fn asym_blocks() -> [[[f64; 16]; ASYM_J]; ASYM_BLOCKS] {
             let n = 4 * k + l + 1;
             let mut j = 0;
             while n <= ASYM_ORDERS && j < ASYM_J && 2 * j + 1 < ASYM_DEG {
-                t[k][j][l] = p[n][2 * j];
-                t[k][j][4 + l] = p[n][2 * j + 1];
-                t[k][j][8 + l] = d[n][2 * j];
-                t[k][j][12 + l] = d[n][2 * j + 1];
+                t[k][j][0][l] = p[n][2 * j];
+                t[k][j][1][l] = p[n][2 * j + 1];
+                t[k][j][2][l] = d[n][2 * j];
+                t[k][j][3][l] = d[n][2 * j + 1];
                 j += 1;
             }
             l += 1;
@@ -756,94 +761,191 @@ const ASYM_G_MIN: f64 = 40.0;
 /// The asymptotic completion of the rough approximation (module doc), or `None` when its
 /// error estimate does not reach `tol` within [`ASYM_ORDERS`] orders.
 pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
-    asymptotic_body(g, a, tol)
+    struct Call(f64, f64, f64);
+    impl LanesFn for Call {
+        type Out = Option<LnQ>;
+        #[inline(always)]
+        fn call<V: F64x4>(self) -> Option<LnQ> {
+            asymptotic_body::<V>(self.0, self.1, self.2)
+        }
+    }
+    with_lanes(Call(g, a, tol))
 }
 
 #[inline(always)]
-fn asymptotic_body(g: f64, a: f64, tol: f64) -> Option<LnQ> {
+fn asymptotic_body<V: F64x4>(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     let b = a / g;
     let x = 1.0 / g;
     let target = 0.5 * tol;
-    // R = Σ g^{−n} P_n(b); r_g = g ∂R/∂g|_b = −Σ n g^{−n} P_n; r_b = ∂R/∂b.
-    let (mut r, mut r_g, mut r_b) = (1.0f64, 0.0f64, 0.0f64);
-    let mut gp = 1.0;
-    // Sizes and error estimates of the previous two orders.
-    let (mut prev, mut prev2) = (f64::INFINITY, f64::INFINITY);
-    let (mut err_prev, mut err_prev2) = (f64::INFINITY, f64::INFINITY);
     // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): Horner
-    // in b² for four orders at once, sixteen independent lanes (E, O, E', O' of each
-    // order; a lower order's leading coefficients are zero, which leaves its chain exact).
-    let y = b * b;
-    let mut vals = [0.0f64; 16];
+    // in b² for four orders at once, four vectors of four lanes (E, O, E', O' of the
+    // orders; a lower order's leading coefficients are zero, which leaves its chain exact).
+    let (bv, yv) = (V::splat(b), V::splat(b * b));
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let mut sums = AsymSums::<V>::start(target);
+    // g^{−n} of the block's four orders.
+    let mut xp = V::from_array([x, x2, x2 * x, x4]);
+    let x4v = V::splat(x4);
     // Where the first eight orders are needed anyway (the error of order 4 is ~ 5·4!/g^4
     // times a decay of ~5/g: above 0.15 tol while g^5 tol < 4e3), their two blocks run as
-    // one chain of nine steps on 32 lanes instead of chains of five and nine steps.
+    // one chain of nine steps on eight vectors instead of chains of five and nine steps.
     let paired = {
         let g2 = g * g;
         g2 * g2 * g * tol < 4e3
     };
-    let mut pair = [0.0f64; 32];
+    let mut first = 0;
     if paired {
-        for row in ASYM_BLK01.iter().rev() {
-            for l in 0..32 {
-                pair[l] = pair[l] * y + row[l];
+        // Block 1's nine rows; block 0's five join at row 4 (its rows above are zero).
+        let rows = &ASYM_BLK01;
+        let mut v = rows[8].map(V::from_array);
+        for (j, row) in rows[..8].iter().enumerate().rev() {
+            let joined = if j >= 4 { 4 } else { 0 };
+            for (vk, rk) in v[joined..].iter_mut().zip(&row[joined..]) {
+                *vk = vk.mul_add(yv, V::from_array(*rk));
             }
-        }
-    }
-    for n in 1..=ASYM_ORDERS {
-        let lane = (n - 1) % 4;
-        if lane == 0 {
-            let k = (n - 1) / 4;
-            if paired && k < 2 {
-                vals.copy_from_slice(&pair[16 * k..16 * k + 16]);
-            } else {
-                vals = [0.0f64; 16];
-                for row in ASYM_BLK[k][..4 * k + 5].iter().rev() {
-                    for l in 0..16 {
-                        vals[l] = vals[l] * y + row[l];
-                    }
+            if j == 4 {
+                for (vk, rk) in v[..4].iter_mut().zip(row) {
+                    *vk = V::from_array(*rk);
                 }
             }
         }
-        gp *= x;
-        let p = vals[lane] + b * vals[4 + lane];
-        let dp = vals[8 + lane] + b * vals[12 + lane];
-        let term = gp * p;
-        let term_b = gp * dp;
-        r += term;
-        r_g -= n as f64 * term;
-        r_b += term_b;
-        let size = term.abs();
-        let err = size * (1.0 + n as f64) + b * term_b.abs();
-        // The first omitted order is estimated from the last one and the larger of the
-        // last two decay ratios (so that an order that happens to be small, P_n(b) near a
-        // root, cannot stop the expansion early); accepted only in a clearly decaying phase.
-        // (Written without divisions: q1 = err/err_prev, q2 = err_prev/err_prev2 < ½ and
-        // err·max(q1, q2) ≤ 0.3 target r.)
-        let t = 0.3 * target * r.abs();
-        if n >= 3
-            && err < 0.5 * err_prev
-            && err_prev < 0.5 * err_prev2
-            && err * err <= t * err_prev
-            && err * err_prev <= t * err_prev2
-            && r > 0.0
-        {
-            return Some(LnQ {
-                ln_q: -b + (r / g / g).ln(),
-                d_g: (b - 2.0 + (r_g - b * r_b) / r) * x,
-                d_a: (-1.0 + r_b / r) * x,
-                mode: Mode::Rough,
-            });
+        for k in 0..2 {
+            let p = v[4 * k + 1].mul_add(bv, v[4 * k]);
+            let dp = v[4 * k + 3].mul_add(bv, v[4 * k + 2]);
+            if let Some(done) = sums.add_block(k, p, dp, xp, bv) {
+                return done.map(|s| asymptotic_result(b, x, s));
+            }
+            xp = xp.mul(x4v);
         }
-        if n >= 3 && size >= prev.max(prev2) {
-            return None; // the asymptotic series has started to diverge
+        first = 2;
+    }
+    for (k, block) in ASYM_BLK.iter().enumerate().skip(first) {
+        let rows = &block[..4 * k + 5];
+        let mut v = rows[4 * k + 4].map(V::from_array);
+        for row in rows[..4 * k + 4].iter().rev() {
+            for (vk, rk) in v.iter_mut().zip(row) {
+                *vk = vk.mul_add(yv, V::from_array(*rk));
+            }
         }
-        prev2 = prev;
-        prev = size;
-        err_prev2 = err_prev;
-        err_prev = err;
+        let p = v[1].mul_add(bv, v[0]);
+        let dp = v[3].mul_add(bv, v[2]);
+        if let Some(done) = sums.add_block(k, p, dp, xp, bv) {
+            return done.map(|s| asymptotic_result(b, x, s));
+        }
+        xp = xp.mul(x4v);
     }
     None
+}
+
+/// The asymptotic expansion's running state: R = Σ g^{−n} P_n(b), r_g = g ∂R/∂g|_b =
+/// −Σ n g^{−n} P_n, r_b = ∂R/∂b over the orders added so far; the sizes and error
+/// estimates of the last block's four orders.
+struct AsymSums<V> {
+    r: f64,
+    r_g: f64,
+    r_b: f64,
+    size: V,
+    err: V,
+    /// 0.3 × the target for the estimated error relative to R.
+    accept: V,
+}
+
+/// The expansion's result: R, r_g, r_b (see [`AsymSums`]).
+struct AsymTotal {
+    r: f64,
+    r_g: f64,
+    r_b: f64,
+}
+
+/// `LANES_UPTO[i]`: 1 in lanes 0..=i, 0 above.
+const LANES_UPTO: [[f64; 4]; 4] = [
+    [1.0, 0.0, 0.0, 0.0],
+    [1.0, 1.0, 0.0, 0.0],
+    [1.0, 1.0, 1.0, 0.0],
+    [1.0, 1.0, 1.0, 1.0],
+];
+
+impl<V: F64x4> AsymSums<V> {
+    #[inline(always)]
+    fn start(target: f64) -> Self {
+        AsymSums {
+            r: 1.0,
+            r_g: 0.0,
+            r_b: 0.0,
+            size: V::splat(f64::INFINITY),
+            err: V::splat(f64::INFINITY),
+            accept: V::splat(0.3 * target),
+        }
+    }
+
+    /// Add the orders n = 4k+1..4k+4 (polynomial values `p`, derivatives `dp`, weights
+    /// `xp` = g^{−n}) and test each, lowest first. `Some(Some(total))` when an order is
+    /// accepted, `Some(None)` when the orders have started to grow (the expansion fails),
+    /// `None` to go on.
+    ///
+    /// Order n (≥ 3) is accepted when its error estimate err_n = (n+1)|term| + b|term_b|
+    /// predicts the first omitted order below 0.3 × target × R: err_n · max(q1, q2) with
+    /// the last two decay ratios q1 = err_n/err_{n−1}, q2 = err_{n−1}/err_{n−2}, both < ½
+    /// (the larger ratio, so that an order that happens to be small, P_n(b) near a root,
+    /// cannot stop the expansion early), written without divisions; and R > 0. The orders
+    /// have started to grow when |term_n| ≥ max(|term_{n−1}|, |term_{n−2}|). Unlike the
+    /// series' tail bounds this estimate is not a proof; see the module doc for its checks.
+    #[inline(always)]
+    fn add_block(&mut self, k: usize, p: V, dp: V, xp: V, b: V) -> Option<Option<AsymTotal>> {
+        let base = 4.0 * k as f64;
+        let n = V::from_array([base + 1.0, base + 2.0, base + 3.0, base + 4.0]);
+        let term = xp.mul(p);
+        let term_b = xp.mul(dp);
+        let size = term.abs();
+        let err = size.mul_add(n.add(V::splat(1.0)), b.mul(term_b.abs()));
+        let (err1, err2) = (V::shift1(self.err, err), V::shift2(self.err, err));
+        let (size1, size2) = (V::shift1(self.size, size), V::shift2(self.size, size));
+        let r = term.prefix_sum().add(V::splat(self.r));
+        let t = self.accept.mul(r.abs());
+        let half = V::splat(0.5);
+        let accepted = err.lt(half.mul(err1))
+            & err1.lt(half.mul(err2))
+            & err.mul(err).le(t.mul(err1))
+            & err.mul(err1).le(t.mul(err2))
+            & r.gt(V::splat(0.0));
+        let growing = size.ge(size1.max(size2));
+        // Orders from 3 to ASYM_ORDERS take part.
+        let first = if k == 0 { 2 } else { 0 };
+        let last = (ASYM_ORDERS - 4 * k).min(4);
+        let valid = (1u32 << last) - (1u32 << first);
+        let decided = (accepted | growing) & valid;
+        if decided != 0 {
+            let at = decided.trailing_zeros() as usize;
+            if accepted & (1 << at) == 0 {
+                return Some(None);
+            }
+            let upto = V::from_array(LANES_UPTO[at]);
+            return Some(Some(AsymTotal {
+                r: r.to_array()[at],
+                r_g: self.r_g - n.mul(term).mul(upto).hsum(),
+                r_b: self.r_b + term_b.mul(upto).hsum(),
+            }));
+        }
+        self.r = r.to_array()[3];
+        self.r_g -= n.mul(term).hsum();
+        self.r_b += term_b.hsum();
+        self.size = size;
+        self.err = err;
+        None
+    }
+}
+
+/// ln Q and its derivatives from the asymptotic sums: Q = e^{−b} R / g².
+#[inline(always)]
+fn asymptotic_result(b: f64, x: f64, s: AsymTotal) -> LnQ {
+    let inv_r = 1.0 / s.r;
+    LnQ {
+        ln_q: -b + (s.r * x * x).ln(),
+        d_g: (b - 2.0 + (s.r_g - b * s.r_b) * inv_r) * x,
+        d_a: (-1.0 + s.r_b * inv_r) * x,
+        mode: Mode::Rough,
+    }
 }
 
 /// The smooth approximation with the m = 2 correction of its derivatives, when the bound
@@ -867,14 +969,18 @@ fn smooth_checked(g: f64, a: f64, tol: f64) -> Option<LnQ> {
 
 /// The cheapest evaluation whose error bound meets `tol`: smooth (m = 1 with its bound),
 /// the rough approximation's asymptotic completion, else the series.
-#[inline(always)]
 pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
+    ln_q(g, a, EvalMode::Auto, tol)
+}
+
+#[inline(always)]
+fn auto_with<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
     if g > G_DOMAIN_MAX {
         // Beyond the stated domain (a fit's trial step can go there): no O(√g) series;
         // the asymptotic expansion where it applies, else the rough approximation, whose
         // relative error is O(1/g) < 1e-6 here. Best effort, not held to `tol`.
         if a < g * g.sqrt() {
-            if let Some(q) = asymptotic(g, a, tol.max(1e-6)) {
+            if let Some(q) = asymptotic_body::<V>(g, a, tol.max(1e-6)) {
                 return q;
             }
         }
@@ -886,7 +992,7 @@ pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
             return q;
         }
     } else if tries_asymptotic(g, a) {
-        if let Some(q) = asymptotic_body(g, a, tol) {
+        if let Some(q) = asymptotic_body::<V>(g, a, tol) {
             return q;
         }
     }
@@ -894,32 +1000,49 @@ pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
 }
 
 /// ln Q for a batch of samples: `out[i]` = [`ln_q`]`(g[i], a[i], mode, tol)`, identical
-/// results, faster: on x86-64 CPUs with AVX2 the batch runs in a copy of the evaluation
-/// compiled for AVX2 (chosen at run time; the binary stays portable), where the series'
-/// lanes of eight terms or ratios vectorise.
+/// results, faster: on x86-64 CPUs with AVX2 and FMA the batch runs in a copy of the
+/// evaluation compiled for them (chosen at run time; the binary stays portable), where the
+/// series' lanes of eight terms or ratios vectorise.
 /// Panics if the slices differ in length.
 pub fn ln_q_batch(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &mut [LnQ]) {
     assert!(g.len() == a.len() && g.len() == out.len());
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above).
-        unsafe { ln_q_batch_avx2(g, a, mode, tol, out) };
-        return;
+    struct Call<'s>(&'s [f64], &'s [f64], EvalMode, f64, &'s mut [LnQ]);
+    impl LanesFn for Call<'_> {
+        type Out = ();
+        #[inline(always)]
+        fn call<V: F64x4>(self) {
+            let Call(g, a, mode, tol, out) = self;
+            for ((o, &gi), &ai) in out.iter_mut().zip(g).zip(a) {
+                *o = ln_q_with::<V>(gi, ai, mode, tol);
+            }
+        }
     }
-    ln_q_batch_body(g, a, mode, tol, out);
+    with_lanes(Call(g, a, mode, tol, out));
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn ln_q_batch_avx2(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &mut [LnQ]) {
-    ln_q_batch_body(g, a, mode, tol, out);
+/// A computation written for any [`F64x4`], run by [`with_lanes`] with the lanes this CPU
+/// has.
+trait LanesFn {
+    type Out;
+    fn call<V: F64x4>(self) -> Self::Out;
 }
 
+/// Run `f` with AVX2 + FMA lanes, compiled for them, where the CPU has both; with
+/// [`Portable`] lanes otherwise. Both give the same bits (the lanes are tested to agree
+/// op by op, and the scalar code around them is the same), so every entry point
+/// (batch or single sample) returns the same result whichever runs.
 #[inline(always)]
-fn ln_q_batch_body(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &mut [LnQ]) {
-    for ((o, &gi), &ai) in out.iter_mut().zip(g).zip(a) {
-        *o = ln_q(gi, ai, mode, tol);
+fn with_lanes<F: LanesFn>(f: F) -> F::Out {
+    #[cfg(target_arch = "x86_64")]
+    if super::lanes::has_avx2_fma() {
+        #[target_feature(enable = "avx2,fma")]
+        fn run<F: LanesFn>(f: F) -> F::Out {
+            f.call::<super::lanes::Avx>()
+        }
+        // SAFETY: the CPU has AVX2 and FMA (checked just above).
+        return unsafe { run(f) };
     }
+    f.call::<Portable>()
 }
 
 /// Whether `auto` tries the asymptotic expansion (at the requested `tol`) before the series.
@@ -936,10 +1059,16 @@ const ASYM_S_MAX: f64 = 3.0;
 pub const G_DOMAIN_MAX: f64 = 1e6;
 
 /// ln Q by the given evaluation mode.
-#[inline(always)]
 pub fn ln_q(g: f64, a: f64, mode: EvalMode, tol: f64) -> LnQ {
+    let mut out = [smooth(0.0, 0.0)];
+    ln_q_batch(&[g], &[a], mode, tol, &mut out);
+    out[0]
+}
+
+#[inline(always)]
+fn ln_q_with<V: F64x4>(g: f64, a: f64, mode: EvalMode, tol: f64) -> LnQ {
     match mode {
-        EvalMode::Auto => auto(g, a, tol),
+        EvalMode::Auto => auto_with::<V>(g, a, tol),
         EvalMode::Series => series(g, a, tol),
         EvalMode::Smooth => smooth(g, a),
         EvalMode::Rough => rough(g, a),
@@ -971,8 +1100,9 @@ mod tests {
 
     #[test]
     fn batch_equals_one_by_one() {
-        // The AVX2 copy where the CPU has it and the generic body: bit-identical to the
-        // one-sample evaluation in every mode, on every path of `auto`.
+        // The lanes this CPU runs (AVX2 + FMA where it has them), batch and one sample at
+        // a time, and the portable lanes compiled for any CPU: the same bits, in every
+        // mode, on every path of `auto`.
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut uniform = || {
             state ^= state << 13;
@@ -999,15 +1129,16 @@ mod tests {
             EvalMode::Smooth,
             EvalMode::Rough,
         ] {
-            for len in [1, 2, 3, 5, 7, 9, n] {
-                let mut fast = vec![smooth(0.0, 0.0); len];
-                let mut generic = fast.clone();
-                ln_q_batch(&g[..len], &a[..len], mode, 1e-10, &mut fast);
-                ln_q_batch_body(&g[..len], &a[..len], mode, 1e-10, &mut generic);
-                for i in 0..len {
-                    let one = ln_q(g[i], a[i], mode, 1e-10);
-                    assert_eq!(fast[i], one, "{mode:?} g={} a={}", g[i], a[i]);
-                    assert_eq!(generic[i], one, "{mode:?} g={} a={}", g[i], a[i]);
+            for tol in [1e-10, 1e-13, 1e-6] {
+                for len in [1, 2, 3, 5, 7, 9, n] {
+                    let mut fast = vec![smooth(0.0, 0.0); len];
+                    ln_q_batch(&g[..len], &a[..len], mode, tol, &mut fast);
+                    for i in 0..len {
+                        let (g, a) = (g[i], a[i]);
+                        let portable = ln_q_with::<Portable>(g, a, mode, tol);
+                        assert_eq!(fast[i], portable, "{mode:?} g={g} a={a} tol={tol}");
+                        assert_eq!(ln_q(g, a, mode, tol), portable);
+                    }
                 }
             }
         }

@@ -1,0 +1,322 @@
+//! Four f64 lanes with the handful of operations the asymptotic KBS expansion needs
+//! ([`super::series`]): fused multiply-add, lane shifts across two vectors, comparisons to
+//! bit masks, and a fixed-order horizontal sum.
+//!
+//! Two implementations give bit-identical results (unit-tested op by op): [`Portable`]
+//! (plain arrays; `f64::mul_add`, which is one instruction where the CPU has FMA and a
+//! correctly rounded library call where it does not) and, on x86-64, [`Avx`] (AVX2 + FMA
+//! intrinsics, chosen at run time). The compiler's own vectorisation of the same array code
+//! picked 128-bit registers and spent most of its instructions shuffling lanes; written
+//! against these types the expansion runs in 256-bit registers.
+
+/// Four f64 lanes. Every operation is lane by lane unless it says otherwise; `shift1`,
+/// `shift2`, `prefix_sum` and `hsum` fix their order of operations, so that both
+/// implementations round alike.
+pub(crate) trait F64x4: Copy {
+    fn splat(x: f64) -> Self;
+    fn from_array(a: [f64; 4]) -> Self;
+    fn to_array(self) -> [f64; 4];
+    /// self · m + c, rounded once.
+    fn mul_add(self, m: Self, c: Self) -> Self;
+    fn mul(self, o: Self) -> Self;
+    fn add(self, o: Self) -> Self;
+    fn abs(self) -> Self;
+    /// The larger of the two (the second when they are unordered).
+    fn max(self, o: Self) -> Self;
+    /// [prev₃, cur₀, cur₁, cur₂]: the lanes of `cur` moved up one, `prev`'s last below.
+    fn shift1(prev: Self, cur: Self) -> Self;
+    /// [prev₂, prev₃, cur₀, cur₁].
+    fn shift2(prev: Self, cur: Self) -> Self;
+    /// Bit i set where self_i < o_i (false when unordered); likewise `le`, `gt`, `ge`.
+    fn lt(self, o: Self) -> u32;
+    fn le(self, o: Self) -> u32;
+    fn gt(self, o: Self) -> u32;
+    fn ge(self, o: Self) -> u32;
+    /// (x₀ + x₂) + (x₁ + x₃).
+    fn hsum(self) -> f64;
+    /// Inclusive prefix sums: [x₀, x₀+x₁, x₀+(x₁+x₂), (x₀+x₁)+(x₂+x₃)].
+    #[inline(always)]
+    fn prefix_sum(self) -> Self {
+        let zero = Self::splat(0.0);
+        let s = self.add(Self::shift1(zero, self));
+        s.add(Self::shift2(zero, s))
+    }
+}
+
+/// Plain arrays: runs everywhere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Portable([f64; 4]);
+
+fn bits(c: [bool; 4]) -> u32 {
+    c[0] as u32 | (c[1] as u32) << 1 | (c[2] as u32) << 2 | (c[3] as u32) << 3
+}
+
+impl F64x4 for Portable {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        Portable([x; 4])
+    }
+    #[inline(always)]
+    fn from_array(a: [f64; 4]) -> Self {
+        Portable(a)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f64; 4] {
+        self.0
+    }
+    #[inline(always)]
+    fn mul_add(self, m: Self, c: Self) -> Self {
+        Portable(std::array::from_fn(|i| self.0[i].mul_add(m.0[i], c.0[i])))
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Portable(std::array::from_fn(|i| self.0[i] * o.0[i]))
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Portable(std::array::from_fn(|i| self.0[i] + o.0[i]))
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Portable(self.0.map(f64::abs))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Portable(std::array::from_fn(|i| {
+            if self.0[i] > o.0[i] {
+                self.0[i]
+            } else {
+                o.0[i]
+            }
+        }))
+    }
+    #[inline(always)]
+    fn shift1(prev: Self, cur: Self) -> Self {
+        Portable([prev.0[3], cur.0[0], cur.0[1], cur.0[2]])
+    }
+    #[inline(always)]
+    fn shift2(prev: Self, cur: Self) -> Self {
+        Portable([prev.0[2], prev.0[3], cur.0[0], cur.0[1]])
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> u32 {
+        bits(std::array::from_fn(|i| self.0[i] < o.0[i]))
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> u32 {
+        bits(std::array::from_fn(|i| self.0[i] <= o.0[i]))
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> u32 {
+        bits(std::array::from_fn(|i| self.0[i] > o.0[i]))
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> u32 {
+        bits(std::array::from_fn(|i| self.0[i] >= o.0[i]))
+    }
+    #[inline(always)]
+    fn hsum(self) -> f64 {
+        (self.0[0] + self.0[2]) + (self.0[1] + self.0[3])
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use avx::{has_avx2_fma, Avx};
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use super::F64x4;
+    use std::arch::x86_64::*;
+
+    /// AVX2 + FMA registers. Only ever created inside functions compiled with
+    /// `#[target_feature(enable = "avx2,fma")]` that run after the CPU was checked for
+    /// both (`has_avx2_fma`); the methods are `#[inline(always)]` so that they compile
+    /// into those functions.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct Avx(__m256d);
+
+    /// Whether this CPU runs [`Avx`].
+    pub(crate) fn has_avx2_fma() -> bool {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+
+    // SAFETY (every `unsafe` block below): the intrinsics need AVX2/FMA, which the CPU has
+    // whenever an `Avx` value exists (see the type's doc); they touch no memory except
+    // through the references passed in.
+    impl F64x4 for Avx {
+        #[inline(always)]
+        fn splat(x: f64) -> Self {
+            unsafe { Avx(_mm256_set1_pd(x)) }
+        }
+        #[inline(always)]
+        fn from_array(a: [f64; 4]) -> Self {
+            unsafe { Avx(_mm256_loadu_pd(a.as_ptr())) }
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f64; 4] {
+            let mut a = [0.0; 4];
+            unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
+            a
+        }
+        #[inline(always)]
+        fn mul_add(self, m: Self, c: Self) -> Self {
+            unsafe { Avx(_mm256_fmadd_pd(self.0, m.0, c.0)) }
+        }
+        #[inline(always)]
+        fn mul(self, o: Self) -> Self {
+            unsafe { Avx(_mm256_mul_pd(self.0, o.0)) }
+        }
+        #[inline(always)]
+        fn add(self, o: Self) -> Self {
+            unsafe { Avx(_mm256_add_pd(self.0, o.0)) }
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            unsafe { Avx(_mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0)) }
+        }
+        #[inline(always)]
+        fn max(self, o: Self) -> Self {
+            // vmaxpd returns its second operand when unordered.
+            unsafe { Avx(_mm256_max_pd(self.0, o.0)) }
+        }
+        #[inline(always)]
+        fn shift1(prev: Self, cur: Self) -> Self {
+            unsafe {
+                // [p2, p3, c0, c1], then lanes (p3, c0, c1, c2).
+                let mid = _mm256_permute2f128_pd::<0x21>(prev.0, cur.0);
+                Avx(_mm256_shuffle_pd::<0b0101>(mid, cur.0))
+            }
+        }
+        #[inline(always)]
+        fn shift2(prev: Self, cur: Self) -> Self {
+            unsafe { Avx(_mm256_permute2f128_pd::<0x21>(prev.0, cur.0)) }
+        }
+        #[inline(always)]
+        fn lt(self, o: Self) -> u32 {
+            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0)) as u32 }
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> u32 {
+            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(self.0, o.0)) as u32 }
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> u32 {
+            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(self.0, o.0)) as u32 }
+        }
+        #[inline(always)]
+        fn ge(self, o: Self) -> u32 {
+            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0)) as u32 }
+        }
+        #[inline(always)]
+        fn hsum(self) -> f64 {
+            unsafe {
+                let s = _mm_add_pd(
+                    _mm256_castpd256_pd128(self.0),
+                    _mm256_extractf128_pd::<1>(self.0),
+                );
+                _mm_cvtsd_f64(_mm_add_sd(s, _mm_unpackhi_pd(s, s)))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every operation of [`Avx`] gives the bits [`Portable`] gives, on values that include
+    /// zeros of both signs, infinities, NaN, subnormals and ties.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_matches_portable_bit_for_bit() {
+        if !avx::has_avx2_fma() {
+            return;
+        }
+        #[target_feature(enable = "avx2,fma")]
+        fn run() {
+            let special = [
+                0.0,
+                -0.0,
+                1.0,
+                -1.5,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NAN,
+                5e-324,
+                1e308,
+                0.1,
+                0.1,
+                3.0,
+            ];
+            let mut state = 0x9e37_79b9_7f4a_7c15u64;
+            let mut next = || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                if state % 3 == 0 {
+                    special[(state >> 8) as usize % special.len()]
+                } else {
+                    (((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5)
+                        * 10f64.powi((state % 40) as i32 - 20)
+                }
+            };
+            let same = |p: [f64; 4], q: [f64; 4]| {
+                p.iter().zip(&q).all(|(x, y)| x.to_bits() == y.to_bits())
+            };
+            for _ in 0..20_000 {
+                let (x, y, z) = (
+                    [next(), next(), next(), next()],
+                    [next(), next(), next(), next()],
+                    [next(), next(), next(), next()],
+                );
+                let (px, py, pz) = (
+                    Portable::from_array(x),
+                    Portable::from_array(y),
+                    Portable::from_array(z),
+                );
+                let (ax, ay, az) = (Avx::from_array(x), Avx::from_array(y), Avx::from_array(z));
+                let pairs: [([f64; 4], [f64; 4]); 9] = [
+                    (px.mul_add(py, pz).to_array(), ax.mul_add(ay, az).to_array()),
+                    (px.mul(py).to_array(), ax.mul(ay).to_array()),
+                    (px.add(py).to_array(), ax.add(ay).to_array()),
+                    (px.abs().to_array(), ax.abs().to_array()),
+                    (px.max(py).to_array(), ax.max(ay).to_array()),
+                    (
+                        Portable::shift1(px, py).to_array(),
+                        Avx::shift1(ax, ay).to_array(),
+                    ),
+                    (
+                        Portable::shift2(px, py).to_array(),
+                        Avx::shift2(ax, ay).to_array(),
+                    ),
+                    (px.prefix_sum().to_array(), ax.prefix_sum().to_array()),
+                    (
+                        [Portable::splat(x[1]).hsum(), px.hsum(), 0.0, 0.0],
+                        [Avx::splat(x[1]).hsum(), ax.hsum(), 0.0, 0.0],
+                    ),
+                ];
+                for (i, (p, a)) in pairs.iter().enumerate() {
+                    assert!(same(*p, *a), "op {i}: {x:?} {y:?} {z:?}: {p:?} != {a:?}");
+                }
+                assert_eq!(px.lt(py), ax.lt(ay));
+                assert_eq!(px.le(py), ax.le(ay));
+                assert_eq!(px.gt(py), ax.gt(ay));
+                assert_eq!(px.ge(py), ax.ge(ay));
+            }
+        }
+        // SAFETY: the CPU has AVX2 and FMA (checked above).
+        unsafe { run() };
+    }
+
+    #[test]
+    fn portable_lane_order() {
+        let x = Portable::from_array([1.0, 2.0, 4.0, 8.0]);
+        let p = Portable::from_array([-1.0, -2.0, -3.0, -4.0]);
+        assert_eq!(Portable::shift1(p, x).to_array(), [-4.0, 1.0, 2.0, 4.0]);
+        assert_eq!(Portable::shift2(p, x).to_array(), [-3.0, -4.0, 1.0, 2.0]);
+        assert_eq!(x.prefix_sum().to_array(), [1.0, 3.0, 7.0, 15.0]);
+        assert_eq!(x.hsum(), 15.0);
+        assert_eq!(x.lt(Portable::splat(3.0)), 0b0011);
+        assert_eq!(x.ge(Portable::splat(4.0)), 0b1100);
+    }
+}
