@@ -16,9 +16,10 @@
 //!   Cost: O(1) terms for small g, O(√g) for large g (one `exp` per term when a > 0; the
 //!   ratios of eight consecutive terms are computed together, so their `exp`s vectorise).
 //!   For g < 60 and a < 600 it sums upward from m = 1 instead: no peak search, no lgamma,
-//!   no divisions, each term t_m = g^{m−1}/(m! m) e^{−a/m} computed on its own
-//!   from tabulated constants, eight terms at a time in independent lanes (vectorised in
-//!   the AVX2 copy, with a table-free `exp`).
+//!   each term t_m = g^{m−1}/(m! m) e^{−a/m} computed on its own from tabulated
+//!   constants, eight terms at a time in independent lanes (vectorised in the AVX2 copy,
+//!   with a table-free `exp`), the tail bounded once per eight terms with the ratio of
+//!   the last two.
 //! * [`smooth`]: m = 1 only (eq. 42). `auto` uses it when the bound on the rest,
 //!   u/(1−u) with u = t2/t1 = (g/4) e^{a/2}, is below `tol`; it then returns derivatives
 //!   corrected by the m = 2 term (exact to O(u)).
@@ -334,27 +335,6 @@ const SMALL_A_MAX: f64 = 600.0;
 /// Number of terms the small-g path tabulates its per-term constants for.
 const SMALL_M: usize = 168;
 
-/// Per-term constants of the ratio r_m = g m/(m+1)² e^{a/(m(m+1))} for m = 1..SMALL_M
-/// (index m − 1): m/(m+1)², 1/(m(m+1)), 1/(m+1). Built at compile time: the small-g sum
-/// checks its tail bound once per eight terms, on its critical path, and three divisions
-/// there cost ~10 % of the whole evaluation at g ≈ 1.
-static SMALL_TABLE: [[f64; 3]; SMALL_M] = small_table();
-
-const fn small_table() -> [[f64; 3]; SMALL_M] {
-    let mut t = [[0.0f64; 3]; SMALL_M];
-    let mut i = 0;
-    while i < SMALL_M {
-        let m = (i + 1) as f64;
-        t[i] = [
-            m / ((m + 1.0) * (m + 1.0)),
-            1.0 / (m * (m + 1.0)),
-            1.0 / (m + 1.0),
-        ];
-        i += 1;
-    }
-    t
-}
-
 /// 1/(m! m) for m = 1..SMALL_M (index m − 1), correctly rounded (generated with Python's
 /// exact `fractions`).
 #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
@@ -545,8 +525,8 @@ const fn small_inv() -> [f64; SMALL_M] {
 /// The series for small g and moderate a, summed upward from m = 1 with the same tail
 /// bounds as [`series`]: t_m = g^{m−1}/(m! m) e^{−a/m} relative to g, eight terms at a time
 /// in independent lanes (powers of g by lane, tabulated 1/(m! m) and 1/m, one `exp` per
-/// term; no divisions, no serial product of ratios), the bounds checked after each group
-/// of eight. With a < 600 and g < 60 the sum is ≥ e^{−600} and no relevant term under- or
+/// term; no serial product of ratios), the bounds checked after each group of eight with
+/// the ratio of its last two terms (one division). With a < 600 and g < 60 the sum is ≥ e^{−600} and no relevant term under- or
 /// overflows, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
 #[inline(always)]
 fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
@@ -560,11 +540,7 @@ fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
     let g8 = g4 * g4;
     let mut m0 = 1.0f64;
     let lanes = |v: &[f64; L]| ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
-    for ((coef, inv), rows) in SMALL_COEF
-        .chunks_exact(L)
-        .zip(SMALL_INV.chunks_exact(L))
-        .zip(SMALL_TABLE.chunks_exact(L))
-    {
+    for (coef, inv) in SMALL_COEF.chunks_exact(L).zip(SMALL_INV.chunks_exact(L)) {
         let mut t = [0.0f64; L];
         for l in 0..L {
             t[l] = gp[l] * coef[l];
@@ -576,21 +552,25 @@ fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
             s_inv[l] = t[l].mul_add(inv[l], s_inv[l]);
             gp[l] *= g8;
         }
-        // The last term added is t_m, m = m0 + L − 1, with ratio r = r_m = t_{m+1}/t_m; the
-        // tail bounds of the module doc, multiplied through by (1−r) or (1−r)².
+        // The last term added is t_m, m = m0 + L − 1. The ratios decrease, so r_{m−1} =
+        // t_m/t_{m−1} ≥ r_m bounds every later one (a few % above r_m here; a division
+        // instead of an `exp`); from the formula only where t_{m−1} is near underflow. The
+        // tail bounds of the module doc with r, multiplied through by (1−r) or (1−r)², and
+        // 1/m ≥ 1/(m+1) in the last.
         let m = m0 + (L - 1) as f64;
-        let row = &rows[L - 1];
-        let mut r = g * row[0];
-        if a != 0.0 {
-            r *= exp_poly(a * row[1]);
-        }
+        let r = if t[L - 2] > 1e-290 {
+            t[L - 1] / t[L - 2]
+        } else {
+            let (factor, exponent) = ratio_parts(g, a, m);
+            factor * exp_poly(exponent)
+        };
         if r < 1.0 {
             let (s0, s_c, s_inv) = (lanes(&s0), lanes(&s_c), lanes(&s_inv));
             let om = 1.0 - r;
             let tail_om = t[L - 1] * r; // tail · (1−r)
             if tail_om <= eps * s0 * om
                 && tail_om * ((m + g) * om + 1.0) <= eps * (s0 + s_c.abs()) * om * om
-                && a * tail_om * row[2] <= eps * (s0 + a * s_inv) * om
+                && a * tail_om * inv[L - 1] <= eps * (s0 + a * s_inv) * om
             {
                 break;
             }
