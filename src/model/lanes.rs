@@ -233,7 +233,7 @@ mod tests {
             return;
         }
         #[target_feature(enable = "avx2,fma")]
-        fn run() {
+        unsafe fn run() {
             let special = [
                 0.0,
                 -0.0,

@@ -1027,7 +1027,7 @@ fn with_lanes<F: LanesFn>(f: F) -> F::Out {
     #[cfg(target_arch = "x86_64")]
     if super::lanes::has_avx2_fma() {
         #[target_feature(enable = "avx2,fma")]
-        fn run<F: LanesFn>(f: F) -> F::Out {
+        unsafe fn run<F: LanesFn>(f: F) -> F::Out {
             f.call::<super::lanes::Avx>()
         }
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
