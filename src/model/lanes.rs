@@ -47,8 +47,10 @@ pub(crate) trait F64x4: Copy {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Portable([f64; 4]);
 
-fn bits(c: [bool; 4]) -> u32 {
-    c[0] as u32 | (c[1] as u32) << 1 | (c[2] as u32) << 2 | (c[3] as u32) << 3
+/// Bit i set where `holds(a_i, b_i)`.
+#[inline(always)]
+fn bits(a: Portable, b: Portable, holds: impl Fn(f64, f64) -> bool) -> u32 {
+    (0..4).fold(0, |m, i| m | (holds(a.0[i], b.0[i]) as u32) << i)
 }
 
 impl F64x4 for Portable {
@@ -100,19 +102,19 @@ impl F64x4 for Portable {
     }
     #[inline(always)]
     fn lt(self, o: Self) -> u32 {
-        bits(std::array::from_fn(|i| self.0[i] < o.0[i]))
+        bits(self, o, |x, y| x < y)
     }
     #[inline(always)]
     fn le(self, o: Self) -> u32 {
-        bits(std::array::from_fn(|i| self.0[i] <= o.0[i]))
+        bits(self, o, |x, y| x <= y)
     }
     #[inline(always)]
     fn gt(self, o: Self) -> u32 {
-        bits(std::array::from_fn(|i| self.0[i] > o.0[i]))
+        bits(self, o, |x, y| x > y)
     }
     #[inline(always)]
     fn ge(self, o: Self) -> u32 {
-        bits(std::array::from_fn(|i| self.0[i] >= o.0[i]))
+        bits(self, o, |x, y| x >= y)
     }
     #[inline(always)]
     fn hsum(self) -> f64 {
@@ -138,6 +140,13 @@ mod avx {
     /// Whether this CPU runs [`Avx`].
     pub(crate) fn has_avx2_fma() -> bool {
         std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+
+    /// Bit i set where the comparison `P` (an `_CMP_*` predicate) holds in lane i.
+    #[inline(always)]
+    fn mask<const P: i32>(a: Avx, b: Avx) -> u32 {
+        // SAFETY: as for the methods below.
+        unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<P>(a.0, b.0)) as u32 }
     }
 
     // SAFETY (every `unsafe` block below): the intrinsics need AVX2/FMA, which the CPU has
@@ -193,19 +202,19 @@ mod avx {
         }
         #[inline(always)]
         fn lt(self, o: Self) -> u32 {
-            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0)) as u32 }
+            mask::<_CMP_LT_OQ>(self, o)
         }
         #[inline(always)]
         fn le(self, o: Self) -> u32 {
-            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(self.0, o.0)) as u32 }
+            mask::<_CMP_LE_OQ>(self, o)
         }
         #[inline(always)]
         fn gt(self, o: Self) -> u32 {
-            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(self.0, o.0)) as u32 }
+            mask::<_CMP_GT_OQ>(self, o)
         }
         #[inline(always)]
         fn ge(self, o: Self) -> u32 {
-            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0)) as u32 }
+            mask::<_CMP_GE_OQ>(self, o)
         }
         #[inline(always)]
         fn hsum(self) -> f64 {
