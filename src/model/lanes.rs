@@ -2,10 +2,13 @@
 //! ([`super::series`]): fused multiply-add, lane shifts across two vectors, comparisons to
 //! bit masks, and a fixed-order horizontal sum.
 //!
-//! Two implementations give bit-identical results (unit-tested op by op): [`Portable`]
-//! (plain arrays; `f64::mul_add`, which is one instruction where the CPU has FMA and a
-//! correctly rounded library call where it does not) and, on x86-64, [`Avx`] (AVX2 + FMA
-//! intrinsics, chosen at run time). The compiler's own vectorisation of the same array code
+//! Two implementations: on x86-64, [`Avx`] (AVX2 + FMA intrinsics, chosen at run time), and
+//! [`Portable`] (plain arrays) everywhere. `Portable<true>` fuses its multiply-adds
+//! (`f64::mul_add`) and gives the bits `Avx` gives (unit-tested op by op);
+//! `Portable<false>` rounds the product and the sum separately, for CPUs without FMA,
+//! where `f64::mul_add` is a slow library call. [`PortableNative`] is the one this build
+//! runs when `Avx` cannot: fused where the target always has FMA (aarch64, or x86-64 built
+//! with it), unfused otherwise. The compiler's own vectorisation of the same array code
 //! picked 128-bit registers and spent most of its instructions shuffling lanes; written
 //! against these types the expansion runs in 256-bit registers.
 
@@ -13,10 +16,13 @@
 /// `shift2`, `prefix_sum` and `hsum` fix their order of operations, so that both
 /// implementations round alike.
 pub(crate) trait F64x4: Copy {
+    /// a · b + c on scalars, fused exactly when [`F64x4::mul_add`] is (so that the scalar
+    /// code beside the lanes also rounds alike in both implementations).
+    fn fma1(a: f64, b: f64, c: f64) -> f64;
     fn splat(x: f64) -> Self;
     fn from_array(a: [f64; 4]) -> Self;
     fn to_array(self) -> [f64; 4];
-    /// self · m + c, rounded once.
+    /// self · m + c lane by lane, with [`F64x4::fma1`].
     fn mul_add(self, m: Self, c: Self) -> Self;
     fn mul(self, o: Self) -> Self;
     fn add(self, o: Self) -> Self;
@@ -43,17 +49,29 @@ pub(crate) trait F64x4: Copy {
     }
 }
 
-/// Plain arrays: runs everywhere.
+/// Plain arrays: runs everywhere; multiply-adds fused when `FUSED`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Portable([f64; 4]);
+pub(crate) struct Portable<const FUSED: bool>([f64; 4]);
+
+/// The portable lanes this build runs: fused where the target always has FMA.
+pub(crate) type PortableNative =
+    Portable<{ cfg!(any(target_feature = "fma", target_arch = "aarch64")) }>;
 
 /// Bit i set where `holds(a_i, b_i)`.
 #[inline(always)]
-fn bits(a: Portable, b: Portable, holds: impl Fn(f64, f64) -> bool) -> u32 {
+fn bits<const F: bool>(a: Portable<F>, b: Portable<F>, holds: impl Fn(f64, f64) -> bool) -> u32 {
     (0..4).fold(0, |m, i| m | (holds(a.0[i], b.0[i]) as u32) << i)
 }
 
-impl F64x4 for Portable {
+impl<const FUSED: bool> F64x4 for Portable<FUSED> {
+    #[inline(always)]
+    fn fma1(a: f64, b: f64, c: f64) -> f64 {
+        if FUSED {
+            a.mul_add(b, c)
+        } else {
+            a * b + c
+        }
+    }
     #[inline(always)]
     fn splat(x: f64) -> Self {
         Portable([x; 4])
@@ -68,7 +86,9 @@ impl F64x4 for Portable {
     }
     #[inline(always)]
     fn mul_add(self, m: Self, c: Self) -> Self {
-        Portable(std::array::from_fn(|i| self.0[i].mul_add(m.0[i], c.0[i])))
+        Portable(std::array::from_fn(|i| {
+            Self::fma1(self.0[i], m.0[i], c.0[i])
+        }))
     }
     #[inline(always)]
     fn mul(self, o: Self) -> Self {
@@ -154,6 +174,11 @@ mod avx {
     // through the references passed in.
     impl F64x4 for Avx {
         #[inline(always)]
+        fn fma1(a: f64, b: f64, c: f64) -> f64 {
+            // One vfmadd in the AVX2 + FMA functions these methods compile into.
+            a.mul_add(b, c)
+        }
+        #[inline(always)]
         fn splat(x: f64) -> Self {
             unsafe { Avx(_mm256_set1_pd(x)) }
         }
@@ -233,8 +258,8 @@ mod avx {
 mod tests {
     use super::*;
 
-    /// Every operation of [`Avx`] gives the bits [`Portable`] gives, on values that include
-    /// zeros of both signs, infinities, NaN, subnormals and ties.
+    /// Every operation of [`Avx`] gives the bits fused [`Portable`] lanes give, on values
+    /// that include zeros of both signs, infinities, NaN, subnormals and ties.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_matches_portable_bit_for_bit() {
@@ -243,6 +268,7 @@ mod tests {
         }
         #[target_feature(enable = "avx2,fma")]
         unsafe fn run() {
+            type P = Portable<true>;
             let special = [
                 0.0,
                 -0.0,
@@ -278,11 +304,7 @@ mod tests {
                     [next(), next(), next(), next()],
                     [next(), next(), next(), next()],
                 );
-                let (px, py, pz) = (
-                    Portable::from_array(x),
-                    Portable::from_array(y),
-                    Portable::from_array(z),
-                );
+                let (px, py, pz) = (P::from_array(x), P::from_array(y), P::from_array(z));
                 let (ax, ay, az) = (Avx::from_array(x), Avx::from_array(y), Avx::from_array(z));
                 let pairs: [([f64; 4], [f64; 4]); 9] = [
                     (px.mul_add(py, pz).to_array(), ax.mul_add(ay, az).to_array()),
@@ -290,17 +312,11 @@ mod tests {
                     (px.add(py).to_array(), ax.add(ay).to_array()),
                     (px.abs().to_array(), ax.abs().to_array()),
                     (px.max(py).to_array(), ax.max(ay).to_array()),
-                    (
-                        Portable::shift1(px, py).to_array(),
-                        Avx::shift1(ax, ay).to_array(),
-                    ),
-                    (
-                        Portable::shift2(px, py).to_array(),
-                        Avx::shift2(ax, ay).to_array(),
-                    ),
+                    (P::shift1(px, py).to_array(), Avx::shift1(ax, ay).to_array()),
+                    (P::shift2(px, py).to_array(), Avx::shift2(ax, ay).to_array()),
                     (px.prefix_sum().to_array(), ax.prefix_sum().to_array()),
                     (
-                        [Portable::splat(x[1]).hsum(), px.hsum(), 0.0, 0.0],
+                        [P::splat(x[1]).hsum(), px.hsum(), 0.0, 0.0],
                         [Avx::splat(x[1]).hsum(), ax.hsum(), 0.0, 0.0],
                     ),
                 ];
@@ -311,6 +327,10 @@ mod tests {
                 assert_eq!(px.le(py), ax.le(ay));
                 assert_eq!(px.gt(py), ax.gt(ay));
                 assert_eq!(px.ge(py), ax.ge(ay));
+                assert_eq!(
+                    P::fma1(x[0], y[0], z[0]).to_bits(),
+                    Avx::fma1(x[0], y[0], z[0]).to_bits()
+                );
             }
         }
         // SAFETY: the CPU has AVX2 and FMA (checked above).
@@ -319,13 +339,25 @@ mod tests {
 
     #[test]
     fn portable_lane_order() {
-        let x = Portable::from_array([1.0, 2.0, 4.0, 8.0]);
-        let p = Portable::from_array([-1.0, -2.0, -3.0, -4.0]);
-        assert_eq!(Portable::shift1(p, x).to_array(), [-4.0, 1.0, 2.0, 4.0]);
-        assert_eq!(Portable::shift2(p, x).to_array(), [-3.0, -4.0, 1.0, 2.0]);
+        type P = Portable<false>;
+        let x = P::from_array([1.0, 2.0, 4.0, 8.0]);
+        let p = P::from_array([-1.0, -2.0, -3.0, -4.0]);
+        assert_eq!(P::shift1(p, x).to_array(), [-4.0, 1.0, 2.0, 4.0]);
+        assert_eq!(P::shift2(p, x).to_array(), [-3.0, -4.0, 1.0, 2.0]);
         assert_eq!(x.prefix_sum().to_array(), [1.0, 3.0, 7.0, 15.0]);
         assert_eq!(x.hsum(), 15.0);
-        assert_eq!(x.lt(Portable::splat(3.0)), 0b0011);
-        assert_eq!(x.ge(Portable::splat(4.0)), 0b1100);
+        assert_eq!(x.lt(P::splat(3.0)), 0b0011);
+        assert_eq!(x.ge(P::splat(4.0)), 0b1100);
+    }
+
+    #[test]
+    fn fused_rounds_once_unfused_twice() {
+        // (1 + 2^−30)(1 − 2^−30) − 1 = −2^−60 exactly; the product alone rounds to 1.
+        let e = 2f64.powi(-30);
+        let (a, b, c) = (1.0 + e, 1.0 - e, -1.0);
+        assert_eq!(Portable::<true>::fma1(a, b, c), -e * e);
+        assert_eq!(Portable::<false>::fma1(a, b, c), 0.0);
+        let v = |x| Portable::<true>::splat(x);
+        assert_eq!(v(a).mul_add(v(b), v(c)).to_array(), [-e * e; 4]);
     }
 }

@@ -51,10 +51,10 @@
 //! Batches ([`ln_q_batch`], what the models call): the same results bit for bit as one
 //! sample at a time; on x86-64 CPUs with AVX2 and FMA both run in a copy of this code
 //! compiled for them, chosen at run time, which gives the same bits as the portable code
-//! (unit-tested). The evaluation uses fused multiply-adds (`f64::mul_add`): one
-//! instruction on CPUs with FMA (x86-64 since 2013, every aarch64); on an x86-64 CPU
-//! without it the portable code calls the correctly rounded library routine instead, with
-//! the same results, several times slower.
+//! (unit-tested). That copy, and the portable code where the target always has FMA
+//! (aarch64), fuse their multiply-adds; on a CPU without FMA (x86-64 before 2013) the
+//! portable code rounds products and sums separately, which changes results by rounding
+//! only (unit-tested: within `tol` of the fused code) and keeps it fast.
 //!
 //! Accuracy (`series`, and `auto` at every switch): |Δ ln Q| ≤ tol (the relative error of
 //! Q, also when Q itself under- or overflows), |Δ(g ∂lnQ/∂g)| ≤ tol (1 + |g ∂lnQ/∂g|) and
@@ -63,7 +63,7 @@
 //! uses (∂ln L/∂ln σ = 2 + 2g ∂lnQ/∂g, ∂ln L/∂ln T = 2 + 2a ∂lnQ/∂a). Verified against the
 //! 60-digit mpmath reference in `tests/ref/` (g 1e-12..1e6, a 0..1e8).
 
-use super::lanes::{F64x4, Portable};
+use super::lanes::{F64x4, PortableNative};
 use super::{EvalMode, Mode};
 
 /// ln Q(g, a) and its partial derivatives.
@@ -174,9 +174,9 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
 }
 
 #[inline(always)]
-fn series_body(g: f64, a: f64, tol: f64) -> LnQ {
+fn series_body<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
     if g < SMALL_G_MAX && a < SMALL_A_MAX {
-        return series_from_one(g, a, tol);
+        return series_from_one::<V>(g, a, tol);
     }
     let ln_g = g.ln();
     let m0 = peak_index(g, ln_g, a);
@@ -195,7 +195,7 @@ fn series_body(g: f64, a: f64, tol: f64) -> LnQ {
     // A function inlined into the caller rather than a closure: compiled on its own it
     // would miss the caller's FMA (and `exp_poly`'s fused multiply-adds become calls).
     #[inline(always)]
-    fn ratios_at(g: f64, a: f64, inline_exp: bool, m_first: f64, step: f64) -> [f64; L] {
+    fn ratios_at<V: F64x4>(g: f64, a: f64, inline_exp: bool, m_first: f64, step: f64) -> [f64; L] {
         let mut e = [0.0f64; L];
         let mut rs = [0.0f64; L];
         for l in 0..L {
@@ -204,7 +204,7 @@ fn series_body(g: f64, a: f64, tol: f64) -> LnQ {
         if a != 0.0 {
             if inline_exp {
                 for l in 0..L {
-                    rs[l] *= exp_poly(e[l]);
+                    rs[l] *= exp_poly::<V>(e[l]);
                 }
             } else {
                 for l in 0..L {
@@ -214,7 +214,7 @@ fn series_body(g: f64, a: f64, tol: f64) -> LnQ {
         }
         rs
     }
-    let ratios = |m_first: f64, step: f64| ratios_at(g, a, inline_exp, m_first, step);
+    let ratios = |m_first: f64, step: f64| ratios_at::<V>(g, a, inline_exp, m_first, step);
     // Upward: after adding t_m (rel = t_m/t0) with r = r_m < 1, Σ_{j>m} t_j ≤ rel r/(1−r),
     // Σ_{j>m} |j−1−g| t_j ≤ rel [(m+g) r/(1−r) + r/(1−r)²], Σ_{j>m} t_j/j ≤ tail/(m+1).
     let mut m = m0;
@@ -285,7 +285,7 @@ fn series_body(g: f64, a: f64, tol: f64) -> LnQ {
 /// with |r| ≤ ln2/2, e^r by its degree-13 Taylor polynomial (truncation < 4e-18) in fused
 /// multiply-adds, times 2^k through the exponent bits. Error ≤ 2 ulp (unit-tested).
 #[inline(always)]
-fn exp_poly(x: f64) -> f64 {
+fn exp_poly<V: F64x4>(x: f64) -> f64 {
     const INV_LN2: f64 = std::f64::consts::LOG2_E;
     #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
     const LN2_HI: f64 = 0.6931471803691238;
@@ -302,27 +302,27 @@ fn exp_poly(x: f64) -> f64 {
         c
     };
     let x = x.clamp(-700.0, 700.0);
-    let kd = x.mul_add(INV_LN2, MAGIC);
+    let kd = V::fma1(x, INV_LN2, MAGIC);
     let k = kd - MAGIC;
-    let r = k.mul_add(-LN2_LO, k.mul_add(-LN2_HI, x));
+    let r = V::fma1(k, -LN2_LO, V::fma1(k, -LN2_HI, x));
     let ki = (kd.to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64);
     // Estrin's scheme in r² (shorter dependency chains than Horner).
     let r2 = r * r;
     let r4 = r2 * r2;
     let r8 = r4 * r4;
-    let p01 = r.mul_add(C[1], C[0]);
-    let p23 = r.mul_add(C[3], C[2]);
-    let p45 = r.mul_add(C[5], C[4]);
-    let p67 = r.mul_add(C[7], C[6]);
-    let p89 = r.mul_add(C[9], C[8]);
-    let p1011 = r.mul_add(C[11], C[10]);
-    let p1213 = r.mul_add(C[13], C[12]);
-    let q0 = r2.mul_add(p23, p01);
-    let q1 = r2.mul_add(p67, p45);
-    let q2 = r2.mul_add(p1011, p89);
-    let lo = r4.mul_add(q1, q0);
-    let hi = r4.mul_add(p1213, q2);
-    let p = r8.mul_add(hi, lo);
+    let p01 = V::fma1(r, C[1], C[0]);
+    let p23 = V::fma1(r, C[3], C[2]);
+    let p45 = V::fma1(r, C[5], C[4]);
+    let p67 = V::fma1(r, C[7], C[6]);
+    let p89 = V::fma1(r, C[9], C[8]);
+    let p1011 = V::fma1(r, C[11], C[10]);
+    let p1213 = V::fma1(r, C[13], C[12]);
+    let q0 = V::fma1(r2, p23, p01);
+    let q1 = V::fma1(r2, p67, p45);
+    let q2 = V::fma1(r2, p1011, p89);
+    let lo = V::fma1(r4, q1, q0);
+    let hi = V::fma1(r4, p1213, q2);
+    let p = V::fma1(r8, hi, lo);
     // 2^k as two factors so that k down to −1010 stays normal.
     let k1 = ki >> 1;
     p * f64::from_bits(((k1 + 1023) << 52) as u64) * f64::from_bits(((ki - k1 + 1023) << 52) as u64)
@@ -529,7 +529,7 @@ const fn small_inv() -> [f64; SMALL_M] {
 /// the ratio of its last two terms (one division). With a < 600 and g < 60 the sum is ≥ e^{−600} and no relevant term under- or
 /// overflows, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
 #[inline(always)]
-fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
+fn series_from_one<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
     const L: usize = 8;
     let eps = 0.1 * tol.max(1e-17);
     let (mut s0, mut s_c, mut s_inv) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
@@ -545,11 +545,11 @@ fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
         for l in 0..L {
             t[l] = gp[l] * coef[l];
             if a != 0.0 {
-                t[l] *= exp_poly(-a * inv[l]);
+                t[l] *= exp_poly::<V>(-a * inv[l]);
             }
             s0[l] += t[l];
-            s_c[l] = (m0 + (l as f64 - 1.0) - g).mul_add(t[l], s_c[l]);
-            s_inv[l] = t[l].mul_add(inv[l], s_inv[l]);
+            s_c[l] = V::fma1(m0 + (l as f64 - 1.0) - g, t[l], s_c[l]);
+            s_inv[l] = V::fma1(t[l], inv[l], s_inv[l]);
             gp[l] *= g8;
         }
         // The last term added is t_m, m = m0 + L − 1. The ratios decrease, so r_{m−1} =
@@ -562,7 +562,7 @@ fn series_from_one(g: f64, a: f64, tol: f64) -> LnQ {
             t[L - 1] / t[L - 2]
         } else {
             let (factor, exponent) = ratio_parts(g, a, m);
-            factor * exp_poly(exponent)
+            factor * exp_poly::<V>(exponent)
         };
         if r < 1.0 {
             let (s0, s_c, s_inv) = (lanes(&s0), lanes(&s_c), lanes(&s_inv));
@@ -987,7 +987,7 @@ fn auto_with<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
             return q;
         }
     }
-    series_body(g, a, tol)
+    series_body::<V>(g, a, tol)
 }
 
 /// ln Q for a batch of samples: `out[i]` = [`ln_q`]`(g[i], a[i], mode, tol)`, identical
@@ -1033,7 +1033,7 @@ fn with_lanes<F: LanesFn>(f: F) -> F::Out {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
         return unsafe { run(f) };
     }
-    f.call::<Portable>()
+    f.call::<PortableNative>()
 }
 
 /// Whether `auto` tries the asymptotic expansion (at the requested `tol`) before the series.
@@ -1060,7 +1060,7 @@ pub fn ln_q(g: f64, a: f64, mode: EvalMode, tol: f64) -> LnQ {
 fn ln_q_with<V: F64x4>(g: f64, a: f64, mode: EvalMode, tol: f64) -> LnQ {
     match mode {
         EvalMode::Auto => auto_with::<V>(g, a, tol),
-        EvalMode::Series => series_body(g, a, tol),
+        EvalMode::Series => series_body::<V>(g, a, tol),
         EvalMode::Smooth => smooth(g, a),
         EvalMode::Rough => rough(g, a),
     }
@@ -1068,6 +1068,7 @@ fn ln_q_with<V: F64x4>(g: f64, a: f64, mode: EvalMode, tol: f64) -> LnQ {
 
 #[cfg(test)]
 mod tests {
+    use super::super::lanes::Portable;
     use super::*;
 
     #[test]
@@ -1089,11 +1090,9 @@ mod tests {
         assert_eq!(&ASYM[1][..3], &[1.0, -2.0, 0.5]);
     }
 
-    #[test]
-    fn batch_equals_one_by_one() {
-        // The lanes this CPU runs (AVX2 + FMA where it has them), batch and one sample at
-        // a time, and the portable lanes compiled for any CPU: the same bits, in every
-        // mode, on every path of `auto`.
+    /// (g, a) spread over the domain: log-uniform g in [1e-12, 1e6], a zero, ~ g,
+    /// up to g^1.5 (the asymptotic region) or log-uniform in [1e-3, 1e8].
+    fn random_g_a(n: usize) -> (Vec<f64>, Vec<f64>) {
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut uniform = || {
             state ^= state << 13;
@@ -1101,11 +1100,10 @@ mod tests {
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
-        let n = 2003;
         let g: Vec<f64> = (0..n)
             .map(|_| 10f64.powf(-12.0 + 18.0 * uniform()))
             .collect();
-        let a: Vec<f64> = g
+        let a = g
             .iter()
             .map(|&g| match (uniform() * 4.0) as u32 {
                 0 => 0.0,
@@ -1114,6 +1112,28 @@ mod tests {
                 _ => 10f64.powf(-3.0 + 11.0 * uniform()),
             })
             .collect();
+        (g, a)
+    }
+
+    #[test]
+    fn batch_equals_one_by_one() {
+        // The lanes this CPU runs (AVX2 + FMA where it has them), batch and one sample at
+        // a time, give the bits of the portable lanes with the same rounding (fused
+        // multiply-adds with AVX2 + FMA): in every mode, on every path of `auto`. The
+        // portable lanes with separate roundings (CPUs without FMA) agree within `tol`.
+        let (g, a) = random_g_a(2003);
+        let n = g.len();
+        #[cfg(target_arch = "x86_64")]
+        let fused = super::super::lanes::has_avx2_fma();
+        #[cfg(not(target_arch = "x86_64"))]
+        let fused = cfg!(target_arch = "aarch64");
+        let reference = |g, a, mode, tol| {
+            if fused {
+                ln_q_with::<Portable<true>>(g, a, mode, tol)
+            } else {
+                ln_q_with::<Portable<false>>(g, a, mode, tol)
+            }
+        };
         for mode in [
             EvalMode::Auto,
             EvalMode::Series,
@@ -1126,9 +1146,21 @@ mod tests {
                     ln_q_batch(&g[..len], &a[..len], mode, tol, &mut fast);
                     for i in 0..len {
                         let (g, a) = (g[i], a[i]);
-                        let portable = ln_q_with::<Portable>(g, a, mode, tol);
+                        let portable = reference(g, a, mode, tol);
                         assert_eq!(fast[i], portable, "{mode:?} g={g} a={a} tol={tol}");
                         assert_eq!(ln_q(g, a, mode, tol), portable);
+                        let other = if fused {
+                            ln_q_with::<Portable<false>>(g, a, mode, tol)
+                        } else {
+                            ln_q_with::<Portable<true>>(g, a, mode, tol)
+                        };
+                        let close = |x: f64, y: f64| (x - y).abs() <= tol * (1.0 + y.abs());
+                        assert!(
+                            close(other.ln_q, portable.ln_q)
+                                && close(g * other.d_g, g * portable.d_g)
+                                && close(a * other.d_a, a * portable.d_a),
+                            "{mode:?} g={g} a={a} tol={tol}: {other:?} vs {portable:?}"
+                        );
                     }
                 }
             }
@@ -1153,17 +1185,21 @@ mod tests {
 
     #[test]
     fn exp_poly_is_accurate() {
-        let mut x = -700.0;
-        while x <= 700.0 {
-            let (f, e) = (exp_poly(x), x.exp());
-            assert!(
-                (f / e - 1.0).abs() < 4.0 * f64::EPSILON,
-                "x={x}: {f} vs {e}"
-            );
-            x += 0.00731;
+        fn check<V: F64x4>() {
+            let mut x = -700.0;
+            while x <= 700.0 {
+                let (f, e) = (exp_poly::<V>(x), x.exp());
+                assert!(
+                    (f / e - 1.0).abs() < 4.0 * f64::EPSILON,
+                    "x={x}: {f} vs {e}"
+                );
+                x += 0.00731;
+            }
+            assert_eq!(exp_poly::<V>(0.0), 1.0);
+            assert_eq!(exp_poly::<V>(-800.0), exp_poly::<V>(-700.0));
         }
-        assert_eq!(exp_poly(0.0), 1.0);
-        assert_eq!(exp_poly(-800.0), exp_poly(-700.0));
+        check::<Portable<true>>();
+        check::<Portable<false>>();
     }
 
     #[test]
