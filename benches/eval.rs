@@ -10,7 +10,8 @@
 //!
 //! Groups: `kbs_hemi/<regime>/<mode>` and `kbs_lobe/<regime>/<mode>` (whole-model radiance;
 //! modes series, rough, smooth, auto, and rough+jac, auto+jac with the Jacobian),
-//! `lnq_hemi/<regime>/<mode>` (the sum ln Q alone), and `models/<name>/{values,jacobian}`
+//! `lnq_hemi/<regime>/<mode>` (the sum ln Q alone, as a batch: `series::ln_q_batch`), and
+//! `models/<name>/{values,jacobian}`
 //! for the other models. Throughput is reported in samples/s; the target is auto/rough ≤ 4
 //! in every regime.
 
@@ -86,22 +87,14 @@ fn bench_lnq(c: &mut Criterion) {
     for (rname, g0) in REGIMES {
         let sigma = sigma_for(g0);
         let k = 2.0 * std::f64::consts::PI;
-        let ga: Vec<(f64, f64)> = (0..N)
-            .map(|i| {
-                let g = (k * sigma * geo.c[i]).powi(2);
-                let a = geo.vxy2[i] * (k * 5.0 * sigma).powi(2) * 0.25;
-                (g, a)
-            })
+        let g: Vec<f64> = (0..N).map(|i| (k * sigma * geo.c[i]).powi(2)).collect();
+        let a: Vec<f64> = (0..N)
+            .map(|i| geo.vxy2[i] * (k * 5.0 * sigma).powi(2) * 0.25)
             .collect();
+        let mut out = vec![series::rough(1.0, 0.0); N];
         for (mname, mode) in MODES {
             group.bench_function(BenchmarkId::new(rname, mname), |b| {
-                b.iter(|| {
-                    let mut acc = 0.0;
-                    for &(g, a) in &ga {
-                        acc += series::ln_q(g, a, mode, 1e-10).ln_q;
-                    }
-                    acc
-                })
+                b.iter(|| series::ln_q_batch(&g, &a, mode, 1e-10, &mut out))
             });
         }
     }
