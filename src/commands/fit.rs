@@ -116,21 +116,18 @@ pub struct FitArgs {
     pub file: Vec<PathBuf>,
 }
 
-/// Parse `role=name,...`.
-pub fn parse_columns(text: Option<&str>) -> anyhow::Result<Vec<(String, String)>> {
-    let mut out = Vec::new();
-    for part in text
-        .unwrap_or("")
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-    {
-        let (k, v) = part
-            .split_once('=')
-            .ok_or_else(|| Error::Usage(format!("--columns '{part}': expected role=name")))?;
-        out.push((k.trim().to_string(), v.trim().to_string()));
+impl FitArgs {
+    /// How the input files are read (`--radians`, `--signed-theta-r`, `--columns`,
+    /// `--channel`); values are required.
+    pub fn read_options(&self) -> anyhow::Result<ReadOptions> {
+        Ok(ReadOptions {
+            radians: self.radians,
+            signed_theta_r: self.signed_theta_r,
+            columns: io::csv::parse_columns(self.columns.as_deref().unwrap_or(""))?,
+            require_value: true,
+            channel: self.channel.clone(),
+        })
     }
-    Ok(out)
 }
 
 /// The fit's data from a dataset: geometry, values, weights, channels.
@@ -311,13 +308,7 @@ fn outcome_text(o: &Outcome, info: &RunInfo) -> String {
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
-    let opts = ReadOptions {
-        radians: args.radians,
-        signed_theta_r: args.signed_theta_r,
-        columns: parse_columns(args.columns.as_deref())?,
-        require_value: true,
-        channel: args.channel.clone(),
-    };
+    let opts = args.read_options()?;
     // Every input is read (and checked) before any fit starts.
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
     for file in &args.file {

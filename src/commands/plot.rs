@@ -2,12 +2,12 @@
 //! --json > fit.json`), without fitting again: the report carries the fit's arguments and
 //! the fitted values.
 
-use super::fit::{fit_config, fit_input, parse_columns, plot_fit};
+use super::fit::{fit_config, fit_input, plot_fit};
 use crate::cli::{Cli, Command};
 use anyhow::Context;
 use clap::{Args, Parser};
 use goniofit::fit::problem::ParamLayout;
-use goniofit::io::{self, ReadOptions};
+use goniofit::io;
 use goniofit::Error;
 use std::path::PathBuf;
 
@@ -44,13 +44,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     let Command::Fit(fa) = cli.command else {
         return Err(bad("not a fit").into());
     };
-    let opts = ReadOptions {
-        radians: fa.radians,
-        signed_theta_r: fa.signed_theta_r,
-        columns: parse_columns(fa.columns.as_deref())?,
-        require_value: true,
-        channel: fa.channel.clone(),
-    };
+    let opts = fa.read_options()?;
     let file = fa.file.first().ok_or_else(|| bad("no input file"))?;
     let ds = io::read_dataset(file, &opts)
         .with_context(|| format!("re-reading the data of {}", args.report.display()))?;

@@ -201,26 +201,17 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
         let color = series_color(c);
         let (idx, in_plane) = plane_samples(geo, g);
         any_near |= !in_plane;
-        let mut meas: Vec<(f64, f64)> = idx
-            .iter()
-            .map(|&k| {
-                (
-                    signed_theta_r_deg(geo.theta_r[k], geo.phi_r[k]),
-                    input.measured[k],
-                )
-            })
-            .collect();
-        meas.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut fit_pts: Vec<(f64, f64)> = idx
-            .iter()
-            .map(|&k| {
-                (
-                    signed_theta_r_deg(geo.theta_r[k], geo.phi_r[k]),
-                    input.fitted[k],
-                )
-            })
-            .collect();
-        fit_pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // (signed θr in degrees, value) along the plane, in order of angle.
+        let along = |values: &[f64]| {
+            let mut pts: Vec<(f64, f64)> = idx
+                .iter()
+                .map(|&k| (signed_theta_r_deg(geo.theta_r[k], geo.phi_r[k]), values[k]))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pts
+        };
+        let meas = along(input.measured);
+        let fit_pts = along(input.fitted);
         yvals.extend(meas.iter().chain(&fit_pts).map(|p| p.1));
         // A smooth model curve along the plane when the samples are in it and the model
         // reproduces the fitted values there; otherwise the fitted values joined.
