@@ -16,6 +16,18 @@ fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
 }
 
+/// Standard output of a successful `goniofit ARGS FILE`.
+fn stdout_of(args: &[&str], file: impl AsRef<std::ffi::OsStr>) -> Vec<u8> {
+    goniofit()
+        .args(args)
+        .arg(file)
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone()
+}
+
 /// Parse eval output: header and rows (simple CSV, no quoted fields in these tests).
 fn parse_out(stdout: &[u8]) -> (Vec<String>, Vec<Vec<String>>) {
     let text = String::from_utf8(stdout.to_vec()).unwrap();
@@ -68,8 +80,8 @@ fn eval_matches_the_library_for_every_model() {
         .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
         .collect();
     for (name, params) in MODELS {
-        let out = goniofit()
-            .args([
+        let out = stdout_of(
+            &[
                 "eval",
                 "--model",
                 name,
@@ -77,13 +89,9 @@ fn eval_matches_the_library_for_every_model() {
                 params,
                 "--wavelength",
                 "1",
-            ])
-            .arg(&file)
-            .assert()
-            .success()
-            .get_output()
-            .stdout
-            .clone();
+            ],
+            &file,
+        );
         let (header, rows) = parse_out(&out);
         assert_eq!(header, ["id", "theta_i", "theta_r", "phi_r", "L_model"]);
         let want = library_values(
@@ -112,8 +120,8 @@ fn eval_matches_the_library_for_every_model() {
 #[test]
 fn eval_options_brdf_patch_mode_tol() {
     let file = data("angles_inplane.csv");
-    let out = goniofit()
-        .args([
+    let out = stdout_of(
+        &[
             "eval",
             "--model",
             "kbs",
@@ -129,13 +137,9 @@ fn eval_options_brdf_patch_mode_tol() {
             "series",
             "--tol",
             "1e-12",
-        ])
-        .arg(&file)
-        .assert()
-        .success()
-        .get_output()
-        .stdout
-        .clone();
+        ],
+        &file,
+    );
     let (_, rows) = parse_out(&out);
     let want = library_values(
         &file,
@@ -159,26 +163,23 @@ fn eval_radians_signed_and_column_mapping() {
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("in.csv");
     std::fs::write(&f, "Inc,View,keep\n0.5,-0.3,a\n0.5,0.5,b\n").unwrap();
-    let out = goniofit()
-        .args([
+    let out = stdout_of(
+        &[
             "eval",
             "--model",
             "lambert-specular",
             "--params",
-            "scale=1e-300,B=1,w=0.1",
-        ])
-        .args([
+            "scale=1e-300,
+            B=1,
+            w=0.1",
             "--radians",
             "--signed-theta-r",
             "--columns",
-            "theta_i=Inc,theta_r=View",
-        ])
-        .arg(&f)
-        .assert()
-        .success()
-        .get_output()
-        .stdout
-        .clone();
+            "theta_i=Inc,
+            theta_r=View",
+        ],
+        &f,
+    );
     let (header, rows) = parse_out(&out);
     assert_eq!(header, ["Inc", "View", "keep", "L_model"]);
     assert_eq!(rows[1][2], "b");
@@ -197,21 +198,22 @@ fn eval_radians_signed_and_column_mapping() {
 
 #[test]
 fn eval_astm_channel_gives_the_wavelength() {
-    let out = goniofit()
-        .args([
+    let out = stdout_of(
+        &[
             "eval",
             "--model",
             "kbs-rough",
             "--params",
-            "sigma=300,T=1500,scale=1",
-        ])
-        .args(["--channel", "550nm", "--quantity", "brdf"])
-        .arg(data("cornell/garnet_red.astm"))
-        .assert()
-        .success()
-        .get_output()
-        .stdout
-        .clone();
+            "sigma=300,
+            T=1500,
+            scale=1",
+            "--channel",
+            "550nm",
+            "--quantity",
+            "brdf",
+        ],
+        data("cornell/garnet_red.astm"),
+    );
     let (header, rows) = parse_out(&out);
     assert_eq!(
         header,
@@ -228,14 +230,10 @@ fn eval_astm_channel_gives_the_wavelength() {
 fn eval_writes_out_file() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("model.csv");
-    let stdout = goniofit()
-        .args(["eval", "--model", "lambert", "--params", "scale=1"])
-        .arg(data("angles_inplane.csv"))
-        .assert()
-        .success()
-        .get_output()
-        .stdout
-        .clone();
+    let stdout = stdout_of(
+        &["eval", "--model", "lambert", "--params", "scale=1"],
+        data("angles_inplane.csv"),
+    );
     goniofit()
         .args(["eval", "--model", "lambert", "--params", "scale=1", "--out"])
         .arg(&out)

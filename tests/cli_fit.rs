@@ -9,6 +9,18 @@ fn goniofit() -> Command {
 }
 
 /// The text report without the lines that vary between runs (timings, the command path).
+/// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
+fn fit_json(args: &[&str]) -> serde_json::Value {
+    let out = goniofit().args(args).output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 fn stable(report: &str) -> String {
     report
         .lines()
@@ -53,18 +65,13 @@ fn report_snapshot() {
 
 #[test]
 fn json_report_has_the_documented_keys() {
-    let out = goniofit()
-        .args([
-            "fit",
-            "--model",
-            "lambert-specular",
-            "--json",
-            "data/synthetic/lambert_specular.csv",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "lambert-specular",
+        "--json",
+        "data/synthetic/lambert_specular.csv",
+    ]);
     for key in [
         "model",
         "params",
@@ -262,22 +269,17 @@ fn several_files_are_fitted_in_one_run() {
 
 #[test]
 fn rough_data_reports_undetermined_sigma() {
-    let out = goniofit()
-        .args([
-            "fit",
-            "--model",
-            "kbs",
-            "--wavelength",
-            "1",
-            "--residual",
-            "relative",
-            "--json",
-            "data/synthetic/kbs_rough.csv",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "kbs",
+        "--wavelength",
+        "1",
+        "--residual",
+        "relative",
+        "--json",
+        "data/synthetic/kbs_rough.csv",
+    ]);
     assert_eq!(v["verdict"], "rough");
     assert_eq!(v["params"]["sigma"]["determined"], false);
     let ratio = v["derived"]["T/sigma"]["value"].as_f64().unwrap();
