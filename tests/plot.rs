@@ -352,20 +352,21 @@ fn synthetic_fit() -> (Box<dyn Model>, Vec<f64>, Geometry, Vec<f64>) {
     (m, params, geo, fitted)
 }
 
-#[test]
-fn fit_plots_write_twelve_valid_files() {
+/// `f` applied to the synthetic fit with measured values off the model by a relative
+/// `wiggle` (a sine over the sample index) and residuals standardised by 3 %.
+fn with_synthetic_input<R>(wiggle: f64, f: impl FnOnce(&FitPlotInput) -> R) -> R {
     let (m, params, geo, fitted) = synthetic_fit();
     let measured: Vec<f64> = fitted
         .iter()
         .enumerate()
-        .map(|(k, v)| v * (1.0 + 0.03 * ((k as f64) * 1.7).sin()))
+        .map(|(k, v)| v * (1.0 + wiggle * ((k as f64) * 1.7).sin()))
         .collect();
     let res: Vec<f64> = measured
         .iter()
         .zip(&fitted)
         .map(|(m, f)| (m - f) / (0.03 * f.abs().max(1e-12)))
         .collect();
-    let input = FitPlotInput {
+    f(&FitPlotInput {
         title: "kbs: sigma = 0.3, T = 2, scale = 1".into(),
         model: m.as_ref(),
         params: &params,
@@ -373,9 +374,17 @@ fn fit_plots_write_twelve_valid_files() {
         measured: &measured,
         fitted: &fitted,
         std_residuals: &res,
-    };
+    })
+}
+
+#[test]
+fn fit_plots_write_twelve_valid_files() {
+    with_synthetic_input(0.03, check_fit_plots);
+}
+
+fn check_fit_plots(input: &FitPlotInput) {
     let dir = tempfile::tempdir().unwrap();
-    let paths = write_fit_plots(dir.path(), &input).unwrap();
+    let paths = write_fit_plots(dir.path(), input).unwrap();
     assert_eq!(paths.len(), 12);
     for stem in [
         "fit_linear",
@@ -396,7 +405,7 @@ fn fit_plots_write_twelve_valid_files() {
         );
     }
     // The polar plot's lobe peaks near the mirror direction of the busiest θi (45°).
-    let polar = goniofit::plot::fit::polar_plot(&input).unwrap();
+    let polar = goniofit::plot::fit::polar_plot(input).unwrap();
     assert!((polar.theta_i.to_degrees() - 45.0).abs() < 1e-9);
     let peak = polar
         .curve
@@ -407,8 +416,9 @@ fn fit_plots_write_twelve_valid_files() {
     assert!(peak.0 > 30.0 && peak.0 < 60.0, "peak at {peak:?}");
     // Mismatched lengths are a usage error, not a panic.
     let short = FitPlotInput {
-        measured: &measured[..3],
-        ..input
+        title: input.title.clone(),
+        measured: &input.measured[..3],
+        ..*input
     };
     assert!(write_fit_plots(dir.path(), &short).is_err());
 }
@@ -420,27 +430,10 @@ fn fit_plots_demo_output() {
     let Ok(dir) = std::env::var("GONIOFIT_PLOT_DEMO") else {
         return;
     };
-    let (m, params, geo, fitted) = synthetic_fit();
-    let measured: Vec<f64> = fitted
-        .iter()
-        .enumerate()
-        .map(|(k, v)| v * (1.0 + 0.05 * ((k as f64) * 1.7).sin()))
-        .collect();
-    let res: Vec<f64> = measured
-        .iter()
-        .zip(&fitted)
-        .map(|(m, f)| (m - f) / (0.03 * f.abs().max(1e-12)))
-        .collect();
-    let input = FitPlotInput {
-        title: "kbs: sigma = 0.3, T = 2, scale = 1".into(),
-        model: m.as_ref(),
-        params: &params,
-        geo: &geo,
-        measured: &measured,
-        fitted: &fitted,
-        std_residuals: &res,
-    };
-    write_fit_plots(std::path::Path::new(&dir), &input).unwrap();
+    with_synthetic_input(0.05, |input| {
+        write_fit_plots(std::path::Path::new(&dir), input)
+    })
+    .unwrap();
 }
 
 #[test]
