@@ -38,7 +38,7 @@
 //!   series' tail bounds this estimate is not a proof; it is checked against the mpmath
 //!   grid (worst error found 0.13 of the claim) and against the series at 3000 random
 //!   (g, a) (`tests/model_props.rs`). Work: the orders are evaluated four at a time, in
-//!   four-lane vectors ([`super::lanes`]): Horner in b² on four vectors (even and odd parts
+//!   four-lane vectors (`src/model/lanes.rs`): Horner in b² on four vectors (even and odd parts
 //!   of P_n and P_n'), 4k+4 fused multiply-adds of four lanes for the k-th group of four
 //!   orders, then the group's sums and acceptance tests as vector operations (no branch
 //!   per order); n ≈ 3 orders at g = 1e4, ≈ 6–9 at g = 100 and moderate b. It fails, and
