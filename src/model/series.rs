@@ -526,8 +526,9 @@ const fn small_inv() -> [f64; SMALL_M] {
 /// bounds as [`series`]: t_m = g^{m−1}/(m! m) e^{−a/m} relative to g, eight terms at a time
 /// in independent lanes (powers of g by lane, tabulated 1/(m! m) and 1/m, one `exp` per
 /// term; no serial product of ratios), the bounds checked after each group of eight with
-/// the ratio of its last two terms (one division). With a < 600 and g < 60 the sum is ≥ e^{−600} and no relevant term under- or
-/// overflows, and the terms fall below 1e-17 of the sum well before m = SMALL_M.
+/// the ratio of its last two terms (one division). With a < 600 and g < 60 the sum is
+/// ≥ e^{−600} and no relevant term under- or overflows, and the terms fall below 1e-17 of
+/// the sum well before m = SMALL_M.
 #[inline(always)]
 fn series_from_one<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
     const L: usize = 8;
