@@ -1184,6 +1184,46 @@ mod tests {
         );
     }
 
+    /// Both portable roundings (fused, and the separate roundings CPUs without FMA run)
+    /// meet the accuracy claim of the module doc against the 60-digit mpmath reference
+    /// (`tests/ref/kbs_reference_q.csv`, the grid `tests/kbs_reference.rs` checks the
+    /// dispatched code on), in `series` and `auto` modes at tol 1e-10.
+    #[test]
+    fn portable_lanes_meet_tol_against_mpmath() {
+        fn worst<V: F64x4>(mode: EvalMode) -> f64 {
+            let tol = 1e-10;
+            let eps = f64::EPSILON;
+            let mut worst = 0.0f64;
+            let text = include_str!("../../tests/ref/kbs_reference_q.csv");
+            for line in text.lines().skip(1) {
+                let f: Vec<f64> = line
+                    .split(',')
+                    .take(5)
+                    .map(|s| s.parse().unwrap())
+                    .collect();
+                let (g, a, ln_q, d_g, d_a) = (f[0], f[1], f[2], f[3], f[4]);
+                let q = ln_q_with::<V>(g, a, mode, tol);
+                let rel = |x: f64, r: f64| (x - r).abs() / (1.0 + r.abs());
+                let round_d = 64.0 * eps * (1.0 + g.sqrt());
+                let ratio = ((q.ln_q - ln_q).abs() / (tol + 64.0 * eps * (1.0 + ln_q.abs())))
+                    .max(rel(g * q.d_g, g * d_g) / (tol + round_d))
+                    .max(rel(a * q.d_a, a * d_a) / (tol + round_d));
+                assert!(ratio.is_finite(), "{mode:?} g={g} a={a}: {q:?}");
+                worst = worst.max(ratio);
+            }
+            worst
+        }
+        for mode in [EvalMode::Series, EvalMode::Auto] {
+            for w in [
+                worst::<Portable<true>>(mode),
+                worst::<Portable<false>>(mode),
+            ] {
+                println!("{mode:?}: worst error/allowance {w:.3}");
+                assert!(w <= 1.0, "{mode:?}: worst error/allowance {w}");
+            }
+        }
+    }
+
     #[test]
     fn exp_poly_is_accurate() {
         fn check<V: F64x4>() {
