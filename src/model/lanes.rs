@@ -11,6 +11,12 @@
 //! with it), unfused otherwise. The compiler's own vectorisation of the same array code
 //! picked 128-bit registers and spent most of its instructions shuffling lanes; written
 //! against these types the expansion runs in 256-bit registers.
+//!
+//! Code written against these types must compile into the AVX2 + FMA function that runs
+//! it (`with_lanes` in `series.rs`): `#[inline(always)]` functions, no closures. A closure
+//! or a function that is not inlined is compiled without those features, and there every
+//! fused multiply-add becomes a call to the `fma` library routine (correct, but it made
+//! the series' fallback samples 4× slower once).
 
 /// Four f64 lanes. Every operation is lane by lane unless it says otherwise; `shift1`,
 /// `shift2`, `prefix_sum` and `hsum` fix their order of operations, so that both
