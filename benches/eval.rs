@@ -86,11 +86,8 @@ fn bench_lnq(c: &mut Criterion) {
         .throughput(Throughput::Elements(N as u64));
     for (rname, g0) in REGIMES {
         let sigma = sigma_for(g0);
-        let k = 2.0 * std::f64::consts::PI;
-        let g: Vec<f64> = (0..N).map(|i| (k * sigma * geo.c[i]).powi(2)).collect();
-        let a: Vec<f64> = (0..N)
-            .map(|i| geo.vxy2[i] * (k * 5.0 * sigma).powi(2) * 0.25)
-            .collect();
+        let g: Vec<f64> = (0..N).map(|i| geo.g(i, sigma)).collect();
+        let a: Vec<f64> = (0..N).map(|i| geo.a(i, 5.0 * sigma)).collect();
         let mut out = vec![series::rough(1.0, 0.0); N];
         for (mname, mode) in MODES {
             group.bench_function(BenchmarkId::new(rname, mname), |b| {

@@ -7,7 +7,8 @@ use goniofit::geometry::{Geometry, Quantity};
 use goniofit::model::{by_name, ModelOptions};
 use goniofit::synth::{generate, Layout, Noise, NoiseKind};
 
-/// Synthetic data for `model` at `params` on `layout`, with relative noise.
+/// Synthetic data for `model` at `params` on `layout`, with relative noise: one channel of
+/// [`joint_synthetic`].
 fn synthetic(
     model: &str,
     params: &[f64],
@@ -16,30 +17,15 @@ fn synthetic(
     seed: u64,
     lambda: f64,
 ) -> FitInput {
-    let m = by_name(model, &ModelOptions::default()).unwrap();
-    let noise = Noise {
-        kind: NoiseKind::Relative,
-        level: noise,
+    joint_synthetic(
+        model,
+        &[params.to_vec()],
+        &[lambda],
+        &[""],
+        layout,
+        noise,
         seed,
-    };
-    let data = generate(
-        m.as_ref(),
-        params,
-        &layout.angles(),
-        lambda,
-        Quantity::Radiance,
-        &noise,
     )
-    .unwrap();
-    let geo = Geometry::new(&data.samples, &[lambda], Quantity::Radiance).unwrap();
-    let n = geo.len();
-    FitInput {
-        geo,
-        y: data.value,
-        weight: vec![1.0; n],
-        channel: vec![0; n],
-        channel_names: vec![String::new()],
-    }
 }
 
 /// Several channels of synthetic data in one input (unit weights): channel c, named

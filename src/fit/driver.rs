@@ -254,14 +254,9 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         || starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let problem = problem?;
-    let Start {
-        p0,
-        grid_start,
-        start_seconds,
-        init_seconds,
-    } = start?;
+    let start = start?;
 
-    let first = run_lm(&problem, &p0, &config.lm);
+    let first = run_lm(&problem, &start.p0, &config.lm);
     let mut report = first;
     let mut problem_used = problem;
     let mut verdict = Verdict::Full;
@@ -306,7 +301,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         }
     }
     let elapsed = t0.elapsed().as_secs_f64();
-    let mut result = assemble(
+    Ok(assemble(
         model,
         input,
         config,
@@ -316,11 +311,8 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         verdict,
         notes,
         elapsed,
-        init_seconds,
-    );
-    result.start = grid_start;
-    result.start_seconds = start_seconds;
-    Ok(result)
+        start,
+    ))
 }
 
 /// Where the full fit starts, and when the search for it ended.
@@ -422,7 +414,7 @@ fn starting_point(
             .map(|(_, start)| {
                 let rough_band =
                     sigma_k.is_some_and(|k| median_g(&sub, start[k]) > init::ROUGH_BAND_G);
-                match (&sub_rough, rough_band) {
+                let (cost, values) = match (&sub_rough, rough_band) {
                     (Some(rough), true) => {
                         let run = run_lm(rough, start, &coarse);
                         let cost = 0.5 * sub_exact.weighted_residuals(&run.values).norm_squared();
@@ -432,21 +424,19 @@ fn starting_point(
                         let run = run_lm(&sub_exact, start, &coarse);
                         (run.lm.cost, run.values)
                     }
-                }
+                };
+                // A refined start outside the domain (on the full data) does not count.
+                let usable = cost.is_finite() && inside(&values);
+                (if usable { cost } else { f64::INFINITY }, values)
             })
             .collect();
         // The lowest cost wins; costs within the refinement's ftol count as a tie, won by
         // the better-ranked grid point.
-        let ok = |(cost, values): &(f64, Vec<f64>)| cost.is_finite() && inside(values);
-        let lowest = refined
-            .iter()
-            .filter(|r| ok(r))
-            .map(|r| r.0)
-            .fold(f64::INFINITY, f64::min);
+        let lowest = refined.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
         let best = refined
             .into_iter()
             .zip(&candidates)
-            .find(|(r, _)| ok(r) && r.0 <= lowest * (1.0 + coarse.ftol));
+            .find(|(r, _)| r.0.is_finite() && r.0 <= lowest * (1.0 + coarse.ftol));
         if let Some(((_, values), (_, start))) = best {
             p0 = values;
             grid_start = start.clone();
@@ -611,7 +601,7 @@ fn assemble(
     verdict: Verdict,
     mut notes: Vec<String>,
     seconds: f64,
-    init_seconds: f64,
+    start: Start,
 ) -> FitResult {
     let layout = &problem.layout;
     let specs = model.params();
@@ -828,8 +818,8 @@ fn assemble(
         jacobian_evaluations: run.lm.jacobian_evaluations,
         termination: run.lm.termination,
         seconds,
-        init_seconds,
-        start_seconds: 0.0,
+        init_seconds: start.init_seconds,
+        start_seconds: start.start_seconds,
         modes,
         g_range,
         fitted,
@@ -838,6 +828,6 @@ fn assemble(
         sample_modes,
         layout: layout.clone(),
         values: p.clone(),
-        start: Vec::new(),
+        start: start.grid_start,
     }
 }

@@ -146,26 +146,26 @@ pub fn uncertainty(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
     #[test]
     fn median_of_odd_even_empty_and_nan() {
-        assert!(super::median(&[]).is_nan());
-        assert!(super::median(&[f64::NAN]).is_nan());
-        assert_eq!(super::median(&[3.0]), 3.0);
-        assert_eq!(super::median(&[4.0, 1.0]), 2.5);
-        assert_eq!(super::median(&[5.0, -1.0, f64::NAN, 2.0, 2.0, 9.0]), 2.0);
+        assert!(median(&[]).is_nan());
+        assert!(median(&[f64::NAN]).is_nan());
+        assert_eq!(median(&[3.0]), 3.0);
+        assert_eq!(median(&[4.0, 1.0]), 2.5);
+        assert_eq!(median(&[5.0, -1.0, f64::NAN, 2.0, 2.0, 9.0]), 2.0);
         let v: Vec<f64> = (0..1001)
             .map(|i| ((i * 7919) % 1001) as f64 * 0.5)
             .collect();
-        assert_eq!(super::median(&v), 250.0);
-        assert_eq!(super::median(&v[..1000]), {
+        assert_eq!(median(&v), 250.0);
+        assert_eq!(median(&v[..1000]), {
             let mut s = v[..1000].to_vec();
             s.sort_by(f64::total_cmp);
             0.5 * (s[499] + s[500])
         });
     }
-
-    use super::*;
-    use approx::assert_relative_eq;
 
     /// Straight line y = a + b t: the textbook closed forms for the covariance,
     /// Var(b) = s²/Sₜₜ, Var(a) = s²(1/n + t̄²/Sₜₜ), Cov(a, b) = −s² t̄/Sₜₜ.

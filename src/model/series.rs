@@ -51,7 +51,7 @@
 //! Batches ([`ln_q_batch`], what the models call): the same results bit for bit as one
 //! sample at a time; on x86-64 CPUs with AVX2 and FMA both run in a copy of this code
 //! compiled for them, chosen at run time, which gives the same bits as the portable code
-//! (unit-tested). That copy, and the portable code where the target always has FMA
+//! with fused multiply-adds (unit-tested). That copy, and the portable code where the target always has FMA
 //! (aarch64), fuse their multiply-adds; on a CPU without FMA (x86-64 before 2013) the
 //! portable code rounds products and sums separately, which changes results by rounding
 //! only (unit-tested: within `tol` of the fused code) and keeps it fast.
@@ -214,14 +214,13 @@ fn series_body<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
         }
         rs
     }
-    let ratios = |m_first: f64, step: f64| ratios_at::<V>(g, a, inline_exp, m_first, step);
     // Upward: after adding t_m (rel = t_m/t0) with r = r_m < 1, Σ_{j>m} t_j ≤ rel r/(1−r),
     // Σ_{j>m} |j−1−g| t_j ≤ rel [(m+g) r/(1−r) + r/(1−r)²], Σ_{j>m} t_j/j ≤ tail/(m+1).
     let mut m = m0;
     let mut rel = 1.0f64;
-    let mut rs = ratios(m0, 1.0);
+    let mut rs = ratios_at::<V>(g, a, inline_exp, m0, 1.0);
     'up: loop {
-        let next = ratios(m + L as f64, 1.0);
+        let next = ratios_at::<V>(g, a, inline_exp, m + L as f64, 1.0);
         for l in 0..L {
             rel *= rs[l];
             m += 1.0;
@@ -250,9 +249,9 @@ fn series_body<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
     // left are each ≤ t_{m−1} = rel/r_{m−1}.
     let mut m = m0;
     let mut rel = 1.0f64;
-    let mut rs = ratios(m0 - 1.0, -1.0);
+    let mut rs = ratios_at::<V>(g, a, inline_exp, m0 - 1.0, -1.0);
     'down: while m > 1.0 {
-        let next = ratios(m - 1.0 - L as f64, -1.0);
+        let next = ratios_at::<V>(g, a, inline_exp, m - 1.0 - L as f64, -1.0);
         for l in 0..L {
             rel /= rs[l];
             m -= 1.0;
@@ -540,7 +539,6 @@ fn series_from_one<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
     let mut gp = [1.0, g, g2, g3, g4, g4 * g, g4 * g2, g4 * g3];
     let g8 = g4 * g4;
     let mut m0 = 1.0f64;
-    let lanes = |v: &[f64; L]| ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
     for (coef, inv) in SMALL_COEF.chunks_exact(L).zip(SMALL_INV.chunks_exact(L)) {
         let mut t = [0.0f64; L];
         for l in 0..L {
@@ -566,7 +564,7 @@ fn series_from_one<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
             factor * exp_poly::<V>(exponent)
         };
         if r < 1.0 {
-            let (s0, s_c, s_inv) = (lanes(&s0), lanes(&s_c), lanes(&s_inv));
+            let (s0, s_c, s_inv) = (sum8(&s0), sum8(&s_c), sum8(&s_inv));
             let om = 1.0 - r;
             let tail_om = t[L - 1] * r; // tail · (1−r)
             if tail_om <= eps * s0 * om
@@ -578,13 +576,19 @@ fn series_from_one<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
         }
         m0 += L as f64;
     }
-    let (s0, s_c, s_inv) = (lanes(&s0), lanes(&s_c), lanes(&s_inv));
+    let (s0, s_c, s_inv) = (sum8(&s0), sum8(&s_c), sum8(&s_inv));
     LnQ {
         ln_q: -g + s0.ln(),
         d_g: s_c / (g * s0),
         d_a: -s_inv / s0,
         mode: Mode::Series,
     }
+}
+
+/// The sum of eight lanes, pairwise.
+#[inline(always)]
+fn sum8(v: &[f64; 8]) -> f64 {
+    ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]))
 }
 
 /// Highest order of the asymptotic expansion tabulated.
@@ -603,26 +607,6 @@ static ASYM: [[f64; ASYM_DEG]; ASYM_ORDERS + 1] = asym_table();
 static ASYM_BLK: [[[[f64; 4]; 4]; ASYM_J]; ASYM_BLOCKS] = asym_blocks();
 const ASYM_BLOCKS: usize = ASYM_ORDERS.div_ceil(4);
 const ASYM_J: usize = 4 * ASYM_BLOCKS + 1;
-
-/// The first two blocks of [`ASYM_BLK`] side by side (eight vectors), nine rows (block 0's
-/// rows 5–8 zero).
-static ASYM_BLK01: [[[f64; 4]; 8]; 9] = {
-    let blk = asym_blocks();
-    let mut t = [[[0.0f64; 4]; 8]; 9];
-    let mut j = 0;
-    while j < 9 {
-        let mut v = 0;
-        while v < 4 {
-            if j < 5 {
-                t[j][v] = blk[0][j][v];
-            }
-            t[j][4 + v] = blk[1][j][v];
-            v += 1;
-        }
-        j += 1;
-    }
-    t
-};
 
 const fn asym_blocks() -> [[[[f64; 4]; 4]; ASYM_J]; ASYM_BLOCKS] {
     let p = asym_table();
@@ -769,70 +753,60 @@ fn asymptotic_body<V: F64x4>(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     let b = a / g;
     let x = 1.0 / g;
     let target = 0.5 * tol;
-    // P_n(b) = E(b²) + b O(b²) and P_n'(b) = E'(b²) + b O'(b²) (even/odd split): Horner
-    // in b² for four orders at once, four vectors of four lanes (E, O, E', O' of the
-    // orders; a lower order's leading coefficients are zero, which leaves its chain exact).
     let (bv, yv) = (V::splat(b), V::splat(b * b));
-    let x2 = x * x;
-    let x4 = x2 * x2;
-    let mut sums = AsymSums::<V>::start(target);
-    // g^{−n} of the block's four orders.
-    let mut xp = V::from_array([x, x2, x2 * x, x4]);
-    let x4v = V::splat(x4);
+    let mut sums = AsymSums::<V>::start(target, x, b);
     // Where the first eight orders are needed anyway (the error of order 4 is ~ 5·4!/g^4
-    // times a decay of ~5/g: above 0.15 tol while g^5 tol < 4e3), their two blocks run as
-    // one chain of nine steps on eight vectors instead of chains of five and nine steps.
+    // times a decay of ~5/g: above 0.15 tol while g^5 tol < 4e3), block 1's polynomials are
+    // evaluated before block 0 is tested, so that the two Horner chains overlap.
     let paired = {
         let g2 = g * g;
         g2 * g2 * g * tol < 4e3
     };
-    let mut first = 0;
-    if paired {
-        // Block 1's nine rows; block 0's five join at row 4 (its rows above are zero).
-        let rows = &ASYM_BLK01;
-        let mut v = rows[8].map(V::from_array);
-        for (j, row) in rows[..8].iter().enumerate().rev() {
-            let joined = if j >= 4 { 4 } else { 0 };
-            for (vk, rk) in v[joined..].iter_mut().zip(&row[joined..]) {
-                *vk = vk.mul_add(yv, V::from_array(*rk));
-            }
-            if j == 4 {
-                for (vk, rk) in v[..4].iter_mut().zip(row) {
-                    *vk = V::from_array(*rk);
-                }
-            }
-        }
-        for k in 0..2 {
-            let p = v[4 * k + 1].mul_add(bv, v[4 * k]);
-            let dp = v[4 * k + 3].mul_add(bv, v[4 * k + 2]);
-            if let Some(done) = sums.add_block(k, p, dp, xp, bv) {
-                return done.map(|s| asymptotic_result(b, x, s));
-            }
-            xp = xp.mul(x4v);
-        }
-        first = 2;
+    // Blocks 0 and 1 with constant k (their Horner loops unroll), the rest in a loop.
+    let block1 = if paired {
+        Some(block_polynomials::<V>(1, bv, yv))
+    } else {
+        None
+    };
+    let (p, dp) = block_polynomials::<V>(0, bv, yv);
+    if let Some(done) = sums.add_block(0, p, dp) {
+        return done.map(|s| asymptotic_result(b, x, s));
     }
-    for (k, block) in ASYM_BLK.iter().enumerate().skip(first) {
-        let rows = &block[..4 * k + 5];
-        let mut v = rows[4 * k + 4].map(V::from_array);
-        for row in rows[..4 * k + 4].iter().rev() {
-            for (vk, rk) in v.iter_mut().zip(row) {
-                *vk = vk.mul_add(yv, V::from_array(*rk));
-            }
-        }
-        let p = v[1].mul_add(bv, v[0]);
-        let dp = v[3].mul_add(bv, v[2]);
-        if let Some(done) = sums.add_block(k, p, dp, xp, bv) {
+    let (p, dp) = match block1 {
+        Some(pd) => pd,
+        None => block_polynomials::<V>(1, bv, yv),
+    };
+    if let Some(done) = sums.add_block(1, p, dp) {
+        return done.map(|s| asymptotic_result(b, x, s));
+    }
+    for k in 2..ASYM_BLOCKS {
+        let (p, dp) = block_polynomials::<V>(k, bv, yv);
+        if let Some(done) = sums.add_block(k, p, dp) {
             return done.map(|s| asymptotic_result(b, x, s));
         }
-        xp = xp.mul(x4v);
     }
     None
 }
 
+/// P_n(b) and P_n'(b) of the orders n = 4k+1..4k+4, lane by lane: P_n(b) = E(b²) + b O(b²)
+/// and P_n'(b) = E'(b²) + b O'(b²) (even/odd split), Horner in y = b² on four vectors
+/// (E, O, E', O'; a lower order's leading coefficients are zero, which leaves its chain
+/// exact) over the block's 4k + 5 rows of [`ASYM_BLK`].
+#[inline(always)]
+fn block_polynomials<V: F64x4>(k: usize, b: V, y: V) -> (V, V) {
+    let rows = &ASYM_BLK[k][..4 * k + 5];
+    let mut v = rows[4 * k + 4].map(V::from_array);
+    for row in rows[..4 * k + 4].iter().rev() {
+        for (vk, rk) in v.iter_mut().zip(row) {
+            *vk = vk.mul_add(y, V::from_array(*rk));
+        }
+    }
+    (v[1].mul_add(b, v[0]), v[3].mul_add(b, v[2]))
+}
+
 /// The asymptotic expansion's running state: R = Σ g^{−n} P_n(b), r_g = g ∂R/∂g|_b =
 /// −Σ n g^{−n} P_n, r_b = ∂R/∂b over the orders added so far; the sizes and error
-/// estimates of the last block's four orders.
+/// estimates of the last block's four orders; the next block's weights g^{−n}.
 struct AsymSums<V> {
     r: f64,
     r_g: f64,
@@ -841,6 +815,11 @@ struct AsymSums<V> {
     err: V,
     /// 0.3 × the target for the estimated error relative to R.
     accept: V,
+    /// g^{−n} of the next block's four orders.
+    weights: V,
+    /// g^{−4}: from one block's weights to the next block's.
+    g_4: V,
+    b: V,
 }
 
 /// The expansion's result: R, r_g, r_b (see [`AsymSums`]).
@@ -860,7 +839,9 @@ const LANES_UPTO: [[f64; 4]; 4] = [
 
 impl<V: F64x4> AsymSums<V> {
     #[inline(always)]
-    fn start(target: f64) -> Self {
+    fn start(target: f64, x: f64, b: f64) -> Self {
+        let x2 = x * x;
+        let x4 = x2 * x2;
         AsymSums {
             r: 1.0,
             r_g: 0.0,
@@ -868,11 +849,14 @@ impl<V: F64x4> AsymSums<V> {
             size: V::splat(f64::INFINITY),
             err: V::splat(f64::INFINITY),
             accept: V::splat(0.3 * target),
+            weights: V::from_array([x, x2, x2 * x, x4]),
+            g_4: V::splat(x4),
+            b: V::splat(b),
         }
     }
 
-    /// Add the orders n = 4k+1..4k+4 (polynomial values `p`, derivatives `dp`, weights
-    /// `xp` = g^{−n}) and test each, lowest first. `Some(Some(total))` when an order is
+    /// Add the orders n = 4k+1..4k+4 (polynomial values `p`, derivatives `dp`) and test
+    /// each, lowest first. `Some(Some(total))` when an order is
     /// accepted, `Some(None)` when the orders have started to grow (the expansion fails),
     /// `None` to go on.
     ///
@@ -884,11 +868,13 @@ impl<V: F64x4> AsymSums<V> {
     /// have started to grow when |term_n| ≥ max(|term_{n−1}|, |term_{n−2}|). Unlike the
     /// series' tail bounds this estimate is not a proof; see the module doc for its checks.
     #[inline(always)]
-    fn add_block(&mut self, k: usize, p: V, dp: V, xp: V, b: V) -> Option<Option<AsymTotal>> {
+    fn add_block(&mut self, k: usize, p: V, dp: V) -> Option<Option<AsymTotal>> {
+        let (g_n, b) = (self.weights, self.b);
+        self.weights = g_n.mul(self.g_4);
         let base = 4.0 * k as f64;
         let n = V::from_array([base + 1.0, base + 2.0, base + 3.0, base + 4.0]);
-        let term = xp.mul(p);
-        let term_b = xp.mul(dp);
+        let term = g_n.mul(p);
+        let term_b = g_n.mul(dp);
         let size = term.abs();
         let err = size.mul_add(n.add(V::splat(1.0)), b.mul(term_b.abs()));
         let (err1, err2) = (V::shift1(self.err, err), V::shift2(self.err, err));
@@ -1019,10 +1005,11 @@ trait LanesFn {
     fn call<V: F64x4>(self) -> Self::Out;
 }
 
-/// Run `f` with AVX2 + FMA lanes, compiled for them, where the CPU has both; with
-/// [`Portable`] lanes otherwise. Both give the same bits (the lanes are tested to agree
-/// op by op, and the scalar code around them is the same), so every entry point
-/// (batch or single sample) returns the same result whichever runs.
+/// Run `f` with AVX2 + FMA lanes, compiled for them, where the CPU has both; with the
+/// portable lanes this build runs otherwise (`PortableNative`: fused where the target
+/// always has FMA). On one CPU every entry point (batch or single sample) therefore runs
+/// the same code and returns the same bits; the AVX2 + FMA lanes give the bits of the
+/// fused portable lanes (tested op by op, and the scalar code around them is the same).
 #[inline(always)]
 fn with_lanes<F: LanesFn>(f: F) -> F::Out {
     #[cfg(target_arch = "x86_64")]
