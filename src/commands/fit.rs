@@ -314,16 +314,16 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     for file in &args.file {
         let ds = io::read_dataset(file, &opts)?;
         if args.by_group {
-            let names = ds.channel_names();
-            if names.is_empty() {
+            let groups = ds.channel_groups();
+            if groups.is_empty() {
                 return Err(Error::Usage(format!(
                     "{}: --by-group needs a group column (or ASTM channels)",
                     file.display()
                 ))
                 .into());
             }
-            for name in names {
-                let mut sub = ds.subset(&ds.channel_indices(&name));
+            for (name, idx) in groups {
+                let mut sub = ds.subset(&idx);
                 sub.channel = None;
                 jobs.push((format!("{} [{name}]", file.display()), sub));
             }

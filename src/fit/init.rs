@@ -5,6 +5,7 @@
 //! ([`subsample`]) of at most [`GRID_SAMPLES`] samples, so its cost does not grow with the
 //! dataset.
 
+use super::grid_cache;
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
 use super::stats::median;
 use nalgebra::{DMatrix, DVector};
@@ -102,15 +103,6 @@ pub fn initial_values(
         .ok()
     };
     let is_kbs = specs.iter().any(|s| s.name == "sigma");
-    let (rough_model, smooth_model) = if is_kbs {
-        (limit(EvalMode::Rough), limit(EvalMode::Smooth))
-    } else {
-        (None, None)
-    };
-    let sub_rough = rough_model.as_deref().map(|m| make(m, problem, &sub_input));
-    let sub_smooth = smooth_model
-        .as_deref()
-        .map(|m| make(m, problem, &sub_input));
     // Median of (c/λ)² over the subsample: g ≈ (2πσ)² × that.
     let c2_lambda = median(
         &(0..sub_input.geo.len())
@@ -138,30 +130,66 @@ pub fn initial_values(
         .filter(|&k| is_linear(layout, k, specs) && given[k].is_none())
         .collect();
 
-    // (cost, parameters, regime band of the point's median g), grid points in parallel.
+    // The grid point of a flat index, and its median g (KBS).
     let total: usize = axes.iter().map(Vec::len).product();
+    let point = |flat: usize| -> (Vec<f64>, Option<f64>) {
+        let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
+        let mut rem = flat;
+        for (axis, &k) in axes.iter().zip(&nonlinear) {
+            p[k] = axis[rem % axis.len()];
+            rem /= axis.len();
+        }
+        let g = sigma_k.map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * c2_lambda);
+        (p, g)
+    };
+    // The model side of every grid point depends only on the layout (angles, model, axes),
+    // not on the data: computed once per layout and shared by every fit of it.
+    let mut key =
+        grid_cache::Key::new(grid_model.name(), &sub_input.geo, &sub_input.channel, &axes);
+    key.push(given.iter().map(|g| g.map_or(u64::MAX, f64::to_bits)));
+    key.push(linear.iter().chain(&nonlinear).map(|&k| k as u64));
+    key.push([layout.len() as u64, problem.layout.index.len() as u64]);
+    key.push(options_bits(grid_model));
+    let basis = grid_cache::basis(key, || {
+        let (rough_model, smooth_model) = if is_kbs {
+            (limit(EvalMode::Rough), limit(EvalMode::Smooth))
+        } else {
+            (None, None)
+        };
+        let sub_rough = rough_model.as_deref().map(|m| make(m, problem, &sub_input));
+        let sub_smooth = smooth_model
+            .as_deref()
+            .map(|m| make(m, problem, &sub_input));
+        let points = (0..total)
+            .into_par_iter()
+            .map(|flat| {
+                let (p, g) = point(flat);
+                let grid_problem = match (g, &sub_rough, &sub_smooth) {
+                    (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
+                    (Some(g), _, Some(s)) if g <= GRID_ROUGH_G => s,
+                    _ => &sub,
+                };
+                grid_cache::point_basis(grid_problem, &p, &linear)
+            })
+            .collect();
+        grid_cache::GridBasis { points }
+    });
+    // Residual weights of the linear solve: relative/log residuals linearised around the
+    // data.
+    let d = linear_weights(&sub);
+    // (cost, parameters, regime band of the point's median g), grid points in parallel.
     let mut scored: Vec<(f64, Vec<f64>, usize)> = (0..total)
         .into_par_iter()
         .filter_map(|flat| {
-            let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
-            let mut rem = flat;
-            for (axis, &k) in axes.iter().zip(&nonlinear) {
-                p[k] = axis[rem % axis.len()];
-                rem /= axis.len();
-            }
-            let g = sigma_k.map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * c2_lambda);
-            let grid_problem = match (g, &sub_rough, &sub_smooth) {
-                (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
-                (Some(g), _, Some(s)) if g <= GRID_ROUGH_G => s,
-                _ => &sub,
-            };
+            let (mut p, g) = point(flat);
             let band = match g {
                 Some(g) if g < SMOOTH_BAND_G => 0,
                 Some(g) if g <= ROUGH_BAND_G => 1,
                 Some(_) => 2,
                 None => 0,
             };
-            solve_linear(grid_problem, &mut p, &linear).map(|cost| (cost, p, band))
+            let b = basis.points[flat].as_ref()?;
+            solve_linear_with(&sub, b, &d, &mut p, &linear).map(|cost| (cost, p, band))
         })
         .collect();
     // The grid ranks with the limits' approximations, which can favour a wrong regime (the
@@ -194,37 +222,55 @@ pub fn initial_values(
     picked
 }
 
+/// The bits of a model's evaluation options (mode, tolerance, patch), for cache keys.
+fn options_bits(model: &dyn crate::model::Model) -> Vec<u64> {
+    match model.options() {
+        None => vec![0],
+        Some(o) => {
+            let (x, y) = o.patch.unwrap_or((0.0, 0.0));
+            vec![1, o.mode as u64, o.tol.to_bits(), x.to_bits(), y.to_bits()]
+        }
+    }
+}
+
 /// Solve the linear parameters `linear` of `p` by least squares (with the other parameters
 /// held); returns the resulting cost, or None when the
 /// model gives non-finite values.
 pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Option<f64> {
+    let basis = grid_cache::point_basis(problem, p, linear)?;
+    solve_linear_with(problem, &basis, &linear_weights(problem), p, linear)
+}
+
+/// The weights of [`solve_linear`]'s residuals: √wᵢ, divided by max(|yᵢ|, floor) for
+/// relative and log residuals (linearised around the data).
+fn linear_weights(problem: &FitProblem) -> Vec<f64> {
+    let y = problem.y();
+    problem
+        .sqrt_weight()
+        .iter()
+        .zip(y)
+        .map(|(sw, yi)| match problem.kind() {
+            ResidualKind::Absolute => *sw,
+            _ => sw / yi.abs().max(problem.floor),
+        })
+        .collect()
+}
+
+/// [`solve_linear`] from the model's values at the point, `basis` (f = rest + Σ p_k
+/// column_k), and the residual weights `d` of [`linear_weights`]: no model evaluation.
+fn solve_linear_with(
+    problem: &FitProblem,
+    basis: &grid_cache::PointBasis,
+    d: &[f64],
+    p: &mut [f64],
+    linear: &[usize],
+) -> Option<f64> {
+    let n = problem.len();
+    let rest = &basis.rest;
     if !linear.is_empty() {
-        for &k in linear {
-            p[k] = 1.0;
-        }
-        let (f, jac) = problem.model_values(p, true);
-        let jac = jac.expect("requested");
-        let n = problem.len();
         let y = problem.y();
-        let sw = problem.sqrt_weight();
-        // Residual weights: linearise relative/log residuals around the data.
-        let d: Vec<f64> = (0..n)
-            .map(|i| {
-                let scale = match problem.kind() {
-                    ResidualKind::Absolute => 1.0,
-                    _ => 1.0 / y[i].abs().max(problem.floor),
-                };
-                sw[i] * scale
-            })
-            .collect();
-        // The part of f that does not come from the linear parameters.
-        let mut rest: Vec<f64> = f.clone();
-        for &k in linear {
-            for i in 0..n {
-                rest[i] -= jac[(i, k)];
-            }
-        }
-        let a = DMatrix::from_fn(n, linear.len(), |i, c| d[i] * jac[(i, linear[c])]);
+        let col = |c: usize| &basis.columns[c * n..(c + 1) * n];
+        let a = DMatrix::from_fn(n, linear.len(), |i, c| d[i] * col(c)[i]);
         let b = DVector::from_fn(n, |i, _| d[i] * (y[i] - rest[i]));
         if !a.iter().chain(b.iter()).all(|v| v.is_finite()) {
             return None;
@@ -251,8 +297,20 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
             return cost.is_finite().then_some(cost);
         }
     }
-    let r = problem.weighted_residuals(p);
-    let cost = 0.5 * r.norm_squared();
+    // f at the solved amplitudes, from the basis (f is linear in them).
+    let f: Vec<f64> = (0..n)
+        .map(|i| {
+            linear.iter().enumerate().fold(rest[i], |acc, (c, &k)| {
+                acc + p[k] * basis.columns[c * n + i]
+            })
+        })
+        .collect();
+    let r = problem.raw_residuals(&f);
+    let cost = 0.5
+        * r.iter()
+            .zip(problem.sqrt_weight())
+            .map(|(r, s)| (r * s) * (r * s))
+            .sum::<f64>();
     cost.is_finite().then_some(cost)
 }
 

@@ -3,6 +3,7 @@
 //! starting values ([`init`]) and the whole fit ([`driver`]).
 
 pub mod driver;
+pub mod grid_cache;
 pub mod init;
 pub mod lm;
 pub mod problem;

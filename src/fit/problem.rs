@@ -346,19 +346,22 @@ impl<'a> FitProblem<'a> {
         finish: impl Fn(&Block, &mut [f64], &mut [f64]) + Sync,
     ) -> Vec<(Vec<f64>, Vec<f64>)> {
         let n_spec = self.model.params().len();
-        self.blocks
-            .par_iter()
-            .map(|b| {
-                let mp = self.layout.model_params(p, b.channel);
-                let m = b.geo.len();
-                let mut f = vec![0.0; m];
-                let mut jac = vec![0.0; if want_jac { m * n_spec } else { 0 }];
-                self.model
-                    .eval(&b.geo, &mp, &mut f, want_jac.then_some(&mut jac[..]));
-                finish(b, &mut f, &mut jac);
-                (f, jac)
-            })
-            .collect()
+        let run = |b: &Block| {
+            let mp = self.layout.model_params(p, b.channel);
+            let m = b.geo.len();
+            let mut f = vec![0.0; m];
+            let mut jac = vec![0.0; if want_jac { m * n_spec } else { 0 }];
+            self.model
+                .eval(&b.geo, &mp, &mut f, want_jac.then_some(&mut jac[..]));
+            finish(b, &mut f, &mut jac);
+            (f, jac)
+        };
+        // One block (a small fit) runs on the calling thread: no task to schedule.
+        if self.blocks.len() == 1 {
+            self.blocks.iter().map(run).collect()
+        } else {
+            self.blocks.par_iter().map(run).collect()
+        }
     }
 
     /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).

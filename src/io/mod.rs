@@ -90,13 +90,24 @@ impl Dataset {
 
     /// The distinct channel labels in first-appearance order (empty without channels).
     pub fn channel_names(&self) -> Vec<String> {
-        let mut out: Vec<String> = Vec::new();
-        if let Some(ch) = &self.channel {
-            for c in ch {
-                if !out.iter().any(|o| o == c) {
-                    out.push(c.clone());
-                }
-            }
+        self.channel_groups()
+            .into_iter()
+            .map(|(name, _)| name)
+            .collect()
+    }
+
+    /// Every distinct channel label (first-appearance order) with the indices of its
+    /// samples (ascending), found in one pass: O(n) for n samples however many groups
+    /// (a texel batch has thousands). Empty without channels.
+    pub fn channel_groups(&self) -> Vec<(String, Vec<usize>)> {
+        let mut out: Vec<(String, Vec<usize>)> = Vec::new();
+        let mut slot: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+        for (i, c) in self.channel.iter().flatten().enumerate() {
+            let k = *slot.entry(c.as_str()).or_insert_with(|| {
+                out.push((c.clone(), Vec::new()));
+                out.len() - 1
+            });
+            out[k].1.push(i);
         }
         out
     }
@@ -388,4 +399,27 @@ pub fn wavelength_nm_of_channel(name: &str) -> Option<f64> {
     let v: f64 = num.trim().parse().ok()?;
     let v = v * scale;
     (v.is_finite() && v > 0.0).then_some(v)
+}
+
+#[cfg(test)]
+mod group_tests {
+    use super::*;
+
+    #[test]
+    fn channel_groups_collect_interleaved_labels_in_first_appearance_order() {
+        let text = b"theta_i,theta_r,phi_r,L,group\n10,20,0,1,b\n10,30,0,2,a\n10,40,0,3,b\n10,50,0,4,c\n10,60,0,5,a\n";
+        let opts = ReadOptions {
+            require_value: true,
+            ..Default::default()
+        };
+        let ds = read_bytes(Path::new("t.csv"), text, &opts).unwrap();
+        let groups = ds.channel_groups();
+        let want: Vec<(String, Vec<usize>)> = vec![
+            ("b".into(), vec![0, 2]),
+            ("a".into(), vec![1, 4]),
+            ("c".into(), vec![3]),
+        ];
+        assert_eq!(groups, want);
+        assert_eq!(ds.channel_names(), ["b", "a", "c"]);
+    }
 }

@@ -211,6 +211,10 @@ impl Model for Kbs {
         }
     }
 
+    fn options(&self) -> Option<ModelOptions> {
+        Some(self.opts)
+    }
+
     fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
         self.batch_ln_q(geo, p[0], p[1])
             .2

@@ -66,6 +66,10 @@ impl Model for KbsLambert {
         }
     }
 
+    fn options(&self) -> Option<ModelOptions> {
+        Some(self.kbs.opts)
+    }
+
     fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
         self.kbs.modes(geo, &p[..3])
     }

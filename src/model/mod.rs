@@ -119,6 +119,12 @@ pub trait Model: Send + Sync {
     /// and every parameter vector with positive σ, T, w.
     fn radiance(&self, geo: &Geometry, p: &[f64], out: &mut [f64], jac: Option<&mut [f64]>);
 
+    /// The evaluation options the model was built with (None for models that take none):
+    /// two models of one name and options give the same values.
+    fn options(&self) -> Option<ModelOptions> {
+        None
+    }
+
     /// The evaluation mode used for each sample at parameters `p`.
     fn modes(&self, geo: &Geometry, _p: &[f64]) -> Vec<Mode> {
         vec![Mode::Closed; geo.len()]
