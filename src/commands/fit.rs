@@ -312,7 +312,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // Every input is read (and checked) before any fit starts.
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
     for file in &args.file {
-        let ds = io::read_dataset(file, &opts)?;
+        // The raw rows are kept only for the residuals file (which passes them through).
+        let ds = match args.residuals {
+            Some(_) => io::read_dataset(file, &opts)?,
+            None => io::read_dataset_columns(file, &opts)?,
+        };
         if args.by_group {
             let groups = ds.channel_groups();
             if groups.is_empty() {

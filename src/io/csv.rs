@@ -140,19 +140,48 @@ struct Nist {
 
 /// Parse a CSV table (text already decoded, BOM removed).
 pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Dataset> {
+    let records = split_records(text).map_err(|(line, m)| Error::input(path, line, "(row)", m))?;
+    let n = records.len();
+    parse_records(path, records.into_iter().map(Ok), opts, true, n)
+}
+
+/// Parse a CSV table streamed from `reader` record by record ([`RecordStream`]): the text
+/// is never held whole, and the raw rows are kept only with `keep_rows` (the fit needs them
+/// only for its residuals file). `rows_hint` sizes the columns (an estimate; 0 is fine).
+pub(crate) fn parse_reader(
+    path: &Path,
+    reader: impl std::io::BufRead,
+    opts: &ReadOptions,
+    keep_rows: bool,
+    rows_hint: usize,
+) -> Result<Dataset> {
+    parse_records(
+        path,
+        RecordStream::new(path, reader),
+        opts,
+        keep_rows,
+        rows_hint,
+    )
+}
+
+/// Parse CSV records (header first) into a dataset; see the module docs.
+fn parse_records(
+    path: &Path,
+    records: impl Iterator<Item = Result<Record>>,
+    opts: &ReadOptions,
+    keep_rows: bool,
+    rows_hint: usize,
+) -> Result<Dataset> {
     let input_err = |line, column: &str, message| Error::input(path, line, column, message);
     let file_err = |message| Error::file(path, message);
 
-    let mut records = split_records(text)
-        .map_err(|(line, m)| input_err(line, "(row)", m))?
-        .into_iter();
-    let Some((header_line, headers)) = records.next() else {
+    let mut records = records.peekable();
+    let Some((header_line, headers)) = records.next().transpose()? else {
         return Err(file_err(
             "empty file: no header row (expected e.g. theta_i,theta_r,phi_r,L)".into(),
         ));
     };
-    let records: Vec<Record> = records.collect();
-    if records.is_empty() {
+    if records.peek().is_none() {
         return Err(file_err(format!(
             "no data rows after the header on line {header_line}"
         )));
@@ -296,11 +325,11 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
     }
 
     // The rows.
-    let n = records.len();
+    let n = rows_hint;
     let mut ds = Dataset {
         path: path.to_path_buf(),
         headers: headers.clone(),
-        rows: Vec::with_capacity(n),
+        rows: Vec::with_capacity(if keep_rows { n } else { 0 }),
         lines: Vec::with_capacity(n),
         samples: Vec::with_capacity(n),
         value: cols.get(Role::Value).map(|_| Vec::with_capacity(n)),
@@ -312,7 +341,8 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         wavelength: cols.get(Role::Wavelength).map(|_| Vec::with_capacity(n)),
         channel: cols.get(Role::Group).map(|_| Vec::with_capacity(n)),
     };
-    for (line, fields) in records {
+    for record in records {
+        let (line, fields) = record?;
         if fields.len() != headers.len() {
             return Err(input_err(
                 line,
@@ -418,8 +448,11 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         }
         ds.samples.push(sample);
         ds.lines.push(line);
-        ds.rows.push(fields);
+        if keep_rows {
+            ds.rows.push(fields);
+        }
     }
+    ds.shrink_to_fit();
 
     if opts.require_value {
         if let Some(v) = &ds.value {
@@ -551,6 +584,171 @@ pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, Str
     Ok(out)
 }
 
+/// Records read one at a time from a byte stream: the streaming form of [`split_records`]
+/// (same fields, same 1-based line numbers, same errors), holding one record's text at a
+/// time instead of the whole file. A record is one line, or several when a quoted field
+/// holds line breaks. Invalid UTF-8 is an error naming the line and the byte offset.
+pub(crate) struct RecordStream<'p, R> {
+    path: &'p Path,
+    reader: R,
+    /// Line number of the next line to read (1-based).
+    line: usize,
+    /// Bytes consumed so far after the byte-order mark (for the UTF-8 message).
+    offset: usize,
+    /// Whether the first chunk has been read (a byte-order mark is skipped there).
+    started: bool,
+    buf: Vec<u8>,
+    queue: std::collections::VecDeque<Record>,
+    failed: bool,
+}
+
+impl<'p, R: std::io::BufRead> RecordStream<'p, R> {
+    pub(crate) fn new(path: &'p Path, reader: R) -> Self {
+        RecordStream {
+            path,
+            reader,
+            line: 1,
+            offset: 0,
+            started: false,
+            buf: Vec::new(),
+            queue: std::collections::VecDeque::new(),
+            failed: false,
+        }
+    }
+
+    /// Read the next chunk of whole records (at least one line) and split it; false at the
+    /// end of the stream.
+    fn fill(&mut self) -> Result<bool> {
+        self.buf.clear();
+        loop {
+            let got = self
+                .reader
+                .read_until(b'\n', &mut self.buf)
+                .map_err(|source| Error::Io {
+                    path: self.path.to_path_buf(),
+                    source,
+                })?;
+            if got == 0 || !ends_inside_quotes(&self.buf) {
+                break;
+            }
+        }
+        if self.buf.is_empty() {
+            return Ok(false);
+        }
+        let mut start = 0;
+        if !self.started && self.buf.starts_with(b"\xEF\xBB\xBF") {
+            start = 3;
+        }
+        self.started = true;
+        let chunk = &self.buf[start..];
+        let text = std::str::from_utf8(chunk).map_err(|e| {
+            let good = &chunk[..e.valid_up_to()];
+            Error::input(
+                self.path,
+                self.line + good.iter().filter(|&&b| b == b'\n').count(),
+                "(text)",
+                format!(
+                    "invalid UTF-8 at byte {} (save the file as UTF-8 text)",
+                    self.offset + e.valid_up_to()
+                ),
+            )
+        })?;
+        let first = self.line;
+        let records = split_records(text)
+            .map_err(|(l, m)| Error::input(self.path, first + l - 1, "(row)", m))?;
+        self.queue
+            .extend(records.into_iter().map(|(l, f)| (first + l - 1, f)));
+        self.line += line_ends(chunk);
+        self.offset += chunk.len();
+        Ok(true)
+    }
+}
+
+impl<R: std::io::BufRead> Iterator for RecordStream<'_, R> {
+    type Item = Result<Record>;
+
+    fn next(&mut self) -> Option<Result<Record>> {
+        while self.queue.is_empty() && !self.failed {
+            match self.fill() {
+                Ok(true) => {}
+                Ok(false) => return None,
+                Err(e) => {
+                    self.failed = true;
+                    return Some(Err(e));
+                }
+            }
+        }
+        self.queue.pop_front().map(Ok)
+    }
+}
+
+/// Line ends as [`split_records`] counts them: `\n`, `\r\n`, and a lone `\r`.
+fn line_ends(b: &[u8]) -> usize {
+    (0..b.len())
+        .filter(|&i| b[i] == b'\n' || (b[i] == b'\r' && b.get(i + 1) != Some(&b'\n')))
+        .count()
+}
+
+/// Whether the text ends inside a quoted field, by the rules of [`split_records`]: a quote
+/// opens a field only at its start (after blanks), `""` inside is a quote, and a line whose
+/// first non-blank character is `#` is a comment.
+fn ends_inside_quotes(b: &[u8]) -> bool {
+    let mut i = 0;
+    let mut field_start = true;
+    let mut line_start = true;
+    while i < b.len() {
+        if line_start {
+            let mut j = i;
+            while j < b.len() && (b[j] == b' ' || b[j] == b'\t') {
+                j += 1;
+            }
+            if b.get(j) == Some(&b'#') {
+                while j < b.len() && b[j] != b'\n' && b[j] != b'\r' {
+                    j += 1;
+                }
+            }
+            i = j;
+            line_start = false;
+            continue;
+        }
+        match b[i] {
+            b' ' | b'\t' if field_start => i += 1,
+            b'"' if field_start => {
+                i += 1;
+                loop {
+                    if i >= b.len() {
+                        return true;
+                    }
+                    if b[i] == b'"' {
+                        if b.get(i + 1) == Some(&b'"') {
+                            i += 2;
+                            continue;
+                        }
+                        i += 1;
+                        break;
+                    }
+                    i += 1;
+                }
+                field_start = false;
+            }
+            b',' => {
+                field_start = true;
+                i += 1;
+            }
+            b'\n' | b'\r' => {
+                field_start = true;
+                line_start = true;
+                i += 1;
+            }
+            _ => {
+                field_start = false;
+                i += 1;
+            }
+        }
+    }
+    false
+}
+
 /// Convert NIST-convention angles (absolute azimuths of outward directions; θi < 0 puts the
 /// source at φi + 180°) to ours.
 fn nist_sample(
@@ -578,4 +776,56 @@ fn nist_sample(
         rel -= full;
     }
     check_angles(theta_i.abs(), theta_r, rel, radians, false)
+}
+
+#[cfg(test)]
+mod stream_tests {
+    use super::*;
+
+    /// The streamed records equal [`split_records`]'s, line numbers and errors included,
+    /// whatever the chunking (one line at a time here).
+    #[test]
+    fn record_stream_matches_split_records() {
+        let texts = [
+            "a,b\n1,2\n",
+            "a,b\r\n1,2\r\n\r\n# c, \"open\n3,4",
+            "\u{feff}a,b\n\"x\ny\",2\n  # \"q\n\"a\"\"b\", 3\n",
+            "a,\"b\n\nc\",d\n1,2,3\n",
+            "h\r1\r2\r",
+            "a,b\n\"never closed\n1,2\n",
+            "a,b\n\"x\" y,2\n",
+            "a,b\n1,\"2\" \n  \n3 , 4\n",
+            "",
+        ];
+        let path = Path::new("t.csv");
+        for text in texts {
+            let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+            let want = split_records(body);
+            let got: std::result::Result<Vec<Record>, (usize, String)> =
+                RecordStream::new(path, std::io::BufReader::with_capacity(4, text.as_bytes()))
+                    .map(|r| {
+                        r.map_err(|e| match e {
+                            Error::Input { line, message, .. } => (line, message),
+                            e => (0, e.to_string()),
+                        })
+                    })
+                    .collect();
+            assert_eq!(got, want, "{text:?}");
+        }
+    }
+
+    #[test]
+    fn record_stream_names_the_line_of_invalid_utf8() {
+        let bytes = b"a,b\n1,2\n3,\xff\n";
+        let err = RecordStream::new(Path::new("t.csv"), &bytes[..])
+            .find_map(|r| r.err())
+            .expect("an error");
+        match err {
+            Error::Input { line, message, .. } => {
+                assert_eq!(line, 3);
+                assert!(message.contains("at byte 10"), "{message}");
+            }
+            e => panic!("unexpected error {e}"),
+        }
+    }
 }

@@ -121,7 +121,11 @@ impl Dataset {
         Dataset {
             path: self.path.clone(),
             headers: self.headers.clone(),
-            rows: pick(&self.rows, idx),
+            rows: if self.rows.is_empty() {
+                Vec::new()
+            } else {
+                pick(&self.rows, idx)
+            },
             lines: pick(&self.lines, idx),
             samples: pick(&self.samples, idx),
             value: self.value.as_deref().map(|v| pick(v, idx)),
@@ -129,6 +133,27 @@ impl Dataset {
             sigma_l: self.sigma_l.as_deref().map(|v| pick(v, idx)),
             wavelength: self.wavelength.as_deref().map(|v| pick(v, idx)),
             channel: self.channel.as_deref().map(|v| pick(v, idx)),
+        }
+    }
+
+    /// Release the per-sample vectors' spare capacity (after reading).
+    pub fn shrink_to_fit(&mut self) {
+        self.rows.shrink_to_fit();
+        self.lines.shrink_to_fit();
+        self.samples.shrink_to_fit();
+        for v in [
+            &mut self.value,
+            &mut self.weight,
+            &mut self.sigma_l,
+            &mut self.wavelength,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            v.shrink_to_fit();
+        }
+        if let Some(c) = self.channel.as_mut() {
+            c.shrink_to_fit();
         }
     }
 
@@ -143,11 +168,72 @@ impl Dataset {
 
 /// Read a dataset, choosing the format by extension or content (see the module docs).
 pub fn read_dataset(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    read_file(path, opts, true)
+}
+
+/// [`read_dataset`] without the raw rows (`rows` stays empty): what a fit needs when it
+/// writes no residuals file. A CSV file is streamed record by record, so reading holds
+/// one record's text at a time, not the file (a 1M-row scan is ~45 MB of text).
+pub fn read_dataset_columns(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
+    read_file(path, opts, false)
+}
+
+fn read_file(path: &Path, opts: &ReadOptions, keep_rows: bool) -> Result<Dataset> {
+    use std::io::{BufRead, Read};
+    let io_err = |source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    read_bytes(path, &bytes, opts)
+    };
+    let file = std::fs::File::open(path).map_err(io_err)?;
+    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let head = reader.fill_buf().map_err(io_err)?;
+    if !astm_by_extension(path) && surely_csv(head) {
+        let rows_hint = estimate_rows(head, len);
+        return csv::parse_reader(path, reader, opts, keep_rows, rows_hint);
+    }
+    let mut bytes = Vec::new();
+    reader.read_to_end(&mut bytes).map_err(io_err)?;
+    let mut ds = read_bytes(path, &bytes, opts)?;
+    if !keep_rows {
+        ds.rows = Vec::new();
+    }
+    Ok(ds)
+}
+
+/// Whether the extension says ASTM E1392 (`.astm`, any case).
+fn astm_by_extension(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("astm"))
+}
+
+/// Whether the start of a file decides it is CSV by [`is_astm`]'s content rule: its first
+/// non-blank line (complete within `head`) does not open with an ASTM `KEY` token
+/// followed by more text.
+fn surely_csv(head: &[u8]) -> bool {
+    let head = head.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(head);
+    for line in head.split(|&b| b == b'\n' || b == b'\r') {
+        let Ok(text) = std::str::from_utf8(line) else {
+            return false;
+        };
+        let t = text.trim();
+        if t.is_empty() {
+            continue;
+        }
+        let complete = line.len() < head.len();
+        let key = t.split_whitespace().next().unwrap_or("");
+        return complete && !(astm::is_key(key) && t.len() > key.len());
+    }
+    false
+}
+
+/// Rows of a file of `len` bytes, estimated from the line ends in its first bytes `head`
+/// (5 % over, so that the columns rarely grow).
+fn estimate_rows(head: &[u8], len: u64) -> usize {
+    let lines = head.iter().filter(|&&b| b == b'\n').count().max(1);
+    let per_line = head.len() as f64 / lines as f64;
+    ((len as f64 / per_line.max(1.0)) * 1.05) as usize + 16
 }
 
 /// Read a dataset from bytes already in memory; `path` names it in messages and decides
@@ -421,5 +507,28 @@ mod group_tests {
         ];
         assert_eq!(groups, want);
         assert_eq!(ds.channel_names(), ["b", "a", "c"]);
+    }
+
+    /// The streamed reader without rows gives the same columns as the whole-file reader.
+    #[test]
+    fn columns_only_reading_matches_the_whole_file_reader() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+        let opts = ReadOptions {
+            require_value: true,
+            ..Default::default()
+        };
+        for file in ["synthetic/kbs_inplane.csv", "nist-ptfe/PTFE.data.csv"] {
+            let path = dir.join(file);
+            let whole = read_dataset(&path, &opts).unwrap();
+            let lean = read_dataset_columns(&path, &opts).unwrap();
+            assert_eq!(whole.rows.len(), whole.len(), "{file}");
+            assert!(lean.rows.is_empty(), "{file}");
+            assert_eq!(lean.samples, whole.samples, "{file}");
+            assert_eq!(lean.lines, whole.lines, "{file}");
+            assert_eq!(lean.value, whole.value, "{file}");
+            assert_eq!(lean.wavelength, whole.wavelength, "{file}");
+            assert_eq!(lean.headers, whole.headers, "{file}");
+            assert_eq!(lean.subset(&[1, 0]).samples, whole.subset(&[1, 0]).samples);
+        }
     }
 }
