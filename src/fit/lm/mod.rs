@@ -114,8 +114,8 @@ pub use termination::Termination;
 pub use transform::Transformed;
 
 use norm::{all_finite, pad_vec};
-use polish::Polish;
 use step::Tolerances;
+use work::Polish;
 use work::Work;
 
 /// The argmin state the solver runs on: parameters `DVector`, gradient slot `Jᵀr`,

@@ -7,7 +7,7 @@ use nalgebra::DVector;
 use super::lmpar::lmpar;
 use super::norm::{all_finite, enorm, pad_vec};
 use super::qr::jp_norm;
-use super::work::Work;
+use super::work::{Polish, PolishPoint, Work};
 use super::{Termination, EPSMCH};
 
 /// Most Gauss–Newton polishing steps after convergence.
@@ -23,42 +23,6 @@ const POLISH_TOL: f64 = 1e-10;
 const POLISH_MAX_NOISE: f64 = 1e-6;
 /// Largest first polishing step, relative to `‖D x‖`.
 const POLISH_MAX_REL_STEP: f64 = 1e-4;
-
-/// State of the Gauss–Newton polishing phase.
-#[derive(Debug, Clone)]
-pub(super) struct Polish {
-    /// The convergence test that started it; reported as the run's termination.
-    reason: Termination,
-    /// Accepted polishing steps.
-    steps: u32,
-    /// `‖r‖` when polishing started.
-    fnorm0: f64,
-    /// The iterate with the smallest Gauss–Newton step so far.
-    best: Option<PolishPoint>,
-    /// Iterates since `best` last improved.
-    stale: u32,
-}
-
-#[derive(Debug, Clone)]
-struct PolishPoint {
-    x: DVector<f64>,
-    r: DVector<f64>,
-    fnorm: f64,
-    pnorm: f64,
-}
-
-impl Polish {
-    /// Polishing that starts at a point with residual norm `fnorm0`, after `reason` held.
-    pub(super) fn start(reason: Termination, fnorm0: f64) -> Polish {
-        Polish {
-            reason,
-            steps: 0,
-            fnorm0,
-            best: None,
-            stale: 0,
-        }
-    }
-}
 
 impl Work {
     /// One polishing iteration: the undamped Gauss–Newton step from the current point

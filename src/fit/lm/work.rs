@@ -5,7 +5,6 @@ use argmin::core::{Error as ArgminError, Jacobian, Problem};
 use nalgebra::{DMatrix, DVector};
 
 use super::norm::{enorm, pad_mat};
-use super::polish::Polish;
 use super::qr::{qrfac, QrState};
 use super::{LmState, Termination, EPSMCH};
 
@@ -171,4 +170,40 @@ fn scaled_gradient_norm(qr: &QrState, acnorm: &DVector<f64>, fnorm: f64) -> f64 
         }
     }
     gnorm
+}
+
+/// State of the Gauss–Newton polishing phase (its steps are in `polish.rs`).
+#[derive(Debug, Clone)]
+pub(super) struct Polish {
+    /// The convergence test that started it; reported as the run's termination.
+    pub(super) reason: Termination,
+    /// Accepted polishing steps.
+    pub(super) steps: u32,
+    /// `‖r‖` when polishing started.
+    pub(super) fnorm0: f64,
+    /// The iterate with the smallest Gauss–Newton step so far.
+    pub(super) best: Option<PolishPoint>,
+    /// Iterates since `best` last improved.
+    pub(super) stale: u32,
+}
+
+#[derive(Debug, Clone)]
+pub(super) struct PolishPoint {
+    pub(super) x: DVector<f64>,
+    pub(super) r: DVector<f64>,
+    pub(super) fnorm: f64,
+    pub(super) pnorm: f64,
+}
+
+impl Polish {
+    /// Polishing that starts at a point with residual norm `fnorm0`, after `reason` held.
+    pub(super) fn start(reason: Termination, fnorm0: f64) -> Polish {
+        Polish {
+            reason,
+            steps: 0,
+            fnorm0,
+            best: None,
+            stale: 0,
+        }
+    }
 }
