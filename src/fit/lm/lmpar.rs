@@ -115,11 +115,7 @@ fn lower_bound(
 ) -> f64 {
     let n = qr.r.ncols();
     let r = &qr.r;
-    let mut wa1 = DVector::zeros(n);
-    for j in 0..n {
-        let l = qr.ipvt[j];
-        wa1[j] = diag[l] * (wa2[l] / dxnorm);
-    }
+    let mut wa1 = pivoted_direction(qr, diag, wa2, dxnorm);
     for j in 0..n {
         let mut sum = 0.0;
         for i in 0..j {
@@ -170,11 +166,7 @@ fn newton_correction(
 ) -> f64 {
     let n = qr.r.ncols();
     let r = &qr.r;
-    let mut wa1 = DVector::zeros(n);
-    for j in 0..n {
-        let l = qr.ipvt[j];
-        wa1[j] = diag[l] * (wa2[l] / dxnorm);
-    }
+    let mut wa1 = pivoted_direction(qr, diag, wa2, dxnorm);
     for j in 0..n {
         wa1[j] /= sdiag[j];
         let t = wa1[j];
@@ -184,4 +176,17 @@ fn newton_correction(
     }
     let t = enorm(wa1.as_slice());
     ((fp / delta) / t) / t
+}
+
+/// `Pᵀ D (D x)/‖D x‖` (with `wa2 = D x`): the right-hand side of both Newton corrections.
+fn pivoted_direction(
+    qr: &QrState,
+    diag: &DVector<f64>,
+    wa2: &DVector<f64>,
+    dxnorm: f64,
+) -> DVector<f64> {
+    DVector::from_iterator(
+        qr.ipvt.len(),
+        qr.ipvt.iter().map(|&l| diag[l] * (wa2[l] / dxnorm)),
+    )
 }
