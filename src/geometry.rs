@@ -7,6 +7,72 @@
 
 use crate::error::{Error, Result};
 use nalgebra::Vector3;
+use std::sync::Arc;
+
+/// One per-sample column of a [`Geometry`], read as a slice. The storage is shared:
+/// cloning a column or a geometry, or slicing a contiguous range of samples
+/// ([`Geometry::slice`]), copies nothing, so a fit's evaluation blocks and its input hold
+/// one copy of the geometry between them.
+#[derive(Debug, Clone, Default)]
+pub struct Column {
+    data: Arc<Vec<f64>>,
+    start: usize,
+    len: usize,
+}
+
+impl Column {
+    /// The samples `range` of this column, sharing its storage; `range` must lie within
+    /// the column.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Column {
+        assert!(
+            range.start <= range.end && range.end <= self.len,
+            "column slice out of range"
+        );
+        Column {
+            data: self.data.clone(),
+            start: self.start + range.start,
+            len: range.end - range.start,
+        }
+    }
+}
+
+impl std::ops::Deref for Column {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        &self.data[self.start..self.start + self.len]
+    }
+}
+
+impl From<Vec<f64>> for Column {
+    fn from(v: Vec<f64>) -> Self {
+        let len = v.len();
+        Column {
+            data: Arc::new(v),
+            start: 0,
+            len,
+        }
+    }
+}
+
+impl FromIterator<f64> for Column {
+    fn from_iter<I: IntoIterator<Item = f64>>(iter: I) -> Self {
+        Vec::from_iter(iter).into()
+    }
+}
+
+impl<'a> IntoIterator for &'a Column {
+    type Item = &'a f64;
+    type IntoIter = std::slice::Iter<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl PartialEq for Column {
+    fn eq(&self, other: &Column) -> bool {
+        **self == **other
+    }
+}
 
 /// One measurement direction pair, in radians.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,34 +162,70 @@ pub enum Quantity {
     Brdf,
 }
 
-/// Per-sample quantities for a batch of samples, computed once per dataset. Vectors are
-/// indexed by sample. Quantities written `/k` are the wave-vector components divided by
+/// Per-sample quantities for a batch of samples, computed once per dataset. Columns are
+/// indexed by sample ([`Column`]: shared storage). Quantities written `/k` are the wave-vector components divided by
 /// k = 2π/λ, so they depend on angles only.
 #[derive(Debug, Clone)]
 pub struct Geometry {
-    pub theta_i: Vec<f64>,
-    pub theta_r: Vec<f64>,
+    pub theta_i: Column,
+    pub theta_r: Column,
     /// φr wrapped to (−π, π].
-    pub phi_r: Vec<f64>,
-    pub cos_i: Vec<f64>,
-    pub cos_r: Vec<f64>,
+    pub phi_r: Column,
+    pub cos_i: Column,
+    pub cos_r: Column,
     /// Wavelength of each sample (unit of σ, T).
-    pub wavelength: Vec<f64>,
+    pub wavelength: Column,
     /// c = cos θi + cos θr = |v_z|/k.
-    pub c: Vec<f64>,
+    pub c: Column,
     /// h = |v|²/(2k²) = 1 + cos θi cos θr − sin θi sin θr cos φr, computed without
     /// cancellation (≥ 0).
-    pub h: Vec<f64>,
+    pub h: Column,
     /// v_x/k = sin θi − sin θr cos φr.
-    pub vx: Vec<f64>,
+    pub vx: Column,
     /// v_y/k = −sin θr sin φr.
-    pub vy: Vec<f64>,
+    pub vy: Column,
     /// v_xy²/k², computed without cancellation near the mirror direction.
-    pub vxy2: Vec<f64>,
+    pub vxy2: Column,
     /// Factor that turns a radiance into the measured quantity: 1 for radiance, 1/cos θi
     /// for a BRDF.
-    pub out_factor: Vec<f64>,
+    pub out_factor: Column,
     pub quantity: Quantity,
+}
+
+/// The columns of a [`Geometry`] while they are computed.
+struct Columns {
+    theta_i: Vec<f64>,
+    theta_r: Vec<f64>,
+    phi_r: Vec<f64>,
+    cos_i: Vec<f64>,
+    cos_r: Vec<f64>,
+    wavelength: Vec<f64>,
+    c: Vec<f64>,
+    h: Vec<f64>,
+    vx: Vec<f64>,
+    vy: Vec<f64>,
+    vxy2: Vec<f64>,
+    out_factor: Vec<f64>,
+}
+
+impl Columns {
+    fn with_capacity(n: usize) -> Self {
+        let v = || Vec::with_capacity(n);
+        Columns {
+            theta_i: v(),
+            theta_r: v(),
+            phi_r: v(),
+            cos_i: v(),
+            cos_r: v(),
+            wavelength: v(),
+            c: v(),
+            h: v(),
+            vx: v(),
+            vy: v(),
+            vxy2: v(),
+            out_factor: v(),
+        }
+    }
 }
 
 /// Wrap an angle in radians to (−π, π].
@@ -159,21 +261,7 @@ impl Geometry {
                 .map_err(|m| Error::Usage(format!("sample {}: {m}", i + 1)))?;
         }
         let n = samples.len();
-        let mut g = Geometry {
-            theta_i: Vec::with_capacity(n),
-            theta_r: Vec::with_capacity(n),
-            phi_r: Vec::with_capacity(n),
-            cos_i: Vec::with_capacity(n),
-            cos_r: Vec::with_capacity(n),
-            wavelength: Vec::with_capacity(n),
-            c: Vec::with_capacity(n),
-            h: Vec::with_capacity(n),
-            vx: Vec::with_capacity(n),
-            vy: Vec::with_capacity(n),
-            vxy2: Vec::with_capacity(n),
-            out_factor: Vec::with_capacity(n),
-            quantity,
-        };
+        let mut g = Columns::with_capacity(n);
         for (i, s) in samples.iter().enumerate() {
             let phi = wrap_phi(s.phi_r);
             let (sin_i, cos_i) = s.theta_i.sin_cos();
@@ -204,7 +292,21 @@ impl Geometry {
                 Quantity::Brdf => 1.0 / cos_i,
             });
         }
-        Ok(g)
+        Ok(Geometry {
+            theta_i: g.theta_i.into(),
+            theta_r: g.theta_r.into(),
+            phi_r: g.phi_r.into(),
+            cos_i: g.cos_i.into(),
+            cos_r: g.cos_r.into(),
+            wavelength: g.wavelength.into(),
+            c: g.c.into(),
+            h: g.h.into(),
+            vx: g.vx.into(),
+            vy: g.vy.into(),
+            vxy2: g.vxy2.into(),
+            out_factor: g.out_factor.into(),
+            quantity,
+        })
     }
 
     /// Number of samples.
@@ -229,9 +331,35 @@ impl Geometry {
         self.vxy2[i] * (2.0 * std::f64::consts::PI * corr_len / self.wavelength[i]).powi(2) * 0.25
     }
 
-    /// The sub-batch of the given sample indices (used for per-channel fits).
+    /// The samples `range`, sharing this geometry's storage (no copy).
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Geometry {
+        let s = |c: &Column| c.slice(range.clone());
+        Geometry {
+            theta_i: s(&self.theta_i),
+            theta_r: s(&self.theta_r),
+            phi_r: s(&self.phi_r),
+            cos_i: s(&self.cos_i),
+            cos_r: s(&self.cos_r),
+            wavelength: s(&self.wavelength),
+            c: s(&self.c),
+            h: s(&self.h),
+            vx: s(&self.vx),
+            vy: s(&self.vy),
+            vxy2: s(&self.vxy2),
+            out_factor: s(&self.out_factor),
+            quantity: self.quantity,
+        }
+    }
+
+    /// The sub-batch of the given sample indices (used for per-channel fits); a contiguous
+    /// ascending run of indices is a [`Geometry::slice`] (no copy).
     pub fn subset(&self, idx: &[usize]) -> Geometry {
-        let pick = |v: &Vec<f64>| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        if let Some(&first) = idx.first() {
+            if idx.iter().enumerate().all(|(k, &i)| i == first + k) {
+                return self.slice(first..first + idx.len());
+            }
+        }
+        let pick = |v: &Column| idx.iter().map(|&i| v[i]).collect::<Column>();
         Geometry {
             theta_i: pick(&self.theta_i),
             theta_r: pick(&self.theta_r),
@@ -290,5 +418,26 @@ mod tests {
             assert!((g.vxy2[i] - vxy2).abs() < 1e-14);
         }
         assert_eq!(g.vxy2[1], 0.0, "exact zero at the mirror");
+    }
+
+    #[test]
+    fn slices_share_storage_and_equal_copied_subsets() {
+        let samples: Vec<Sample> = (0..7)
+            .map(|k| Sample::from_degrees(10.0 + k as f64, 20.0, 15.0 * k as f64))
+            .collect();
+        let g = Geometry::new(&samples, &[0.5], Quantity::Brdf).unwrap();
+        let part = g.slice(2..5);
+        assert_eq!(part.len(), 3);
+        assert!(std::ptr::eq(&part.h[0], &g.h[2]), "no copy");
+        let picked = g.subset(&[2, 3, 4]);
+        assert!(
+            std::ptr::eq(&picked.c[0], &g.c[2]),
+            "a contiguous subset is a slice"
+        );
+        let copied = g.subset(&[4, 2]);
+        assert_eq!(*copied.vxy2, [g.vxy2[4], g.vxy2[2]]);
+        assert_eq!(part.slice(1..3).theta_i[1], g.theta_i[4]);
+        let direct = Geometry::new(&samples[2..5], &[0.5], Quantity::Brdf).unwrap();
+        assert!(part.c == direct.c && part.out_factor == direct.out_factor);
     }
 }

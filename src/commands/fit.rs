@@ -91,9 +91,13 @@ pub struct FitArgs {
     /// Stop the solver after this many seconds.
     #[arg(long)]
     pub timeout: Option<f64>,
-    /// Show a progress line while fitting.
+    /// Show progress on standard error (reading, datasets done of total, solver
+    /// iterations). This is the default on a terminal; piped, nothing is drawn.
     #[arg(long)]
     pub progress: bool,
+    /// No progress display and no summary line on standard error.
+    #[arg(long, conflicts_with = "progress")]
+    pub quiet: bool,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -116,6 +120,12 @@ pub struct FitArgs {
 }
 
 impl FitArgs {
+    /// Whether progress is drawn: on a terminal unless `--quiet` (indicatif draws nothing
+    /// when standard error is not a terminal, so `--progress` cannot force it there).
+    pub fn show_progress(&self) -> bool {
+        !self.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr())
+    }
+
     /// How the input files are read (`--radians`, `--signed-theta-r`, `--columns`,
     /// `--channel`); values are required.
     pub fn read_options(&self) -> anyhow::Result<ReadOptions> {
@@ -190,7 +200,7 @@ pub fn fit_config(
     let lm = LmConfig {
         max_iters: args.max_iter,
         timeout: args.timeout.map(std::time::Duration::from_secs_f64),
-        progress: args.progress,
+        progress: args.show_progress(),
         ..FitConfig::default().lm
     };
     Ok(FitConfig {
@@ -228,7 +238,7 @@ pub struct Outcome {
 fn fit_dataset(
     args: &FitArgs,
     label: String,
-    ds: Dataset,
+    mut ds: Dataset,
     progress: bool,
 ) -> anyhow::Result<Outcome> {
     let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
@@ -239,11 +249,20 @@ fn fit_dataset(
     };
     let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
     let input = fit_input(&ds, args.quantity.into(), args.wavelength, needs_wavelength)?;
+    if input.channel_names.len() <= 1 {
+        // The input now holds the angles (as geometry), values and weights; what is left of
+        // the dataset serves the residuals file (rows) and the report (sigma_L given or
+        // not). A joint fit keeps the samples for its one-channel comparison fit.
+        ds.samples = Vec::new();
+        ds.lines = Vec::new();
+        ds.value = None;
+        ds.weight = None;
+    }
     let uncertainties = ds.sigma_l.is_some();
     let mut results: Vec<FitResult> = Vec::new();
     for m in &candidates {
         let mut config = fit_config(args, m, uncertainties)?;
-        config.lm.progress = progress && args.progress;
+        config.lm.progress = progress && args.show_progress();
         results.push(
             driver::fit(&input, &config).with_context(|| format!("{label}: fitting model {m}"))?,
         );
@@ -316,10 +335,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
     for file in &args.file {
         // The raw rows are kept only for the residuals file (which passes them through).
-        let ds = match args.residuals {
-            Some(_) => io::read_dataset(file, &opts)?,
-            None => io::read_dataset_columns(file, &opts)?,
-        };
+        let bar = reading_bar(file, args.show_progress());
+        let ds = io::read_dataset_with(file, &opts, args.residuals.is_some(), &|done| {
+            bar.set_position(done)
+        })?;
+        bar.finish_and_clear();
         if args.by_group {
             let groups = ds.channel_groups();
             if groups.is_empty() {
@@ -357,11 +377,22 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         vec![pool.install(|| fit_dataset(&args, label, ds, true))]
     } else {
         use rayon::prelude::*;
-        pool.install(|| {
+        let bar = if args.show_progress() {
+            super::recover::progress_bar(jobs.len() as u64, "datasets fitted")
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        let done = pool.install(|| {
             jobs.into_par_iter()
-                .map(|(label, ds)| fit_dataset(&args, label, ds, false))
+                .map(|(label, ds)| {
+                    let outcome = fit_dataset(&args, label, ds, false);
+                    bar.inc(1);
+                    outcome
+                })
                 .collect()
-        })
+        });
+        bar.finish_and_clear();
+        done
     };
     let wall = t0.elapsed().as_secs_f64();
     let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
@@ -393,7 +424,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             .collect();
         io::print_stdout(&text)?;
     }
-    if !single {
+    if !single && !args.quiet {
         eprintln!(
             "goniofit: fitted {} datasets in {:.3} s ({:.1} datasets/s) on {} threads",
             outcomes.len(),
@@ -423,6 +454,23 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         3
     })
 }
+
+/// A bar of bytes read from `file` on standard error (hidden unless `show`).
+fn reading_bar(file: &Path, show: bool) -> indicatif::ProgressBar {
+    let len = std::fs::metadata(file).map(|m| m.len()).unwrap_or(0);
+    if !show || len < READING_BAR_BYTES {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(super::recover::bar_style(
+        "reading {msg} [{bar:30}] {bytes}/{total_bytes} {elapsed} (eta {eta})",
+    ));
+    bar.set_message(file.display().to_string());
+    bar
+}
+
+/// Files smaller than this are read without a bar (they take milliseconds).
+const READING_BAR_BYTES: u64 = 4 << 20;
 
 /// For a joint fit: how much narrower σ and T are than from the middle channel alone.
 fn joint_narrowing(

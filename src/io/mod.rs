@@ -172,17 +172,34 @@ impl Dataset {
 
 /// Read a dataset, choosing the format by extension or content (see the module docs).
 pub fn read_dataset(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
-    read_file(path, opts, true)
+    read_file(path, opts, true, &|_| {})
+}
+
+/// [`read_dataset`] (with the raw rows only when `keep_rows`, see
+/// [`read_dataset_columns`]), calling `progress(bytes read so far)` every MiB or so while
+/// a CSV file is streamed.
+pub fn read_dataset_with(
+    path: &Path,
+    opts: &ReadOptions,
+    keep_rows: bool,
+    progress: &dyn Fn(u64),
+) -> Result<Dataset> {
+    read_file(path, opts, keep_rows, progress)
 }
 
 /// [`read_dataset`] without the raw rows (`rows` stays empty): what a fit needs when it
 /// writes no residuals file. A CSV file is streamed record by record, so reading holds
 /// one record's text at a time, not the file (a 1M-row scan is ~45 MB of text).
 pub fn read_dataset_columns(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
-    read_file(path, opts, false)
+    read_file(path, opts, false, &|_| {})
 }
 
-fn read_file(path: &Path, opts: &ReadOptions, keep_rows: bool) -> Result<Dataset> {
+fn read_file(
+    path: &Path,
+    opts: &ReadOptions,
+    keep_rows: bool,
+    progress: &dyn Fn(u64),
+) -> Result<Dataset> {
     use std::io::{BufRead, Read};
     let io_err = |source| Error::Io {
         path: path.to_path_buf(),
@@ -194,7 +211,13 @@ fn read_file(path: &Path, opts: &ReadOptions, keep_rows: bool) -> Result<Dataset
     let head = reader.fill_buf().map_err(io_err)?;
     if !astm_by_extension(path) && surely_csv(head) {
         let rows_hint = estimate_rows(head, len);
-        return csv::parse_reader(path, reader, opts, keep_rows, rows_hint);
+        let counted = std::io::BufReader::new(Counting {
+            inner: reader,
+            done: 0,
+            reported: 0,
+            progress,
+        });
+        return csv::parse_reader(path, counted, opts, keep_rows, rows_hint);
     }
     let mut bytes = Vec::new();
     reader.read_to_end(&mut bytes).map_err(io_err)?;
@@ -203,6 +226,26 @@ fn read_file(path: &Path, opts: &ReadOptions, keep_rows: bool) -> Result<Dataset
         ds.rows = Vec::new();
     }
     Ok(ds)
+}
+
+/// A reader that reports the bytes read through it (every MiB).
+struct Counting<'f, R> {
+    inner: R,
+    done: u64,
+    reported: u64,
+    progress: &'f dyn Fn(u64),
+}
+
+impl<R: std::io::Read> std::io::Read for Counting<'_, R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.done += n as u64;
+        if self.done - self.reported >= 1 << 20 {
+            self.reported = self.done;
+            (self.progress)(self.done);
+        }
+        Ok(n)
+    }
 }
 
 /// Whether the extension says ASTM E1392 (`.astm`, any case).
