@@ -8,13 +8,16 @@
 # tree's binary; medians and ratios are printed. Data files go to $BIG_DIR (default
 # /tmp/goniofit-big), never into the repository; a 10M-row file is ~450 MB.
 #
-# Usage: [BASE=/tmp/goniofit-base] bash benches/big_fit.sh [repeats] [rows: 1000000 | 10000000]
+# Usage: [BASE=/tmp/goniofit-base] [NEW=...] bash benches/big_fit.sh [repeats] [rows: 1000000 | 10000000]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repeats=${1:-3}
 rows=${2:-1000000}
-cargo build --release --quiet
-NEW=$PWD/target/release/goniofit
+# NEW=path measures another binary instead of building this tree's.
+if [ -z "${NEW:-}" ]; then
+  cargo build --release --quiet
+  NEW=$PWD/target/release/goniofit
+fi
 dir=${BIG_DIR:-/tmp/goniofit-big}
 mkdir -p "$dir"
 case $rows in

@@ -14,14 +14,17 @@
 # The batch is generated once into $TEXELS_DIR (default /tmp/goniofit-texels), never into
 # the repository.
 #
-# Usage: [BASE=/tmp/goniofit-base] [THREADS="1 2"] bash benches/texels.sh [repeats] [texels]
+# Usage: [BASE=/tmp/goniofit-base] [NEW=...] [THREADS="1 2"] bash benches/texels.sh [repeats] [texels]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repeats=${1:-5}
 texels=${2:-2000}
 threads=${THREADS:-1 2}
-cargo build --release --quiet
-NEW=$PWD/target/release/goniofit
+# NEW=path measures another binary instead of building this tree's.
+if [ -z "${NEW:-}" ]; then
+  cargo build --release --quiet
+  NEW=$PWD/target/release/goniofit
+fi
 dir=${TEXELS_DIR:-/tmp/goniofit-texels}
 mkdir -p "$dir"
 data=$dir/texels-$texels.csv
