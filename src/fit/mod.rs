@@ -7,3 +7,4 @@ pub mod init;
 pub mod lm;
 pub mod problem;
 pub mod stats;
+pub mod weights;
