@@ -12,7 +12,6 @@ use goniofit::io::{self, Dataset, ReadOptions};
 use goniofit::model::{parse_assignments, ModelOptions};
 use goniofit::report::{self, RunInfo};
 use goniofit::Error;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Candidate models for `--model auto`, compared by BIC.
@@ -487,6 +486,10 @@ fn outcome_text(o: &Outcome, info: &RunInfo) -> String {
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let opts = args.read_options()?;
+    if let Some(r) = &args.residuals {
+        let inputs: Vec<(&str, &Path)> = args.file.iter().map(|f| ("input", f.as_path())).collect();
+        io::check_distinct(&inputs, &[("--residuals", r)])?;
+    }
     // Every input is read (and checked) before any fit starts.
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
     let mut files: Vec<(PathBuf, report::setting::InputInfo)> = Vec::new();
@@ -538,7 +541,6 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     };
     let wall = t0.elapsed().as_secs_f64();
     let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
-    let mut out = std::io::stdout().lock();
     let info_for = |o: &Outcome| {
         let file = files
             .iter()
@@ -575,15 +577,18 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
                 "summary": summary_json(&rows),
             })
         };
-        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&v)?))?;
     } else {
-        for (o, i) in outcomes.iter().zip(&infos) {
-            write!(out, "{}", outcome_text(o, i))?;
-        }
+        let mut text: String = outcomes
+            .iter()
+            .zip(&infos)
+            .map(|(o, i)| outcome_text(o, i))
+            .collect();
         let joint = outcomes.iter().any(|o| o.input.channel_names.len() > 1);
         if !single || joint {
-            write!(out, "{}", report::summary::table(&rows))?;
+            text += &report::summary::table(&rows);
         }
+        io::print_stdout(&text)?;
     }
     if let Some(path) = &args.summary {
         let headers: Vec<String> = report::summary::CSV_HEADER.map(String::from).to_vec();

@@ -73,5 +73,6 @@ fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
         model.name(),
         a.params
     );
+    goniofit::io::print_stdout(&format!("{}\n", a.out.display()))?;
     Ok(0)
 }
