@@ -3,28 +3,23 @@
 //! with relative/log residuals, the floor's count, `--by-group` on ASTM files, and the
 //! smaller help/usage texts.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{fit_json, goniofit};
 use predicates::str::contains;
 use std::path::{Path, PathBuf};
-
-fn goniofit() -> Command {
-    Command::cargo_bin("goniofit").unwrap()
-}
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
-/// Run goniofit, expect exit 0, parse stdout as JSON.
-fn fit_json(args: &[&str]) -> serde_json::Value {
-    let out = goniofit().args(args).output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+/// Run goniofit, expect exit 2 (bad usage or input) and `message` on stderr.
+fn usage_error(args: &[&str], message: &str) {
+    goniofit()
+        .args(args)
+        .assert()
+        .code(2)
+        .stderr(contains(message));
 }
 
 fn f(v: &serde_json::Value) -> f64 {
@@ -70,11 +65,7 @@ fn wavelength_units_scale_sigma_and_t_and_are_stated() {
             "wavelength      = 633 nm (from --wavelength; σ, T in nm)",
         ))
         .stdout(predicates::str::is_match(r"\n    sigma = 1\.58\d+e2 +\+/- [^\n]*nm").unwrap());
-    goniofit()
-        .args(["fit", "--wavelength", "633pm", HEMI])
-        .assert()
-        .code(2)
-        .stderr(contains("633nm, 0.633um"));
+    usage_error(&["fit", "--wavelength", "633pm", HEMI], "633nm, 0.633um");
 }
 
 #[test]
@@ -249,20 +240,18 @@ fn channel_selects_a_wavelength_of_a_csv() {
         // Germer's f_r11 is a BRDF.
         assert_eq!(v["setting"]["quantity"], "brdf");
     }
-    goniofit()
-        .args(["fit", "--model", "lambert", "--channel", "0.5", ptfe])
-        .assert()
-        .code(2)
-        .stderr(contains("wavelengths: 0.351µm, 0.532µm, 0.633µm, 1.064µm"));
+    usage_error(
+        &["fit", "--model", "lambert", "--channel", "0.5", ptfe],
+        "wavelengths: 0.351µm, 0.532µm, 0.633µm, 1.064µm",
+    );
     // --by-group on a CSV without a group column fits each wavelength on its own.
     let v = fit_json(&["fit", "--model", "lambert", "--by-group", "--json", ptfe]);
     assert_eq!(v["datasets"].as_u64(), Some(4));
     // A CSV with neither a group nor a wavelength column cannot select a channel.
-    goniofit()
-        .args(["fit", "--wavelength", "1", "--channel", "550nm", HEMI])
-        .assert()
-        .code(2)
-        .stderr(contains("needs a group column or a wavelength column"));
+    usage_error(
+        &["fit", "--wavelength", "1", "--channel", "550nm", HEMI],
+        "needs a group column or a wavelength column",
+    );
 }
 
 #[test]
@@ -284,11 +273,10 @@ fn help_and_usage_texts() {
         .assert()
         .code(0)
         .stdout(contains(r#"`{"rows": [...]}`"#));
-    goniofit()
-        .args(["fit", "--model", "kbz", "--wavelength", "1", HEMI])
-        .assert()
-        .code(2)
-        .stderr(contains("or auto"));
+    usage_error(
+        &["fit", "--model", "kbz", "--wavelength", "1", HEMI],
+        "or auto",
+    );
 }
 
 #[test]
