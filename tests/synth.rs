@@ -57,7 +57,7 @@ impl Table {
         self.rows.iter().map(|r| r[j]).collect()
     }
 
-    /// Samples as a reader following MODEL.md would build them (signed θr < 0 → |θr| at
+    /// Samples as a reader following docs/conventions.md would build them (signed θr < 0 → |θr| at
     /// φr = 180°).
     fn samples(&self) -> Vec<Sample> {
         self.rows

@@ -1,7 +1,7 @@
 //! Reading measurements and writing tables.
 //!
 //! [`read_dataset`] reads either a CSV table ([`csv`]) or an ASTM E1392 file ([`astm`]) into
-//! a [`Dataset`]: validated angles in our convention (MODEL.md: radians, θi ∈ [0, π/2),
+//! a [`Dataset`]: validated angles in our convention (docs/conventions.md: radians, θi ∈ [0, π/2),
 //! θr ∈ [0, π/2], φr from the plane of incidence, φr = 0 the forward/specular side), the
 //! measured values, and the raw rows for pass-through output.
 //!
@@ -68,7 +68,7 @@ pub struct Dataset {
     pub rows: Vec<Vec<String>>,
     /// 1-based source line of each sample.
     pub lines: Vec<usize>,
-    /// Sample angles in radians, in the convention of MODEL.md.
+    /// Sample angles in radians, in the convention of docs/conventions.md.
     pub samples: Vec<Sample>,
     /// Measured L (or BRDF).
     pub value: Option<Vec<f64>>,
