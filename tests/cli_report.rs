@@ -355,3 +355,137 @@ fn long_correlation_matrices_are_summarised() {
     assert_eq!(v["correlation"]["matrix"].as_array().unwrap().len(), k);
     assert_eq!(v["correlation"]["largest"].as_array().unwrap().len(), 10);
 }
+
+/// An interval from JSON: [lo, hi] with None for an open side.
+fn interval(v: &serde_json::Value) -> (Option<f64>, Option<f64>) {
+    let a = v
+        .as_array()
+        .unwrap_or_else(|| panic!("not an interval: {v}"));
+    (a[0].as_f64(), a[1].as_f64())
+}
+
+#[test]
+fn profile_intervals_of_a_linear_model_are_t_times_the_standard_error() {
+    // Lambert is linear in its scale: the profile χ² is exactly quadratic, so the interval
+    // is ŝ ± t_{(1+P)/2, n−1} · se (lmfit's F test with one parameter).
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "lambert",
+        "--channel",
+        "0.633",
+        "--json",
+        "data/nist-ptfe/PTFE.data.csv",
+    ]);
+    let p = &v["params"]["scale"];
+    let (s, se) = (f(&p["value"]), f(&p["stderr"]));
+    let dof = (v["n"].as_u64().unwrap() - 1) as f64;
+    for (key, prob) in [("interval68", 0.682_689_492_137_086), ("interval95", 0.95)] {
+        let t = goniofit::fit::profile::student_t_quantile(0.5 * (1.0 + prob), dof);
+        let (lo, hi) = interval(&p[key]);
+        let (lo, hi) = (lo.unwrap(), hi.unwrap());
+        assert!(
+            ((s - lo) / (t * se) - 1.0).abs() < 1e-3,
+            "{key}: {lo} vs {s} - {t}·{se}"
+        );
+        assert!(
+            ((hi - s) / (t * se) - 1.0).abs() < 1e-3,
+            "{key}: {hi} vs {s} + {t}·{se}"
+        );
+    }
+    // π·s carries the same interval times π.
+    let (rlo, _) = interval(&v["derived"]["reflectance_factor"]["interval95"]);
+    let (lo, _) = interval(&p["interval95"]);
+    assert!((rlo.unwrap() / (std::f64::consts::PI * lo.unwrap()) - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn a_flat_profile_gives_a_one_sided_or_open_interval() {
+    // A specular lobe fitted to Lambertian data: B goes to its bound 0 and the width w
+    // does not matter, so w's profile is flat and B has no upper bound from the data.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("lambert.csv");
+    goniofit()
+        .args([
+            "synth",
+            "--model",
+            "lambert",
+            "--params",
+            "scale=1",
+            "--layout",
+            "inplane",
+            "--noise",
+            "0.01",
+            "--seed",
+            "1",
+            "--write-sigma",
+            "--out",
+        ])
+        .arg(&csv)
+        .assert()
+        .code(0);
+    let path = csv.to_str().unwrap();
+    let v = fit_json(&["fit", "--model", "lambert-specular", "--json", path]);
+    assert_eq!(interval(&v["params"]["w"]["interval95"]), (None, None));
+    let (lo, hi) = interval(&v["params"]["B"]["interval95"]);
+    assert_eq!((lo, hi), (Some(0.0), None));
+    // The scale stays bounded on both sides and contains the truth 1 at 95 %.
+    let (lo, hi) = interval(&v["params"]["scale"]["interval95"]);
+    assert!(lo.unwrap() < 1.0 && 1.0 < hi.unwrap(), "{lo:?} {hi:?}");
+    goniofit()
+        .args(["fit", "--model", "lambert-specular", path])
+        .assert()
+        .code(0)
+        .stdout(contains("95%: not bounded by the data"));
+}
+
+#[test]
+fn undetermined_parameters_are_reported_by_their_bounds() {
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "kbs+lambert",
+        "--channel",
+        "550nm",
+        "--residual",
+        "log",
+        "--json",
+        GARNET,
+    ]);
+    for name in ["sigma", "T"] {
+        let p = &v["params"][name];
+        assert_eq!(p["determined"], false);
+        let (lo, hi) = interval(&p["interval95"]);
+        let x = f(&p["value"]);
+        assert!(
+            lo.unwrap() < x && x < hi.unwrap(),
+            "{name}: {lo:?} {x} {hi:?}"
+        );
+        let (lo68, hi68) = interval(&p["interval68"]);
+        assert!(lo.unwrap() < lo68.unwrap() && hi68.unwrap() < hi.unwrap());
+    }
+    // T/σ's interval holds its estimate and is narrower than σ's in relative terms.
+    let (lo, hi) = interval(&v["derived"]["T/sigma"]["interval95"]);
+    let q = f(&v["derived"]["T/sigma"]["value"]);
+    assert!(lo.unwrap() < q && q < hi.unwrap());
+}
+
+#[test]
+fn absolute_sigma_drops_the_residual_scale() {
+    let rel = fit_json(&["fit", "--wavelength", "1", "--json", HEMI]);
+    let abs = fit_json(&[
+        "fit",
+        "--wavelength",
+        "1",
+        "--absolute-sigma",
+        "--json",
+        HEMI,
+    ]);
+    assert_eq!(abs["setting"]["absolute_sigma"], true);
+    let s = f(&rel["reduced_chi2"]).sqrt();
+    let (a, r) = (
+        f(&abs["params"]["sigma"]["stderr"]),
+        f(&rel["params"]["sigma"]["stderr"]),
+    );
+    assert!((a * s / r - 1.0).abs() < 1e-9, "{a} {r} {s}");
+}

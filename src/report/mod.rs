@@ -21,6 +21,10 @@ pub struct RunInfo {
     /// The fit's setting: input path and checksum, wavelength and units, quantity,
     /// residual, floor, weights, loss.
     pub setting: Setting,
+    /// Profile-likelihood intervals of the parameters and derived quantities (empty when
+    /// not computed).
+    #[serde(skip)]
+    pub intervals: Vec<crate::fit::profile::Interval>,
 }
 
 use crate::fit::driver::{Derived, FitResult};
