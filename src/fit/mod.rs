@@ -9,7 +9,9 @@ pub mod grid_cache;
 pub mod init;
 pub mod lm;
 pub mod problem;
+pub mod profile;
 pub mod stats;
+pub mod weights;
 
 mod assemble;
 mod identify;
