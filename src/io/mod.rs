@@ -226,7 +226,8 @@ fn read_file(
             reported: 0,
             progress,
         });
-        return csv::parse_reader(path, counted, opts, keep_rows, rows_hint);
+        let ds = csv::parse_reader(path, counted, opts, keep_rows, rows_hint)?;
+        return select_csv_channel(ds, opts.channel.as_deref());
     }
     let mut bytes = Vec::new();
     reader.read_to_end(&mut bytes).map_err(io_err)?;
