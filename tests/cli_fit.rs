@@ -2,15 +2,20 @@
 //! exit codes for each kind of bad input, and batch fits.
 
 use assert_cmd::Command;
-use std::path::Path;
+use predicates::prelude::*;
+use std::path::{Path, PathBuf};
+
+fn data(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(p)
+}
 
 fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
 }
 
 /// The text report without the lines that vary between runs (timings, the command path).
-/// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
-fn fit_json(args: &[&str]) -> serde_json::Value {
+/// Run goniofit with `args`, expect exit 0, and return its standard output as text.
+fn success_stdout<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
     let out = goniofit().args(args).output().unwrap();
     assert_eq!(
         out.status.code(),
@@ -18,7 +23,12 @@ fn fit_json(args: &[&str]) -> serde_json::Value {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).unwrap()
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
+fn fit_json(args: &[&str]) -> serde_json::Value {
+    serde_json::from_str(&success_stdout(args)).unwrap()
 }
 
 fn stable(report: &str) -> String {
@@ -32,24 +42,14 @@ fn stable(report: &str) -> String {
 
 #[test]
 fn report_snapshot() {
-    let out = goniofit()
-        .args([
-            "fit",
-            "--model",
-            "kbs",
-            "--wavelength",
-            "1",
-            "data/synthetic/kbs_hemisphere.csv",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = stable(&String::from_utf8(out.stdout).unwrap());
+    let text = stable(&success_stdout(&[
+        "fit",
+        "--model",
+        "kbs",
+        "--wavelength",
+        "1",
+        "data/synthetic/kbs_hemisphere.csv",
+    ]));
     let snap = Path::new("tests/snapshots/fit_kbs_hemisphere.txt");
     if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
         std::fs::write(snap, &text).unwrap();
@@ -322,4 +322,48 @@ fn every_cornell_channel_converges() {
         terminations.iter().all(|l| l.contains("(converged")),
         "{terminations:?}"
     );
+}
+
+#[test]
+fn hostile_file_and_group_names_are_escaped_in_the_report() {
+    // A file name with a line break and a group name with a right-to-left override: the
+    // report shows them escaped, so neither can fake a report line or reverse the text.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("scan\n    verdict = fake.csv");
+    let mut text = String::from("theta_i,theta_r,phi_r,L,group\n");
+    let src = std::fs::read_to_string(data("synthetic/lambert_specular.csv")).unwrap();
+    for (k, line) in src.lines().skip(1).enumerate() {
+        let g = if k % 2 == 0 {
+            "left\u{202e}txt.exe"
+        } else {
+            "right"
+        };
+        text += &format!("{line},{g}\n");
+    }
+    std::fs::write(&file, text).unwrap();
+    let args = ["fit", "--model", "lambert", "--by-group"].map(std::ffi::OsString::from);
+    let report = success_stdout(&[&args[..], &[file.clone().into_os_string()]].concat());
+    assert!(!report.contains('\u{202e}'), "{report}");
+    assert!(
+        !report.lines().any(|l| l.starts_with("    verdict = fake")),
+        "{report}"
+    );
+    assert!(
+        report.contains("scan\\n    verdict = fake.csv [left\\u{202e}txt.exe]"),
+        "{report}"
+    );
+    assert!(
+        report.contains("scan\\n    verdict = fake.csv [right]"),
+        "{report}"
+    );
+    // And in an error message.
+    goniofit()
+        .args(["fit", "--model", "kbs"])
+        .arg(&file)
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("scan\\n    verdict = fake.csv")
+                .and(predicate::str::contains('\u{202e}').not()),
+        );
 }

@@ -143,7 +143,7 @@ pub fn fit_input(
         (None, None) if needs_wavelength => {
             return Err(Error::Usage(format!(
                 "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
-                ds.path.display()
+                goniofit::io::shown(&ds.path)
             ))
             .into())
         }
@@ -167,6 +167,11 @@ pub fn fit_input(
                         names.len() - 1
                     }
                 })
+                .collect();
+            // Names as printed (reports, parameter names): control and bidi characters escaped.
+            let names = names
+                .iter()
+                .map(|n| io::shown_text(n).into_owned())
                 .collect();
             (idx, names)
         }
@@ -210,9 +215,12 @@ pub fn fit_config(
     })
 }
 
-/// The command line as typed, for the report.
+/// The command line as typed, for the report (control and bidi characters escaped).
 fn command_line() -> String {
-    std::env::args().collect::<Vec<_>>().join(" ")
+    std::env::args_os()
+        .map(|a| io::shown_text(&a.to_string_lossy()).into_owned())
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// One dataset's fit: every candidate model, and the chosen one (lowest BIC).
@@ -321,17 +329,20 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             if names.is_empty() {
                 return Err(Error::Usage(format!(
                     "{}: --by-group needs a group column (or ASTM channels)",
-                    file.display()
+                    goniofit::io::shown(file)
                 ))
                 .into());
             }
             for name in names {
                 let mut sub = ds.subset(&ds.channel_indices(&name));
                 sub.channel = None;
-                jobs.push((format!("{} [{name}]", file.display()), sub));
+                jobs.push((
+                    format!("{} [{}]", io::shown(file), io::shown_text(&name)),
+                    sub,
+                ));
             }
         } else {
-            jobs.push((file.display().to_string(), ds));
+            jobs.push((io::shown(file), ds));
         }
     }
     let single = jobs.len() == 1;
@@ -409,7 +420,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             eprintln!(
                 "goniofit: wrote {} pictures to {}",
                 written.len(),
-                dir.display()
+                goniofit::io::shown(dir)
             );
         }
     }
@@ -431,7 +442,9 @@ fn joint_narrowing(
     };
     let names = &joint.layout.channel_names;
     let mid = &names[names.len() / 2];
-    let idx: Vec<usize> = (0..labels.len()).filter(|&i| &labels[i] == mid).collect();
+    let idx: Vec<usize> = (0..labels.len())
+        .filter(|&i| io::shown_text(&labels[i]) == mid.as_str())
+        .collect();
     let mut single = ds.subset(&idx);
     single.channel = None;
     let input = fit_input(&single, args.quantity.into(), args.wavelength, true)?;
@@ -490,7 +503,10 @@ fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<(
 /// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
 /// arguments and the fitted values of every parameter (layout order).
 fn replay_json(r: &FitResult) -> serde_json::Value {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let args: Vec<String> = std::env::args_os()
+        .skip(1)
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
     serde_json::json!({
         "args": args,
         "model": r.model,

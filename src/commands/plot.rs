@@ -46,8 +46,12 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     };
     let opts = fa.read_options()?;
     let file = fa.file.first().ok_or_else(|| bad("no input file"))?;
-    let ds = io::read_dataset(file, &opts)
-        .with_context(|| format!("re-reading the data of {}", args.report.display()))?;
+    let ds = io::read_dataset(file, &opts).with_context(|| {
+        format!(
+            "re-reading the data of {}",
+            goniofit::io::shown(&args.report)
+        )
+    })?;
     let input = fit_input(
         &ds,
         fa.quantity.into(),
@@ -64,7 +68,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     eprintln!(
         "goniofit: wrote {} pictures to {}",
         written.len(),
-        args.out.display()
+        goniofit::io::shown(&args.out)
     );
     Ok(0)
 }

@@ -63,7 +63,8 @@ fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
         negative: a.negative,
         marks: a.marks,
     };
-    write_picture(&pic, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
-    goniofit::io::print_stdout(&format!("{}\n", a.out.display()))?;
+    write_picture(&pic, &a.out)
+        .with_context(|| format!("writing {}", goniofit::io::shown(&a.out)))?;
+    goniofit::io::print_stdout(&format!("{}\n", goniofit::io::shown(&a.out)))?;
     Ok(0)
 }
