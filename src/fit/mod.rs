@@ -1,9 +1,18 @@
 //! Fitting: Levenberg–Marquardt as an argmin solver ([`lm`]), covariance and
 //! identifiability ([`stats`]), the reflectance least-squares problem ([`problem`]),
-//! starting values ([`init`]) and the whole fit ([`driver`]).
+//! starting values ([`init`]) and the whole fit ([`driver`]), whose stages each have a
+//! file: start search (`start`), solve (`solve`), identify (`identify`), reduce
+//! (`reduce`), validate (`validate`) and assemble (`assemble`).
 
 pub mod driver;
 pub mod init;
 pub mod lm;
 pub mod problem;
 pub mod stats;
+
+mod assemble;
+mod identify;
+mod reduce;
+mod solve;
+mod start;
+mod validate;
