@@ -129,6 +129,54 @@ impl FitArgs {
     }
 }
 
+/// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
+/// the Jacobian products square these, so beyond them double precision overflows (cost
+/// = inf, R² = NaN). The fit is the same in any unit of L (amplitudes scale with it) and
+/// under any common factor of the weights, so rescaling the file loses nothing.
+pub const MAGNITUDE_LIMIT: f64 = 1e100;
+
+/// Refuse values and weights the fit cannot square in double precision (see
+/// [`MAGNITUDE_LIMIT`]), naming the file, line and column of the first one.
+pub fn check_magnitudes(ds: &Dataset) -> anyhow::Result<()> {
+    let Some(y) = &ds.value else { return Ok(()) };
+    let column = |i: usize, what: &str| match &ds.channel {
+        Some(ch) if ds.headers.iter().any(|h| h == "channel") => ch[i].clone(),
+        _ => what.to_string(),
+    };
+    let lim = MAGNITUDE_LIMIT;
+    for (i, &v) in y.iter().enumerate() {
+        let w = ds.weight.as_ref().map_or(1.0, |w| w[i]);
+        let (col, msg) = if v.abs() > lim {
+            (
+                column(i, "L"),
+                format!(
+                    "value {} is beyond ±{lim:e}: the fit squares values (cost ½Σw r²) and would overflow double precision; express L in another unit (the fit is the same in any unit of L)",
+                    goniofit::model::domain::short_number(v)
+                ),
+            )
+        } else if !(1.0 / lim..=lim).contains(&w) || v.abs() * w.sqrt() > lim {
+            let col = if ds.sigma_l.is_some() {
+                "sigma_L"
+            } else {
+                "weight"
+            };
+            (
+                col.to_string(),
+                format!(
+                    "weight {} (with L = {}) is outside what the fit can square (weights in [{:e}, {lim:e}], |L|·√w ≤ {lim:e}); scale every weight or uncertainty by one factor (the fitted parameters do not change)",
+                    goniofit::model::domain::short_number(w),
+                    goniofit::model::domain::short_number(v),
+                    1.0 / lim
+                ),
+            )
+        } else {
+            continue;
+        };
+        return Err(Error::input(&ds.path, ds.lines[i], &col, msg).into());
+    }
+    Ok(())
+}
+
 /// The fit's data from a dataset: geometry, values, weights, channels.
 pub fn fit_input(
     ds: &Dataset,
@@ -136,6 +184,7 @@ pub fn fit_input(
     wavelength: Option<f64>,
     needs_wavelength: bool,
 ) -> anyhow::Result<FitInput> {
+    check_magnitudes(ds)?;
     let n = ds.samples.len();
     let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
         (_, Some(l)) => vec![l],
@@ -324,6 +373,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
     for file in &args.file {
         let ds = io::read_dataset(file, &opts)?;
+        check_magnitudes(&ds)?;
         if args.by_group {
             let names = ds.channel_names();
             if names.is_empty() {

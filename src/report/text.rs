@@ -53,7 +53,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let _ = writeln!(s, "    reduced chi-sq  = {:.7e}", r.reduced_chi2);
     let _ = writeln!(s, "    rms residual    = {:.7e}", r.rms);
     let _ = writeln!(s, "    max |residual|  = {:.7e}", r.max_abs_residual);
-    let _ = writeln!(s, "    R-squared       = {:.7}", r.r2);
+    let _ = writeln!(s, "    R-squared       = {}", r_squared_text(r.r2));
     let _ = writeln!(s, "    AIC             = {:.4}", r.aic);
     let _ = writeln!(s, "    BIC             = {:.4}", r.bic);
     if let Some((lo, hi)) = r.g_range {
@@ -146,10 +146,52 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         for i in 0..k {
             let _ = write!(s, "    {:<w$}", r.corr_names[i]);
             for j in 0..k {
-                let _ = write!(s, " {:>w$.4}", r.correlation[(i, j)]);
+                // NaN where a standard error is 0 (an exact fit): undefined, not a number.
+                let c = r.correlation[(i, j)];
+                let c = if c.is_finite() {
+                    format!("{c:.4}")
+                } else {
+                    "undef".into()
+                };
+                let _ = write!(s, " {c:>w$}");
             }
             let _ = writeln!(s);
         }
     }
     s
+}
+
+/// R² for the report: seven decimals where that is short (never `-0.0000000`: a value that
+/// rounds to zero prints as `0.0000000`), scientific for |R²| ≥ 1e4 (a fit far worse than the
+/// mean), and "undefined" when the data has no spread (NaN).
+pub fn r_squared_text(r2: f64) -> String {
+    if !r2.is_finite() {
+        return "undefined (the data has no spread, or the fit is not finite)".into();
+    }
+    if r2.abs() >= 1e4 {
+        return format!("{r2:.7e}");
+    }
+    let t = format!("{r2:.7}");
+    if t.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        "0.0000000".into()
+    } else {
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::r_squared_text;
+
+    #[test]
+    fn r_squared_is_short_and_never_minus_zero() {
+        assert_eq!(r_squared_text(0.67525804), "0.6752580");
+        assert_eq!(r_squared_text(-2e-9), "0.0000000");
+        assert_eq!(r_squared_text(-0.5), "-0.5000000");
+        assert_eq!(r_squared_text(-1.5e280), "-1.5000000e280");
+        assert!(r_squared_text(f64::NAN).starts_with("undefined"));
+    }
 }
