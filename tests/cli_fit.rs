@@ -1,36 +1,13 @@
 //! `goniofit fit` from the command line: the report (snapshot), JSON keys, residuals file,
 //! exit codes for each kind of bad input, and batch fits.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{data, fit_json, goniofit, success_stdout};
 use predicates::prelude::*;
-use std::path::{Path, PathBuf};
-
-fn data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(p)
-}
-
-fn goniofit() -> Command {
-    Command::cargo_bin("goniofit").unwrap()
-}
+use std::path::Path;
 
 /// The text report without the lines that vary between runs (timings, the command path).
-/// Run goniofit with `args`, expect exit 0, and return its standard output as text.
-fn success_stdout<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
-    let out = goniofit().args(args).output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
-fn fit_json(args: &[&str]) -> serde_json::Value {
-    serde_json::from_str(&success_stdout(args)).unwrap()
-}
-
 fn stable(report: &str) -> String {
     report
         .lines()

@@ -65,6 +65,15 @@ fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
     };
     write_picture(&pic, &a.out)
         .with_context(|| format!("writing {}", goniofit::io::shown(&a.out)))?;
+    eprintln!(
+        "goniofit: wrote {} ({}×{} px, a sphere lit from θ = {}°, model {} at {})",
+        goniofit::io::shown(&a.out),
+        a.size,
+        a.size,
+        a.light_deg,
+        model.name(),
+        goniofit::io::shown_text(&a.params)
+    );
     goniofit::io::print_stdout(&format!("{}\n", goniofit::io::shown(&a.out)))?;
     Ok(0)
 }

@@ -9,6 +9,7 @@ pub mod init;
 pub mod lm;
 pub mod problem;
 pub mod stats;
+pub mod weights;
 
 mod assemble;
 mod identify;
