@@ -472,3 +472,51 @@ fn absolute_sigma_drops_the_residual_scale() {
     );
     assert!((a * s / r - 1.0).abs() < 1e-9, "{a} {r} {s}");
 }
+
+#[test]
+fn html_report_is_one_self_contained_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("report.html");
+    goniofit()
+        .args(["fit", "--wavelength", "633nm", "--html"])
+        .arg(&page)
+        .arg(HEMI)
+        .assert()
+        .code(0)
+        .stderr(contains("pictures inline"));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+    for part in [
+        "<h2>Reproduce</h2>",
+        "<h2>Setting</h2>",
+        "<h2>Parameters</h2>",
+        "<h2>Derived quantities</h2>",
+        "<h2>Identifiability and validity</h2>",
+        "<h2>Pictures</h2>",
+        "95 % interval",
+        "--wavelength 633nm",
+    ] {
+        assert!(html.contains(part), "missing {part}");
+    }
+    // Every picture inline (six SVGs), nothing fetched: no src/href to other files or hosts.
+    assert_eq!(html.matches("<svg").count(), 6);
+    for attr in ["src=\"", "href=\"", "url("] {
+        for (i, _) in html.match_indices(attr) {
+            let rest = &html[i + attr.len()..];
+            assert!(
+                rest.starts_with("data:") || rest.starts_with('#'),
+                "external {attr}{}",
+                &rest[..40.min(rest.len())]
+            );
+        }
+    }
+    // The parameter row of σ carries its unit and both intervals.
+    let row = html
+        .lines()
+        .find(|l| l.starts_with("<tr><td>sigma</td>"))
+        .unwrap();
+    assert!(
+        row.contains("<td>nm</td>") && row.matches('[').count() == 2,
+        "{row}"
+    );
+}
