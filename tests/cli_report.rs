@@ -29,6 +29,17 @@ fn f(v: &serde_json::Value) -> f64 {
 const HEMI: &str = "data/synthetic/kbs_hemisphere.csv";
 const GARNET: &str = "data/cornell/garnet_red.astm";
 
+/// The README's fit of the garnet paint's 550 nm channel (append the file).
+const GARNET_550: [&str; 7] = [
+    "fit",
+    "--model",
+    "kbs+lambert",
+    "--channel",
+    "550nm",
+    "--residual",
+    "log",
+];
+
 #[test]
 fn wavelength_units_scale_sigma_and_t_and_are_stated() {
     let bare = fit_json(&["fit", "--wavelength", "1", "--json", HEMI]);
@@ -70,17 +81,7 @@ fn wavelength_units_scale_sigma_and_t_and_are_stated() {
 
 #[test]
 fn json_carries_the_whole_setting() {
-    let v = fit_json(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-        "--json",
-        GARNET,
-    ]);
+    let v = fit_json(&[&GARNET_550[..], &["--json", GARNET]].concat());
     let st = &v["setting"];
     let path = st["input"]["path"].as_str().unwrap();
     assert!(Path::new(path).is_absolute(), "{path}");
@@ -126,15 +127,7 @@ fn json_carries_the_whole_setting() {
 
 #[test]
 fn astm_files_default_to_the_quantity_their_header_states() {
-    let args = [
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-    ];
+    let args = GARNET_550;
     let default = fit_json(&[&args[..], &["--json", GARNET]].concat());
     let brdf = fit_json(&[&args[..], &["--quantity", "brdf", "--json", GARNET]].concat());
     let radiance = fit_json(&[&args[..], &["--quantity", "radiance", "--json", GARNET]].concat());
@@ -354,4 +347,176 @@ fn long_correlation_matrices_are_summarised() {
     let k = v["correlation"]["names"].as_array().unwrap().len();
     assert_eq!(v["correlation"]["matrix"].as_array().unwrap().len(), k);
     assert_eq!(v["correlation"]["largest"].as_array().unwrap().len(), 10);
+}
+
+/// An interval from JSON: [lo, hi] with None for an open side.
+fn interval(v: &serde_json::Value) -> (Option<f64>, Option<f64>) {
+    let a = v
+        .as_array()
+        .unwrap_or_else(|| panic!("not an interval: {v}"));
+    (a[0].as_f64(), a[1].as_f64())
+}
+
+#[test]
+fn profile_intervals_of_a_linear_model_are_t_times_the_standard_error() {
+    // Lambert is linear in its scale: the profile χ² is exactly quadratic, so the interval
+    // is ŝ ± t_{(1+P)/2, n−1} · se (lmfit's F test with one parameter).
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "lambert",
+        "--channel",
+        "0.633",
+        "--json",
+        "data/nist-ptfe/PTFE.data.csv",
+    ]);
+    let p = &v["params"]["scale"];
+    let (s, se) = (f(&p["value"]), f(&p["stderr"]));
+    let dof = (v["n"].as_u64().unwrap() - 1) as f64;
+    for (key, prob) in [("interval68", 0.682_689_492_137_086), ("interval95", 0.95)] {
+        let t = goniofit::fit::profile::student_t_quantile(0.5 * (1.0 + prob), dof);
+        let (lo, hi) = interval(&p[key]);
+        let (lo, hi) = (lo.unwrap(), hi.unwrap());
+        assert!(
+            ((s - lo) / (t * se) - 1.0).abs() < 1e-3,
+            "{key}: {lo} vs {s} - {t}·{se}"
+        );
+        assert!(
+            ((hi - s) / (t * se) - 1.0).abs() < 1e-3,
+            "{key}: {hi} vs {s} + {t}·{se}"
+        );
+    }
+    // π·s carries the same interval times π.
+    let (rlo, _) = interval(&v["derived"]["reflectance_factor"]["interval95"]);
+    let (lo, _) = interval(&p["interval95"]);
+    assert!((rlo.unwrap() / (std::f64::consts::PI * lo.unwrap()) - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn a_flat_profile_gives_a_one_sided_or_open_interval() {
+    // A specular lobe fitted to Lambertian data: B goes to its bound 0 and the width w
+    // does not matter, so w's profile is flat and B has no upper bound from the data.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("lambert.csv");
+    goniofit()
+        .args([
+            "synth",
+            "--model",
+            "lambert",
+            "--params",
+            "scale=1",
+            "--layout",
+            "inplane",
+            "--noise",
+            "0.01",
+            "--seed",
+            "1",
+            "--write-sigma",
+            "--out",
+        ])
+        .arg(&csv)
+        .assert()
+        .code(0);
+    let path = csv.to_str().unwrap();
+    let v = fit_json(&["fit", "--model", "lambert-specular", "--json", path]);
+    assert_eq!(interval(&v["params"]["w"]["interval95"]), (None, None));
+    let (lo, hi) = interval(&v["params"]["B"]["interval95"]);
+    assert_eq!((lo, hi), (Some(0.0), None));
+    // The scale stays bounded on both sides and contains the truth 1 at 95 %.
+    let (lo, hi) = interval(&v["params"]["scale"]["interval95"]);
+    assert!(lo.unwrap() < 1.0 && 1.0 < hi.unwrap(), "{lo:?} {hi:?}");
+    goniofit()
+        .args(["fit", "--model", "lambert-specular", path])
+        .assert()
+        .code(0)
+        .stdout(contains("95%: not bounded by the data"));
+}
+
+#[test]
+fn undetermined_parameters_are_reported_by_their_bounds() {
+    let v = fit_json(&[&GARNET_550[..], &["--json", GARNET]].concat());
+    for name in ["sigma", "T"] {
+        let p = &v["params"][name];
+        assert_eq!(p["determined"], false);
+        let (lo, hi) = interval(&p["interval95"]);
+        let x = f(&p["value"]);
+        assert!(
+            lo.unwrap() < x && x < hi.unwrap(),
+            "{name}: {lo:?} {x} {hi:?}"
+        );
+        let (lo68, hi68) = interval(&p["interval68"]);
+        assert!(lo.unwrap() < lo68.unwrap() && hi68.unwrap() < hi.unwrap());
+    }
+    // T/σ's interval holds its estimate and is narrower than σ's in relative terms.
+    let (lo, hi) = interval(&v["derived"]["T/sigma"]["interval95"]);
+    let q = f(&v["derived"]["T/sigma"]["value"]);
+    assert!(lo.unwrap() < q && q < hi.unwrap());
+}
+
+#[test]
+fn absolute_sigma_drops_the_residual_scale() {
+    let rel = fit_json(&["fit", "--wavelength", "1", "--json", HEMI]);
+    let abs = fit_json(&[
+        "fit",
+        "--wavelength",
+        "1",
+        "--absolute-sigma",
+        "--json",
+        HEMI,
+    ]);
+    assert_eq!(abs["setting"]["absolute_sigma"], true);
+    let s = f(&rel["reduced_chi2"]).sqrt();
+    let (a, r) = (
+        f(&abs["params"]["sigma"]["stderr"]),
+        f(&rel["params"]["sigma"]["stderr"]),
+    );
+    assert!((a * s / r - 1.0).abs() < 1e-9, "{a} {r} {s}");
+}
+
+#[test]
+fn html_report_is_one_self_contained_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("report.html");
+    goniofit()
+        .args(["fit", "--wavelength", "633nm", "--html"])
+        .arg(&page)
+        .arg(HEMI)
+        .assert()
+        .code(0)
+        .stderr(contains("pictures inline"));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+    for part in [
+        "<h2>Reproduce</h2>",
+        "<h2>Setting</h2>",
+        "<h2>Parameters</h2>",
+        "<h2>Derived quantities</h2>",
+        "<h2>Identifiability and validity</h2>",
+        "<h2>Pictures</h2>",
+        "95 % interval",
+        "--wavelength 633nm",
+    ] {
+        assert!(html.contains(part), "missing {part}");
+    }
+    // Every picture inline (six SVGs), nothing fetched: no src/href to other files or hosts.
+    assert_eq!(html.matches("<svg").count(), 6);
+    for attr in ["src=\"", "href=\"", "url("] {
+        for (i, _) in html.match_indices(attr) {
+            let rest = &html[i + attr.len()..];
+            assert!(
+                rest.starts_with("data:") || rest.starts_with('#'),
+                "external {attr}{}",
+                &rest[..40.min(rest.len())]
+            );
+        }
+    }
+    // The parameter row of σ carries its unit and both intervals.
+    let row = html
+        .lines()
+        .find(|l| l.starts_with("<tr><td>sigma</td>"))
+        .unwrap();
+    assert!(
+        row.contains("<td>nm</td>") && row.matches('[').count() == 2,
+        "{row}"
+    );
 }

@@ -120,6 +120,14 @@ pub struct FitArgs {
     /// uncertainty), not rescaled by the residual scatter (scipy's `absolute_sigma=True`).
     #[arg(long)]
     pub absolute_sigma: bool,
+    /// Skip the profile-likelihood intervals (they refit the data a few dozen times per
+    /// quantity).
+    #[arg(long)]
+    pub no_intervals: bool,
+    /// Also write the report as one self-contained HTML page (tables, the pictures inline,
+    /// the command that reproduces it); one dataset only.
+    #[arg(long)]
+    pub html: Option<PathBuf>,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -430,6 +438,8 @@ pub struct Outcome {
     pub input: FitInput,
     pub candidates: Vec<FitResult>,
     pub result: FitResult,
+    /// Profile-likelihood intervals (empty when not computed).
+    pub intervals: Vec<goniofit::fit::profile::Interval>,
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC.
@@ -483,13 +493,98 @@ fn fit_dataset(
             result.notes.push(note);
         }
     }
+    // Intervals for a single dataset (`progress` is true only then): many fits at once
+    // get the summary table instead.
+    let intervals = if args.no_intervals || !progress || result.n_free > MAX_PROFILED {
+        Vec::new()
+    } else {
+        profile_intervals(args, &input, &result, uncertainties)?
+    };
     Ok(Outcome {
         label,
         dataset: ds,
         input,
         candidates: results,
         result,
+        intervals,
     })
+}
+
+/// Fits with more free parameters than this get no profile intervals (each needs two
+/// walks of refits per quantity).
+pub const MAX_PROFILED: usize = 8;
+
+/// Profile-likelihood intervals (`goniofit::fit::profile`) of every free parameter, of
+/// the parameters the reduced fit held, and of T/σ, the rms slope, the amplitudes and
+/// the reflectance factors, on the full problem at the reported optimum.
+pub fn profile_intervals(
+    args: &FitArgs,
+    input: &FitInput,
+    r: &FitResult,
+    uncertainties: bool,
+) -> anyhow::Result<Vec<goniofit::fit::profile::Interval>> {
+    use goniofit::fit::problem::FitProblem;
+    use goniofit::fit::profile::{Profiler, Target};
+    let config = fit_config(args, &r.model, uncertainties)?;
+    let model = goniofit::model::by_name(&r.model, &config.model_opts)?;
+    let mut layout = r.layout.clone();
+    // Parameters held by the reduction (reported as not fixed) are profiled too.
+    for (fp, p) in layout.params.iter_mut().zip(&r.params) {
+        if !p.fixed {
+            fp.fixed = None;
+        }
+    }
+    let floor = driver::residual_floor(&config, &input.y);
+    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?;
+    let prof = Profiler::new(&problem, &r.values, args.absolute_sigma, &config.lm);
+    let layout = &problem.layout;
+    let mut out = Vec::new();
+    for k in layout.free() {
+        if let Some(iv) = prof.interval(&layout.params[k].name, &Target::Param(k)) {
+            out.push(iv);
+        }
+    }
+    let first = |n: &str| layout.find(n).first().copied();
+    if let (Some(ks), Some(kt)) = (first("sigma"), first("T")) {
+        let ratio = Target::Product {
+            coef: vec![(kt, 1.0), (ks, -1.0)],
+            eliminate: ks,
+        };
+        if let Some(iv) = prof.interval("T/sigma", &ratio) {
+            out.push(iv.mapped("rms_slope", 2.0, true));
+            out.push(iv);
+        }
+        for d in &r.derived {
+            if !d.name.starts_with("amplitude") {
+                continue;
+            }
+            let scale = d.name.replacen("amplitude", "scale", 1);
+            let Some(ka) = layout.params.iter().position(|p| p.name == scale) else {
+                continue;
+            };
+            let coef = match r.verdict {
+                driver::Verdict::Smooth => vec![(ka, 1.0), (ks, 2.0)],
+                _ => vec![(ka, 1.0), (kt, 2.0), (ks, -2.0)],
+            };
+            let target = Target::Product {
+                coef,
+                eliminate: ks,
+            };
+            if let Some(iv) = prof.interval(&d.name, &target) {
+                out.push(iv);
+            }
+        }
+    }
+    for d in &r.derived {
+        if let Some(term) = d.doc.strip_prefix("π·").and_then(|t| t.split(',').next()) {
+            let src = d.name.replacen("reflectance_factor", term, 1);
+            if let Some(iv) = out.iter().find(|i| i.name == src) {
+                let m = iv.mapped(&d.name, std::f64::consts::PI, false);
+                out.push(m);
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The fit input of a dataset with the quantity, wavelength, residual and floor of `args`.
@@ -576,7 +671,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         }
     }
     let single = jobs.len() == 1;
-    if !single && (args.residuals.is_some() || args.plot.is_some()) {
+    if !single && (args.residuals.is_some() || args.plot.is_some() || args.html.is_some()) {
         return Err(Error::Usage(
             "--residuals and --plot take one dataset; fit several files one at a time for those"
                 .into(),
@@ -613,6 +708,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             command: command_line(),
             version: env!("CARGO_PKG_VERSION").to_string(),
             setting: setting_of(&args, &o.dataset, &o.input, &file),
+            intervals: o.intervals.clone(),
         }
     };
     let infos: Vec<RunInfo> = outcomes.iter().map(info_for).collect();
@@ -669,6 +765,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         if let Some(path) = &args.residuals {
             write_residuals(path, &o.dataset, &o.result)?;
         }
+        if let Some(path) = &args.html {
+            write_html(&args, path, o, &infos[0])?;
+        }
         if let Some(dir) = &args.plot {
             let config = fit_config(&args, &o.result.model, o.dataset.sigma_l.is_some())?;
             let written = plot_fit(dir, &config, &o.input, &o.result.layout, &o.result.values)?;
@@ -684,6 +783,44 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     } else {
         3
     })
+}
+
+/// Write the HTML page of one outcome: its pictures drawn into a temporary folder and
+/// inlined as SVG.
+fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
+    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+    let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
+    let written = plot_fit(
+        dir.path(),
+        &config,
+        &o.input,
+        &o.result.layout,
+        &o.result.values,
+    )?;
+    let mut pictures = Vec::new();
+    for p in written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+    {
+        let svg = std::fs::read_to_string(p).map_err(|source| Error::Io {
+            path: p.clone(),
+            source,
+        })?;
+        let title = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        pictures.push((title, svg));
+    }
+    let text = outcome_text(o, info);
+    let page = report::html::page(&o.result, info, &text, &pictures);
+    io::write_bytes(path, page.as_bytes())?;
+    eprintln!(
+        "goniofit: wrote {} (one page, {} pictures inline)",
+        path.display(),
+        pictures.len()
+    );
+    Ok(())
 }
 
 /// The summary rows as JSON objects (the CSV's columns).

@@ -8,6 +8,7 @@ pub mod driver;
 pub mod init;
 pub mod lm;
 pub mod problem;
+pub mod profile;
 pub mod stats;
 pub mod weights;
 

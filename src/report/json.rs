@@ -2,6 +2,7 @@
 
 use super::RunInfo;
 use crate::fit::driver::FitResult;
+use crate::fit::profile::LEVELS;
 use serde_json::{json, Map, Value};
 
 /// Finite numbers as numbers, the rest as null (JSON has no NaN).
@@ -48,6 +49,25 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         .zip(&r.start)
         .map(|(p, v)| (p.name.clone(), num(*v)))
         .collect();
+    // Profile intervals: params.<name>.interval68/interval95 = [lo, hi], null for an open
+    // side.
+    for iv in &info.intervals {
+        let target = if params.contains_key(&iv.name) {
+            params.get_mut(&iv.name)
+        } else {
+            derived.get_mut(&iv.name)
+        };
+        if let Some(Value::Object(m)) = target {
+            for (key, prob) in [("interval68", LEVELS[0]), ("interval95", LEVELS[1])] {
+                if let Some(l) = iv.at(prob) {
+                    m.insert(
+                        key.into(),
+                        json!([l.lo.value().map(num), l.hi.value().map(num)]),
+                    );
+                }
+            }
+        }
+    }
     json!({
         "model": r.model,
         "start": start,

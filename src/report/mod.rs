@@ -2,6 +2,7 @@
 //! and units of a fit, the input's checksum).
 
 pub mod checksum;
+pub mod html;
 pub mod json;
 pub mod setting;
 pub mod summary;
@@ -21,6 +22,10 @@ pub struct RunInfo {
     /// The fit's setting: input path and checksum, wavelength and units, quantity,
     /// residual, floor, weights, loss.
     pub setting: Setting,
+    /// Profile-likelihood intervals of the parameters and derived quantities (empty when
+    /// not computed).
+    #[serde(skip)]
+    pub intervals: Vec<crate::fit::profile::Interval>,
 }
 
 use crate::fit::driver::{Derived, FitResult};

@@ -191,6 +191,66 @@ fn variable_lines(s: &mut String, r: &FitResult, units: &Units) {
     }
 }
 
+/// A number of an interval, 4 significant digits.
+fn g4(v: f64) -> String {
+    format!("{v:.4e}")
+}
+
+/// One interval as text: `[lo, hi]`, or a one-sided bound ("> lo") where a side is open.
+pub fn interval_text(l: &crate::fit::profile::Level) -> String {
+    use crate::fit::profile::Bound;
+    match (l.lo, l.hi) {
+        (Bound::Open(_), Bound::Open(_)) => "not bounded by the data".into(),
+        (Bound::Edge(v), Bound::Open(_)) => {
+            format!("≥ {} (its bound; no upper bound from the data)", g4(v))
+        }
+        (lo, Bound::Open(_)) => format!("> {}", g4(lo.value().unwrap_or(0.0))),
+        (Bound::Open(_), hi) => format!("< {}", g4(hi.value().unwrap_or(0.0))),
+        (lo, hi) => format!(
+            "[{}, {}]",
+            g4(lo.value().unwrap_or(0.0)),
+            g4(hi.value().unwrap_or(0.0))
+        ),
+    }
+}
+
+/// The `[[Intervals]]` block: profile-likelihood intervals at 68.27 % and 95 %.
+fn interval_lines(s: &mut String, r: &FitResult, info: &RunInfo) {
+    if info.intervals.is_empty() {
+        return;
+    }
+    let units = &info.setting.units;
+    let _ = writeln!(
+        s,
+        "[[Intervals]] (profile likelihood, as lmfit's conf_interval; one-sided where χ² stays flat to a factor 1000)"
+    );
+    let width = info
+        .intervals
+        .iter()
+        .map(|i| i.name.chars().count())
+        .max()
+        .unwrap_or(5);
+    for iv in &info.intervals {
+        let unit = if r.params.iter().any(|p| p.name == iv.name) {
+            units.of_param(&iv.name)
+        } else {
+            units.of_derived(&iv.name, r.verdict == Verdict::Smooth)
+        };
+        let parts: Vec<String> = crate::fit::profile::LEVELS
+            .iter()
+            .filter_map(|&p| iv.at(p))
+            .map(|l| format!("{:.0}%: {}", l.prob * 100.0, interval_text(l)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "    {:<width$}  {}  {}",
+            iv.name,
+            parts.join("   "),
+            text_unit(unit)
+        );
+    }
+}
+
 /// The `[[Correlations]]` block: the matrix when small, its largest |ρ| pairs otherwise.
 fn correlation_lines(s: &mut String, r: &FitResult) {
     let k = r.corr_names.len();
@@ -294,6 +354,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let modes: Vec<String> = r.modes.iter().map(|(k, v)| format!("{k}: {v}")).collect();
     let _ = writeln!(s, "    evaluation modes= {}", modes.join(", "));
     variable_lines(&mut s, r, &info.setting.units);
+    interval_lines(&mut s, r, info);
     let _ = writeln!(s, "[[Identifiability]]");
     let _ = writeln!(s, "    verdict         = {}", verdict_text(r.verdict));
     let sv: Vec<String> = r
