@@ -967,6 +967,10 @@ pub fn plot_fit(
     for (spec, v) in specs.iter().zip(&params) {
         title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
     }
+    let named = |n: &str| specs.iter().position(|s| s.name == n).map(|j| params[j]);
+    if let (Some(sigma), Some(t)) = (named("sigma"), named("T")) {
+        title += &format!(" T/σ={}", goniofit::plot::fmt_num(t / sigma));
+    }
     if layout.channel_names.len() > 1 {
         title += &format!(" [{}]", layout.channel_names[c]);
     }
