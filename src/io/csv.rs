@@ -140,7 +140,8 @@ struct Nist {
 
 /// Parse a CSV table (text already decoded, BOM removed).
 pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Dataset> {
-    let records = split_records(text).map_err(|(line, m)| Error::input(path, line, "(row)", m))?;
+    let records = split_records_limited(text, MAX_FIELDS)
+        .map_err(|(line, m)| Error::input(path, line, "(row)", m))?;
     let n = records.len();
     parse_records(path, records.into_iter().map(Ok), opts, true, n)
 }
