@@ -11,8 +11,10 @@ pub mod problem;
 pub mod stats;
 
 mod assemble;
+mod config;
 mod identify;
 mod reduce;
+mod result;
 mod solve;
 mod start;
 mod validate;

@@ -50,11 +50,15 @@ pub enum Transform {
     NonNegative,
 }
 
+/// Parameters that enter the model linearly: amplitudes, non-negative, and solved exactly
+/// at each point of the starting-value grid ([`super::init`]).
+pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
+
 impl Transform {
     /// The transform for a model parameter: log for positive nonlinear parameters,
     /// non-negative for the linear amplitudes, identity otherwise.
     pub fn for_spec(spec: &crate::model::ParamSpec) -> Self {
-        match (spec.positive, super::init::LINEAR.contains(&spec.name)) {
+        match (spec.positive, LINEAR.contains(&spec.name)) {
             (true, false) => Transform::Log,
             (true, true) => Transform::NonNegative,
             _ => Transform::Identity,

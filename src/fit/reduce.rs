@@ -2,9 +2,10 @@
 //! s·(T/σ)²; smooth: T and s·σ²), refit the reduced problem with σ held at its estimate,
 //! so that T and the scales carry the determined combinations with a finite covariance.
 
-use super::driver::{FitConfig, Verdict};
+use super::config::FitConfig;
 use super::identify::{uncertainty_of, Identified};
 use super::problem::{FitInput, FitProblem};
+use super::result::Verdict;
 use super::solve::{run_lm, Run};
 use super::stats;
 use crate::error::Result;

@@ -5,7 +5,7 @@
 //! and the lowest refined cost inside the models' domain (on the full data) wins. All of
 //! it runs on subsamples, beside the setup of the full problem.
 
-use super::driver::{FitConfig, GRID_TOL, REFINE_TOL};
+use super::config::FitConfig;
 use super::init;
 use super::lm::LmConfig;
 use super::problem::{FitInput, FitProblem, ParamLayout};
@@ -14,6 +14,13 @@ use crate::error::Result;
 use crate::model::{self, EvalMode, Model, ModelOptions};
 use rayon::prelude::*;
 use std::time::Instant;
+
+/// Accuracy of the model on the starting-value grid (it only ranks candidates).
+pub const GRID_TOL: f64 = 1e-4;
+
+/// Model accuracy of the quick refinement on a subsample (it only has to land near the
+/// optimum; the full fit then works at the requested accuracy).
+pub const REFINE_TOL: f64 = 1e-6;
 
 /// Where the full fit starts, and when the search for it ended.
 pub(super) struct Start {

@@ -1,7 +1,7 @@
 //! Validate: whether the data can be fitted at all (before the fit), and what the
 //! optimum's report must say about points that are not a usable optimum (after it).
 
-use super::driver::{assign, FitConfig};
+use super::config::FitConfig;
 use super::lm::Termination;
 use super::problem::{FitInput, FitParam, ParamLayout, Transform};
 use crate::error::{Error, Result};
@@ -62,4 +62,40 @@ pub(super) fn termination_note(termination: Termination) -> Option<String> {
             termination.describe()
         )
     })
+}
+
+/// Resolve (name, value) pairs against a layout: a bare per-channel name applies to every
+/// channel.
+fn assign(layout: &ParamLayout, pairs: &[(String, f64)], out: &mut [Option<f64>]) -> Result<()> {
+    for (name, v) in pairs {
+        let ks = layout.find(name);
+        if ks.is_empty() {
+            return Err(Error::Param {
+                name: name.clone(),
+                message: format!(
+                    "not a parameter of this fit (it has: {})",
+                    layout
+                        .params
+                        .iter()
+                        .map(|p| p.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            });
+        }
+        for k in ks {
+            let fp = &layout.params[k];
+            if !v.is_finite()
+                || (fp.transform == Transform::Log && *v <= 0.0)
+                || *v < 0.0 && fp.transform == Transform::NonNegative
+            {
+                return Err(Error::Param {
+                    name: name.clone(),
+                    message: format!("value {v} is outside its domain"),
+                });
+            }
+            out[k] = Some(*v);
+        }
+    }
+    Ok(())
 }
