@@ -248,13 +248,9 @@ fn fit_dataset(
             driver::fit(&input, &config).with_context(|| format!("{label}: fitting model {m}"))?,
         );
     }
-    let best = results
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
-        .map(|(i, _)| i)
-        .expect("at least one candidate");
+    let (best, skipped) = lowest_bic_usable(&results);
     let mut result = results[best].clone();
+    result.notes.extend(skipped);
     if input.channel_names.len() > 1 {
         if let Some(note) = joint_narrowing(args, &ds, &result)? {
             result.notes.push(note);
@@ -267,6 +263,36 @@ fn fit_dataset(
         candidates: results,
         result,
     })
+}
+
+/// The candidate with the lowest BIC among the converged fits (among all when none
+/// converged), and a note for each candidate with a lower BIC that was skipped because its
+/// fit is not a usable optimum (degenerate, or stopped without converging).
+fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
+    let any_converged = results.iter().any(|r| r.converged());
+    let best = results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.converged() || !any_converged)
+        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
+        .map(|(i, _)| i)
+        .expect("at least one candidate");
+    let skipped = results
+        .iter()
+        .filter(|r| !r.converged() && any_converged && r.bic < results[best].bic)
+        .map(|r| {
+            format!(
+                "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
+                r.model,
+                r.bic,
+                r.notes
+                    .last()
+                    .map(String::as_str)
+                    .unwrap_or(r.termination.describe())
+            )
+        })
+        .collect();
+    (best, skipped)
 }
 
 /// The report of one outcome as JSON.

@@ -30,8 +30,8 @@ pub fn fit(input: &FitInput, config: &FitConfig) -> Result<FitResult> {
     fit_model(model.as_ref(), input, config)
 }
 
-/// Run a fit with a built model: start search → solve → identify → reduce → assemble
-/// (validation of the input before, of the optimum inside the stages).
+/// Run a fit with a built model: start search → solve → identify → reduce → validate →
+/// assemble (the input is validated first).
 pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Result<FitResult> {
     let t0 = Instant::now();
     let (layout, given) = validate::prepare(model, input, config)?;
@@ -42,11 +42,38 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let (problem, start) = (problem?, start?);
-    let run = solve::run_lm(&problem, &start.p0, &config.lm);
+    let run = solve_checked(&problem, input, &start, config);
     let identified = identify::identify(input, &problem, &run, config.reduce);
-    let solved = reduce::reduce(model, input, config, problem, run, identified)?;
+    let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
+    validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     Ok(assemble::assemble(
         model, input, config, solved, seconds, start,
     ))
+}
+
+/// Solve from the start; when that run ends at an edge of the physical domain
+/// ([`validate::at_kbs_edge`]), solve again from each other usable refined candidate and keep
+/// the lowest-cost run inside the domain (the first run when every one ends at an edge).
+fn solve_checked(
+    problem: &FitProblem,
+    input: &FitInput,
+    start: &start::Start,
+    config: &FitConfig,
+) -> solve::Run {
+    let first = solve::run_lm(problem, &start.p0, &config.lm);
+    let layout = &problem.layout;
+    if !validate::at_kbs_edge(layout, input, &first.values) {
+        return first;
+    }
+    let mut best: Option<solve::Run> = None;
+    for p0 in &start.alternatives {
+        let mut run = solve::run_lm(problem, p0, &config.lm);
+        run.add_counts(&first.lm);
+        let better = best.as_ref().is_none_or(|b| run.lm.cost < b.lm.cost);
+        if !validate::at_kbs_edge(layout, input, &run.values) && better {
+            best = Some(run);
+        }
+    }
+    best.unwrap_or(first)
 }
