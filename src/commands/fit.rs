@@ -124,6 +124,10 @@ pub struct FitArgs {
     /// quantity).
     #[arg(long)]
     pub no_intervals: bool,
+    /// Also write the report as one self-contained HTML page (tables, the pictures inline,
+    /// the command that reproduces it); one dataset only.
+    #[arg(long)]
+    pub html: Option<PathBuf>,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -632,7 +636,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         }
     }
     let single = jobs.len() == 1;
-    if !single && (args.residuals.is_some() || args.plot.is_some()) {
+    if !single && (args.residuals.is_some() || args.plot.is_some() || args.html.is_some()) {
         return Err(Error::Usage(
             "--residuals and --plot take one dataset; fit several files one at a time for those"
                 .into(),
@@ -726,6 +730,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         if let Some(path) = &args.residuals {
             write_residuals(path, &o.dataset, &o.result)?;
         }
+        if let Some(path) = &args.html {
+            write_html(&args, path, o, &infos[0])?;
+        }
         if let Some(dir) = &args.plot {
             let config = fit_config(&args, &o.result.model, o.dataset.sigma_l.is_some())?;
             let written = plot_fit(dir, &config, &o.input, &o.result.layout, &o.result.values)?;
@@ -741,6 +748,44 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     } else {
         3
     })
+}
+
+/// Write the HTML page of one outcome: its pictures drawn into a temporary folder and
+/// inlined as SVG.
+fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
+    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+    let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
+    let written = plot_fit(
+        dir.path(),
+        &config,
+        &o.input,
+        &o.result.layout,
+        &o.result.values,
+    )?;
+    let mut pictures = Vec::new();
+    for p in written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+    {
+        let svg = std::fs::read_to_string(p).map_err(|source| Error::Io {
+            path: p.clone(),
+            source,
+        })?;
+        let title = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        pictures.push((title, svg));
+    }
+    let text = outcome_text(o, info);
+    let page = report::html::page(&o.result, info, &text, &pictures);
+    io::write_bytes(path, page.as_bytes())?;
+    eprintln!(
+        "goniofit: wrote {} (one page, {} pictures inline)",
+        path.display(),
+        pictures.len()
+    );
+    Ok(())
 }
 
 /// The summary rows as JSON objects (the CSV's columns).
@@ -881,6 +926,10 @@ pub fn plot_fit(
     let mut title = format!("{}:", model.name());
     for (spec, v) in specs.iter().zip(&params) {
         title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
+    }
+    let named = |n: &str| specs.iter().position(|s| s.name == n).map(|j| params[j]);
+    if let (Some(sigma), Some(t)) = (named("sigma"), named("T")) {
+        title += &format!(" T/σ={}", goniofit::plot::fmt_num(t / sigma));
     }
     if layout.channel_names.len() > 1 {
         title += &format!(" [{}]", layout.channel_names[c]);
