@@ -6,6 +6,7 @@ use clap::{Args, ValueEnum};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
 use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::problem::ResidualKind;
+use goniofit::fit::weights::{floor_raised, residual_weights};
 use goniofit::geometry::{Geometry, Quantity};
 use goniofit::io::{self, Dataset, ReadOptions};
 use goniofit::model::{parse_assignments, ModelOptions};
@@ -33,22 +34,43 @@ impl From<ResidualArg> for ResidualKind {
     }
 }
 
+/// Examples shown by `goniofit fit --help`.
+const FIT_EXAMPLES: &str = "\
+Examples:
+  goniofit fit --model kbs+lambert --channel 550nm --residual log data/cornell/garnet_red.astm
+      one channel of a Cornell paint BRDF (λ = 550 nm from the channel name; σ, T in nm)
+  goniofit fit --model kbs+lambert --channel all --residual log data/cornell/garnet_red.astm
+      every channel jointly: shared σ, T, one scale per channel
+  goniofit fit --model kbs+lambert --by-group --summary fits.csv data/cornell/garnet_red.astm
+      every channel on its own, with a one-line-per-fit table
+  goniofit fit --model lambert --channel 0.633 data/nist-ptfe/PTFE.data.csv
+      the 633 nm rows of a CSV with a wavelength column (its unit, µm here)
+  goniofit fit --model kbs --wavelength 633nm --json data/synthetic/kbs_hemisphere.csv > fit.json
+      a CSV without a wavelength column; the report as JSON (goniofit plot fit.json redraws it)
+  goniofit fit --model auto --wavelength 1 data/synthetic/kbs_hemisphere.csv
+      compare lambert, lambert-specular, kbs and kbs+lambert by BIC";
+
 #[derive(Debug, Args)]
+#[command(after_help = FIT_EXAMPLES)]
 pub struct FitArgs {
     /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
     /// (fits lambert, lambert-specular, kbs, kbs+lambert and keeps the lowest BIC).
     #[arg(long, default_value = "kbs")]
     pub model: String,
-    /// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi). A
+    /// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi). Default:
+    /// what the file states (ASTM `MEAS_NAME BRDF`, NIST PTFE `f_r11`), else radiance. A
     /// reflectance factor is a BRDF × π.
-    #[arg(long, value_enum, default_value = "radiance")]
-    pub quantity: QuantityArg,
-    /// Wavelength (the unit of σ and T in the report); required for KBS models unless a
-    /// `wavelength` column or an ASTM channel name gives it.
-    #[arg(long)]
-    pub wavelength: Option<f64>,
-    /// ASTM E1392 channel to fit (e.g. 550nm), or `all` for a joint fit over every channel
-    /// with shared σ, T and per-channel scales.
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Wavelength, with its unit (633nm, 0.633um) or as a bare number (then σ and T are in
+    /// that number's unknown unit); σ and T are reported in this unit. Required for KBS
+    /// models unless a `wavelength` column or an ASTM channel name gives it.
+    #[arg(long, value_parser = parse_wavelength_arg)]
+    pub wavelength: Option<(f64, Option<&'static str>)>,
+    /// One channel: an ASTM channel (e.g. 550nm); for CSV a `group` label, or a wavelength
+    /// (0.532 in the file's unit, or 532nm) selecting the rows of that wavelength. `all`: a
+    /// joint fit over every channel (CSV without a group column: every wavelength) with
+    /// shared σ, T and per-channel scales.
     #[arg(long)]
     pub channel: Option<String>,
     /// CSV angles are in radians (default degrees).
@@ -77,7 +99,7 @@ pub struct FitArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub mode: ModeArg,
     /// Relative accuracy target of the KBS evaluation.
-    #[arg(long, default_value_t = 1e-10)]
+    #[arg(long, default_value = "1e-10")]
     pub tol: f64,
     /// Patch half-sizes X,Y (unit of λ): include the coherent term.
     #[arg(long)]
@@ -94,6 +116,14 @@ pub struct FitArgs {
     /// Show a progress line while fitting.
     #[arg(long)]
     pub progress: bool,
+    /// Standard errors and intervals from `sigma_L` as stated (a true standard
+    /// uncertainty), not rescaled by the residual scatter (scipy's `absolute_sigma=True`).
+    #[arg(long)]
+    pub absolute_sigma: bool,
+    /// Skip the profile-likelihood intervals (they refit the data a few dozen times per
+    /// quantity).
+    #[arg(long)]
+    pub no_intervals: bool,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -103,7 +133,12 @@ pub struct FitArgs {
     /// Write the fit's pictures (PNG and SVG) into this folder.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// Fit each group (a `group` column, or each ASTM channel) on its own.
+    /// Also write the one-line-per-fit summary (group, n, converged, cost, R², σ, T, T/σ,
+    /// verdict) to this CSV file.
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+    /// Fit each group on its own: each ASTM channel, each label of a `group` column, or
+    /// (CSV without one) each wavelength.
     #[arg(long)]
     pub by_group: bool,
     /// Threads (default: all cores): datasets are fitted in parallel, and one dataset's
@@ -119,22 +154,50 @@ impl FitArgs {
     /// How the input files are read (`--radians`, `--signed-theta-r`, `--columns`,
     /// `--channel`); values are required.
     pub fn read_options(&self) -> anyhow::Result<ReadOptions> {
+        // --by-group needs every channel (ASTM) or every wavelength (CSV) read.
+        let channel = match (&self.channel, self.by_group) {
+            (None, true) => Some("all".to_string()),
+            (c, _) => c.clone(),
+        };
         Ok(ReadOptions {
             radians: self.radians,
             signed_theta_r: self.signed_theta_r,
             columns: io::csv::parse_columns(self.columns.as_deref().unwrap_or(""))?,
             require_value: true,
-            channel: self.channel.clone(),
+            channel,
         })
+    }
+
+    /// The measured quantity for a dataset and where it came from: `--quantity`, what the
+    /// file states, or radiance by default.
+    pub fn quantity_for(&self, ds: &Dataset) -> (Quantity, &'static str) {
+        match (self.quantity, ds.quantity) {
+            (Some(q), _) => (q.into(), "--quantity"),
+            (None, Some(q)) => (q, "stated by the file"),
+            (None, None) => (Quantity::Radiance, "default"),
+        }
+    }
+
+    /// The wavelength given on the command line, as a number.
+    pub fn wavelength_value(&self) -> Option<f64> {
+        self.wavelength.map(|w| w.0)
     }
 }
 
-/// The fit's data from a dataset: geometry, values, weights, channels.
+/// `--wavelength`: a positive number with an optional unit (nm, um, µm).
+fn parse_wavelength_arg(text: &str) -> Result<(f64, Option<&'static str>), String> {
+    io::parse_length(text).map_err(|e| e.to_string())
+}
+
+/// The fit's data from a dataset: geometry, values, channels, and the weights transformed
+/// for the residual kind (`goniofit::fit::weights`).
 pub fn fit_input(
     ds: &Dataset,
     quantity: Quantity,
     wavelength: Option<f64>,
     needs_wavelength: bool,
+    residual: ResidualKind,
+    floor: Option<f64>,
 ) -> anyhow::Result<FitInput> {
     let n = ds.samples.len();
     let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
@@ -154,7 +217,14 @@ pub fn fit_input(
         path: ds.path.clone(),
         message: "no measured value column (L)".into(),
     })?;
-    let weight = ds.weight.clone().unwrap_or_else(|| vec![1.0; n]);
+    let floor = floor_for(floor, &y);
+    let (weight, _) = residual_weights(
+        ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
+        ds.sigma_l.as_deref(),
+        &y,
+        residual,
+        floor,
+    );
     let (channel, channel_names) = match &ds.channel {
         Some(labels) => {
             let mut names: Vec<String> = Vec::new();
@@ -178,6 +248,91 @@ pub fn fit_input(
         weight,
         channel,
         channel_names,
+    })
+}
+
+/// The residual floor: `--floor`, or 1e-6 × max |y| (as the fit computes it).
+fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
+    driver::residual_floor(
+        &FitConfig {
+            floor,
+            ..FitConfig::default()
+        },
+        y,
+    )
+}
+
+/// The whole setting of one dataset's fit, for the report (`report::Setting`).
+pub fn setting_of(
+    args: &FitArgs,
+    ds: &Dataset,
+    input: &FitInput,
+    file: &report::setting::InputInfo,
+) -> report::Setting {
+    let (quantity, quantity_source) = args.quantity_for(ds);
+    let residual: ResidualKind = args.residual.into();
+    let floor = floor_for(args.floor, &input.y);
+    let (_, weights) = residual_weights(
+        ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
+        ds.sigma_l.as_deref(),
+        &input.y,
+        residual,
+        floor,
+    );
+    let (unit, source) = match (args.wavelength, &ds.wavelength) {
+        (Some((_, u)), _) => (u.map(String::from), "--wavelength"),
+        (None, Some(_)) if io::is_astm(&ds.path, "") => {
+            (ds.wavelength_unit.clone(), "channel name")
+        }
+        (None, Some(_)) => (ds.wavelength_unit.clone(), "wavelength column"),
+        (None, None) => (None, "none"),
+    };
+    let mut values: Vec<f64> = Vec::new();
+    if source != "none" {
+        for &l in &input.geo.wavelength {
+            if !values.contains(&l) {
+                values.push(l);
+            }
+        }
+    }
+    report::Setting {
+        input: file.clone(),
+        wavelength: report::setting::WavelengthInfo {
+            values,
+            unit: unit.clone(),
+            source: source.into(),
+        },
+        channel: args.channel.clone(),
+        quantity,
+        quantity_source: quantity_source.into(),
+        residual,
+        floor: report::setting::FloorInfo {
+            value: floor,
+            raised: floor_raised(&input.y, residual, floor),
+            used: residual != ResidualKind::Absolute,
+        },
+        weights,
+        loss: "linear".into(),
+        absolute_sigma: args.absolute_sigma,
+        units: report::Units {
+            length: unit,
+            quantity,
+            radiance: None,
+        },
+    }
+}
+
+/// The input file's absolute path, size and SHA-256.
+pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    Ok(report::setting::InputInfo {
+        path: abs.display().to_string(),
+        sha256: report::checksum::sha256_hex(&bytes),
+        bytes: bytes.len() as u64,
     })
 }
 
@@ -222,6 +377,8 @@ pub struct Outcome {
     pub input: FitInput,
     pub candidates: Vec<FitResult>,
     pub result: FitResult,
+    /// Profile-likelihood intervals (empty when not computed).
+    pub intervals: Vec<goniofit::fit::profile::Interval>,
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC.
@@ -237,11 +394,16 @@ fn fit_dataset(
     let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
         AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect()
     } else {
-        goniofit::model::by_name(&args.model, &ModelOptions::default())?;
+        goniofit::model::by_name(&args.model, &ModelOptions::default()).map_err(|e| match e {
+            Error::UnknownModel(name) => Error::Usage(format!(
+                "unknown model '{name}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto to fit the last four and keep the lowest BIC)"
+            )),
+            e => e,
+        })?;
         vec![args.model.to_ascii_lowercase()]
     };
     let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
-    let input = fit_input(&ds, args.quantity.into(), args.wavelength, needs_wavelength)?;
+    let input = input_of(args, &ds, needs_wavelength)?;
     let uncertainties = ds.sigma_l.is_some();
     let mut results: Vec<FitResult> = Vec::new();
     let mut skipped = Vec::new();
@@ -270,18 +432,125 @@ fn fit_dataset(
             skipped.join(", ")
         ));
     }
+    if args.absolute_sigma {
+        report::use_absolute_sigma(&mut result);
+    }
+    report::add_reflectance_factors(
+        &mut result,
+        &report::Units {
+            quantity: args.quantity_for(&ds).0,
+            ..Default::default()
+        },
+    );
     if input.channel_names.len() > 1 && !stop.is_requested() {
         if let Some(note) = joint_narrowing(args, &ds, &result)? {
             result.notes.push(note);
         }
     }
+    // Intervals for a single dataset (`progress` is true only then): many fits at once
+    // get the summary table instead.
+    let intervals = if args.no_intervals || !progress || result.n_free > MAX_PROFILED {
+        Vec::new()
+    } else {
+        profile_intervals(args, &input, &result, uncertainties)?
+    };
     Ok(Outcome {
         label,
         dataset: ds,
         input,
         candidates: results,
         result,
+        intervals,
     })
+}
+
+/// Fits with more free parameters than this get no profile intervals (each needs two
+/// walks of refits per quantity).
+pub const MAX_PROFILED: usize = 8;
+
+/// Profile-likelihood intervals (`goniofit::fit::profile`) of every free parameter, of
+/// the parameters the reduced fit held, and of T/σ, the rms slope, the amplitudes and
+/// the reflectance factors, on the full problem at the reported optimum.
+pub fn profile_intervals(
+    args: &FitArgs,
+    input: &FitInput,
+    r: &FitResult,
+    uncertainties: bool,
+) -> anyhow::Result<Vec<goniofit::fit::profile::Interval>> {
+    use goniofit::fit::problem::FitProblem;
+    use goniofit::fit::profile::{Profiler, Target};
+    let config = fit_config(args, &r.model, uncertainties)?;
+    let model = goniofit::model::by_name(&r.model, &config.model_opts)?;
+    let mut layout = r.layout.clone();
+    // Parameters held by the reduction (reported as not fixed) are profiled too.
+    for (fp, p) in layout.params.iter_mut().zip(&r.params) {
+        if !p.fixed {
+            fp.fixed = None;
+        }
+    }
+    let floor = driver::residual_floor(&config, &input.y);
+    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?;
+    let prof = Profiler::new(&problem, &r.values, args.absolute_sigma, &config.lm);
+    let layout = &problem.layout;
+    let mut out = Vec::new();
+    for k in layout.free() {
+        if let Some(iv) = prof.interval(&layout.params[k].name, &Target::Param(k)) {
+            out.push(iv);
+        }
+    }
+    let first = |n: &str| layout.find(n).first().copied();
+    if let (Some(ks), Some(kt)) = (first("sigma"), first("T")) {
+        let ratio = Target::Product {
+            coef: vec![(kt, 1.0), (ks, -1.0)],
+            eliminate: ks,
+        };
+        if let Some(iv) = prof.interval("T/sigma", &ratio) {
+            out.push(iv.mapped("rms_slope", 2.0, true));
+            out.push(iv);
+        }
+        for d in &r.derived {
+            if !d.name.starts_with("amplitude") {
+                continue;
+            }
+            let scale = d.name.replacen("amplitude", "scale", 1);
+            let Some(ka) = layout.params.iter().position(|p| p.name == scale) else {
+                continue;
+            };
+            let coef = match r.verdict {
+                driver::Verdict::Smooth => vec![(ka, 1.0), (ks, 2.0)],
+                _ => vec![(ka, 1.0), (kt, 2.0), (ks, -2.0)],
+            };
+            let target = Target::Product {
+                coef,
+                eliminate: ks,
+            };
+            if let Some(iv) = prof.interval(&d.name, &target) {
+                out.push(iv);
+            }
+        }
+    }
+    for d in &r.derived {
+        if let Some(term) = d.doc.strip_prefix("π·").and_then(|t| t.split(',').next()) {
+            let src = d.name.replacen("reflectance_factor", term, 1);
+            if let Some(iv) = out.iter().find(|i| i.name == src) {
+                let m = iv.mapped(&d.name, std::f64::consts::PI, false);
+                out.push(m);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The fit input of a dataset with the quantity, wavelength, residual and floor of `args`.
+pub fn input_of(args: &FitArgs, ds: &Dataset, needs_wavelength: bool) -> anyhow::Result<FitInput> {
+    fit_input(
+        ds,
+        args.quantity_for(ds).0,
+        args.wavelength_value(),
+        needs_wavelength,
+        args.residual.into(),
+        args.floor,
+    )
 }
 
 /// The report of one outcome as JSON.
@@ -329,13 +598,15 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     }
     // Every input is read (and checked) before any fit starts.
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
+    let mut files: Vec<(PathBuf, report::setting::InputInfo)> = Vec::new();
     for file in &args.file {
         let ds = io::read_dataset(file, &opts)?;
+        files.push((file.clone(), input_info(file)?));
         if args.by_group {
             let names = ds.channel_names();
             if names.is_empty() {
                 return Err(Error::Usage(format!(
-                    "{}: --by-group needs a group column (or ASTM channels)",
+                    "{}: --by-group needs groups: ASTM channels, a group column, or a wavelength column",
                     file.display()
                 ))
                 .into());
@@ -379,15 +650,31 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     };
     let wall = t0.elapsed().as_secs_f64();
     let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
-    let info_for = |o: &Outcome| RunInfo {
-        input: o.label.clone(),
-        command: command_line(),
-        version: env!("CARGO_PKG_VERSION").to_string(),
+    let info_for = |o: &Outcome| {
+        let file = files
+            .iter()
+            .find(|(p, _)| *p == o.dataset.path)
+            .map(|(_, i)| i.clone())
+            .unwrap_or_default();
+        RunInfo {
+            input: o.label.clone(),
+            command: command_line(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            setting: setting_of(&args, &o.dataset, &o.input, &file),
+            intervals: o.intervals.clone(),
+        }
     };
+    let infos: Vec<RunInfo> = outcomes.iter().map(info_for).collect();
+    let rows: Vec<report::summary::Row> = outcomes
+        .iter()
+        .zip(&infos)
+        .map(|(o, i)| report::summary::row(&o.label, &o.result, &i.setting.units))
+        .collect();
     if args.json {
         let values: Vec<serde_json::Value> = outcomes
             .iter()
-            .map(|o| outcome_json(o, &info_for(o)))
+            .zip(&infos)
+            .map(|(o, i)| outcome_json(o, i))
             .collect();
         let v = if single {
             values.into_iter().next().expect("one outcome")
@@ -397,15 +684,25 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
                 "datasets": outcomes.len(),
                 "seconds": wall,
                 "threads": pool.current_num_threads(),
+                "summary": summary_json(&rows),
             })
         };
         io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&v)?))?;
     } else {
-        let text: String = outcomes
+        let mut text: String = outcomes
             .iter()
-            .map(|o| outcome_text(o, &info_for(o)))
+            .zip(&infos)
+            .map(|(o, i)| outcome_text(o, i))
             .collect();
+        let joint = outcomes.iter().any(|o| o.input.channel_names.len() > 1);
+        if !single || joint {
+            text += &report::summary::table(&rows);
+        }
         io::print_stdout(&text)?;
+    }
+    if let Some(path) = &args.summary {
+        let headers: Vec<String> = report::summary::CSV_HEADER.map(String::from).to_vec();
+        io::write_csv(path, &headers, &report::summary::csv_rows(&rows))?;
     }
     if !single {
         eprintln!(
@@ -443,7 +740,25 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     )
 }
 
-/// For a joint fit: how much narrower σ and T are than from the middle channel alone.
+/// The summary rows as JSON objects (the CSV's columns).
+fn summary_json(rows: &[report::summary::Row]) -> serde_json::Value {
+    let csv = report::summary::csv_rows(rows);
+    serde_json::Value::Array(
+        csv.into_iter()
+            .map(|r| {
+                let m: serde_json::Map<String, serde_json::Value> = report::summary::CSV_HEADER
+                    .iter()
+                    .zip(r)
+                    .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
+                    .collect();
+                serde_json::Value::Object(m)
+            })
+            .collect(),
+    )
+}
+
+/// For a joint fit: how much narrower σ, T and T/σ are than from the middle channel alone,
+/// or that the data determines them neither way.
 fn joint_narrowing(
     args: &FitArgs,
     ds: &Dataset,
@@ -457,25 +772,34 @@ fn joint_narrowing(
     let idx: Vec<usize> = (0..labels.len()).filter(|&i| &labels[i] == mid).collect();
     let mut single = ds.subset(&idx);
     single.channel = None;
-    let input = fit_input(&single, args.quantity.into(), args.wavelength, true)?;
+    let input = input_of(args, &single, true)?;
     let mut config = fit_config(args, &joint.model, ds.sigma_l.is_some())?;
     config.lm.progress = false;
     let alone = driver::fit(&input, &config)?;
     let mut parts = Vec::new();
-    for name in ["sigma", "T"] {
-        let se = |r: &FitResult| {
-            r.params
-                .iter()
-                .find(|p| p.name == name)
-                .and_then(|p| p.stderr)
+    for name in ["sigma", "T", "T/sigma"] {
+        let se = |r: &FitResult| -> Option<Option<f64>> {
+            let p = r.params.iter().find(|p| p.name == name);
+            let d = r.derived.iter().find(|d| d.name == name);
+            match (p, d) {
+                (Some(p), _) => Some(p.stderr),
+                (None, Some(d)) => Some(d.stderr),
+                _ => None,
+            }
         };
         match (se(joint), se(&alone)) {
-            (Some(j), Some(a)) => parts.push(format!(
+            (Some(Some(j)), Some(Some(a))) => parts.push(format!(
                 "{name}: ±{j:.3e} joint vs ±{a:.3e} from {mid} alone ({:.1}× narrower)",
                 a / j
             )),
-            (Some(j), None) => parts.push(format!(
+            (Some(Some(j)), Some(None)) => parts.push(format!(
                 "{name}: ±{j:.3e} joint, not determined from {mid} alone"
+            )),
+            (Some(None), Some(Some(a))) => parts.push(format!(
+                "{name}: not determined jointly, ±{a:.3e} from {mid} alone"
+            )),
+            (Some(None), Some(None)) => parts.push(format!(
+                "{name}: not determined by the data, jointly or from {mid} alone"
             )),
             _ => {}
         }

@@ -8,7 +8,9 @@ pub mod driver;
 pub mod init;
 pub mod lm;
 pub mod problem;
+pub mod profile;
 pub mod stats;
+pub mod weights;
 
 mod assemble;
 mod identify;

@@ -2,6 +2,7 @@
 
 use super::RunInfo;
 use crate::fit::driver::FitResult;
+use crate::fit::profile::LEVELS;
 use serde_json::{json, Map, Value};
 
 /// Finite numbers as numbers, the rest as null (JSON has no NaN).
@@ -15,6 +16,8 @@ fn num(v: f64) -> Value {
 
 /// The report as a JSON value.
 pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
+    let units = &info.setting.units;
+    let smooth = r.verdict == crate::fit::driver::Verdict::Smooth;
     let mut params = Map::new();
     for p in &r.params {
         params.insert(
@@ -24,7 +27,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
                 "stderr": p.stderr.map(num),
                 "determined": p.determined,
                 "fixed": p.fixed,
-                "unit": p.unit,
+                "unit": units.of_param(&p.name),
             }),
         );
     }
@@ -32,7 +35,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
     for d in &r.derived {
         derived.insert(
             d.name.clone(),
-            json!({"value": num(d.value), "stderr": d.stderr.map(num), "determined": d.determined, "doc": d.doc}),
+            json!({"value": num(d.value), "stderr": d.stderr.map(num), "determined": d.determined, "doc": d.doc, "unit": units.of_derived(&d.name, smooth)}),
         );
     }
     let k = r.corr_names.len();
@@ -46,6 +49,25 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         .zip(&r.start)
         .map(|(p, v)| (p.name.clone(), num(*v)))
         .collect();
+    // Profile intervals: params.<name>.interval68/interval95 = [lo, hi], null for an open
+    // side.
+    for iv in &info.intervals {
+        let target = if params.contains_key(&iv.name) {
+            params.get_mut(&iv.name)
+        } else {
+            derived.get_mut(&iv.name)
+        };
+        if let Some(Value::Object(m)) = target {
+            for (key, prob) in [("interval68", LEVELS[0]), ("interval95", LEVELS[1])] {
+                if let Some(l) = iv.at(prob) {
+                    m.insert(
+                        key.into(),
+                        json!([l.lo.value().map(num), l.hi.value().map(num)]),
+                    );
+                }
+            }
+        }
+    }
     json!({
         "model": r.model,
         "start": start,
@@ -53,7 +75,14 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "derived": derived,
         "verdict": r.verdict,
         "notes": r.notes,
-        "correlation": {"names": r.corr_names, "matrix": correlation},
+        "correlation": {
+            "names": r.corr_names,
+            "matrix": correlation,
+            "largest": super::text::top_pairs(r, super::text::TOP_PAIRS)
+                .into_iter()
+                .map(|(a, b, rho)| json!({"a": a, "b": b, "rho": num(rho)}))
+                .collect::<Vec<_>>(),
+        },
         "singular_values": r.singular_values.iter().map(|v| num(*v)).collect::<Vec<_>>(),
         "condition": num(r.condition),
         "cost": num(r.cost),
@@ -77,6 +106,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "modes": r.modes,
         "g_range": r.g_range.map(|(a, b)| vec![num(a), num(b)]),
         "input": info.input,
+        "setting": info.setting,
         "command": info.command,
         "version": info.version,
     })
