@@ -61,7 +61,7 @@ fn timeout_ends_a_joint_fit_with_its_report_and_exit_3() {
 #[test]
 fn sigint_during_a_fit_prints_the_report_and_exits_3() {
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
-    let mut child = goniofit()
+    let child = goniofit()
         .args(joint_fit_args())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
