@@ -7,7 +7,12 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A value in an input file could not be used.
-    #[error("{path}:{line}: column {column}: {message}")]
+    #[error(
+        "{}:{line}: column {}: {}",
+        crate::io::shown(path),
+        crate::io::shown_text(column),
+        crate::io::shown_text(message)
+    )]
     Input {
         path: PathBuf,
         /// 1-based line number in the file.
@@ -16,10 +21,10 @@ pub enum Error {
         message: String,
     },
     /// A whole input file is unusable (empty, header only, missing column, ...).
-    #[error("{path}: {message}")]
+    #[error("{}: {}", crate::io::shown(path), crate::io::shown_text(message))]
     File { path: PathBuf, message: String },
     /// An I/O failure while reading or writing a file.
-    #[error("{path}: {source}")]
+    #[error("{}: {source}", crate::io::shown(path))]
     Io {
         path: PathBuf,
         #[source]
@@ -27,7 +32,7 @@ pub enum Error {
     },
     /// Writing an output failed after it started (disk full, I/O error): not the user's
     /// input, exit code 1. (A path that cannot be created is an [`Error::File`].)
-    #[error("{path}: writing failed: {source}")]
+    #[error("{}: writing failed: {source}", crate::io::shown(path))]
     Write {
         path: PathBuf,
         #[source]
@@ -40,10 +45,10 @@ pub enum Error {
     #[error("parameter {name}: {message}")]
     Param { name: String, message: String },
     /// A usage error: inconsistent options or arguments.
-    #[error("{0}")]
+    #[error("{}", crate::io::shown_text(.0))]
     Usage(String),
     /// A picture could not be drawn or written.
-    #[error("{path}: drawing failed: {message}")]
+    #[error("{}: drawing failed: {message}", crate::io::shown(path))]
     Plot { path: PathBuf, message: String },
     /// A numerical failure inside the library (a bug, or a domain violation that slipped through).
     #[error("numerical failure: {0}")]

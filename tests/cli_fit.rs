@@ -3,7 +3,8 @@
 
 mod common;
 
-use common::{fit_json, goniofit};
+use common::{data, fit_json, goniofit, success_stdout};
+use predicates::prelude::*;
 use std::path::Path;
 
 /// The text report without the lines that vary between runs (timings, the command path).
@@ -18,24 +19,14 @@ fn stable(report: &str) -> String {
 
 #[test]
 fn report_snapshot() {
-    let out = goniofit()
-        .args([
-            "fit",
-            "--model",
-            "kbs",
-            "--wavelength",
-            "1",
-            "data/synthetic/kbs_hemisphere.csv",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = stable(&String::from_utf8(out.stdout).unwrap());
+    let text = stable(&success_stdout(&[
+        "fit",
+        "--model",
+        "kbs",
+        "--wavelength",
+        "1",
+        "data/synthetic/kbs_hemisphere.csv",
+    ]));
     let snap = Path::new("tests/snapshots/fit_kbs_hemisphere.txt");
     if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
         std::fs::write(snap, &text).unwrap();
@@ -307,5 +298,143 @@ fn every_cornell_channel_converges() {
     assert!(
         terminations.iter().all(|l| l.contains("(converged")),
         "{terminations:?}"
+    );
+}
+
+#[test]
+fn hostile_file_and_group_names_are_escaped_in_the_report() {
+    // A file name with a line break and a group name with a right-to-left override: the
+    // report shows them escaped, so neither can fake a report line or reverse the text.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("scan\n    verdict = fake.csv");
+    let mut text = String::from("theta_i,theta_r,phi_r,L,group\n");
+    let src = std::fs::read_to_string(data("synthetic/lambert_specular.csv")).unwrap();
+    for (k, line) in src.lines().skip(1).enumerate() {
+        let g = if k % 2 == 0 {
+            "left\u{202e}txt.exe"
+        } else {
+            "right"
+        };
+        text += &format!("{line},{g}\n");
+    }
+    std::fs::write(&file, text).unwrap();
+    let args = ["fit", "--model", "lambert", "--by-group"].map(std::ffi::OsString::from);
+    let report = success_stdout(&[&args[..], &[file.clone().into_os_string()]].concat());
+    assert!(!report.contains('\u{202e}'), "{report}");
+    assert!(
+        !report.lines().any(|l| l.starts_with("    verdict = fake")),
+        "{report}"
+    );
+    assert!(
+        report.contains("scan\\n    verdict = fake.csv [left\\u{202e}txt.exe]"),
+        "{report}"
+    );
+    assert!(
+        report.contains("scan\\n    verdict = fake.csv [right]"),
+        "{report}"
+    );
+    // And in an error message.
+    goniofit()
+        .args(["fit", "--model", "kbs"])
+        .arg(&file)
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("scan\\n    verdict = fake.csv")
+                .and(predicate::str::contains('\u{202e}').not()),
+        );
+}
+
+#[test]
+fn overflowing_values_and_weights_are_refused_at_input() {
+    // One L = 1e200, every L × 1e160, one weight 1e308, and −1e308 in one ASTM channel:
+    // each refused before any fit (exit 2), naming line and column.
+    let dir = tempfile::tempdir().unwrap();
+    let src = std::fs::read_to_string(data("synthetic/lambert_specular.csv")).unwrap();
+    let rows: Vec<&str> = src.lines().skip(1).collect();
+    let with_l = |f: &dyn Fn(usize, f64) -> f64| -> String {
+        let mut t = String::from("theta_i,theta_r,phi_r,L\n");
+        for (k, r) in rows.iter().enumerate() {
+            let (angles, l) = r.rsplit_once(',').unwrap();
+            t += &format!("{angles},{:e}\n", f(k, l.parse().unwrap()));
+        }
+        t
+    };
+    let one = dir.path().join("one.csv");
+    std::fs::write(&one, with_l(&|k, l| if k == 5 { 1e200 } else { l })).unwrap();
+    let all = dir.path().join("all.csv");
+    std::fs::write(&all, with_l(&|_, l| l * 1e160)).unwrap();
+    let weighted = dir.path().join("weighted.csv");
+    let mut t = String::from("theta_i,theta_r,phi_r,L,weight\n");
+    for (k, r) in rows.iter().enumerate() {
+        t += &format!("{r},{}\n", if k == 7 { "1e308" } else { "1" });
+    }
+    std::fs::write(&weighted, t).unwrap();
+    let astm_src = std::fs::read_to_string(data("cornell/garnet_red.astm")).unwrap();
+    let mut lines: Vec<String> = astm_src.lines().map(String::from).collect();
+    let first = 1 + lines.iter().position(|l| l.starts_with("VARS")).unwrap();
+    let first = first
+        + lines[first..]
+            .iter()
+            .position(|l| !l.trim().is_empty())
+            .unwrap();
+    let mut fields: Vec<String> = lines[first].split(',').map(String::from).collect();
+    fields[10] = "-1e308".into();
+    lines[first] = fields.join(",");
+    let astm = dir.path().join("neg.astm");
+    std::fs::write(&astm, lines.join("\n") + "\n").unwrap();
+    let cases = [
+        (
+            &one,
+            "lambert",
+            "one.csv:7: column L: value 1e200 is beyond ±1e100",
+        ),
+        (
+            &all,
+            "lambert",
+            "all.csv:2: column L: value 1.9338475483963342e159 is beyond ±1e100",
+        ),
+        (
+            &weighted,
+            "lambert",
+            "weighted.csv:9: column weight: weight 1e308",
+        ),
+        (
+            &astm,
+            "kbs",
+            &format!(
+                "neg.astm:{}: column 460nm: value -1e308 is beyond ±1e100",
+                first + 1
+            ),
+        ),
+    ];
+    for (file, model, says) in cases {
+        let astm = file.extension().is_some_and(|e| e == "astm");
+        goniofit()
+            .args(["fit", "--model", model])
+            .args(if astm {
+                &["--channel", "all"][..]
+            } else {
+                &[][..]
+            })
+            .arg(file)
+            .assert()
+            .code(2)
+            .stdout("")
+            .stderr(predicate::str::contains(says));
+    }
+    // Just inside the limit (all L × 1e90): the fit runs and every number it prints is finite.
+    let inside = dir.path().join("inside.csv");
+    std::fs::write(&inside, with_l(&|_, l| l * 1e90)).unwrap();
+    let out = goniofit()
+        .args(["fit", "--model", "lambert"])
+        .arg(&inside)
+        .output()
+        .unwrap();
+    let report = String::from_utf8(out.stdout).unwrap();
+    assert!(report.contains("R-squared"), "{report}");
+    assert!(
+        !report.contains("NaN") && !report.contains("inf"),
+        "{report}"
     );
 }

@@ -29,6 +29,17 @@ fn f(v: &serde_json::Value) -> f64 {
 const HEMI: &str = "data/synthetic/kbs_hemisphere.csv";
 const GARNET: &str = "data/cornell/garnet_red.astm";
 
+/// The README's fit of the garnet paint's 550 nm channel (append the file).
+const GARNET_550: [&str; 7] = [
+    "fit",
+    "--model",
+    "kbs+lambert",
+    "--channel",
+    "550nm",
+    "--residual",
+    "log",
+];
+
 #[test]
 fn wavelength_units_scale_sigma_and_t_and_are_stated() {
     let bare = fit_json(&["fit", "--wavelength", "1", "--json", HEMI]);
@@ -70,17 +81,7 @@ fn wavelength_units_scale_sigma_and_t_and_are_stated() {
 
 #[test]
 fn json_carries_the_whole_setting() {
-    let v = fit_json(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-        "--json",
-        GARNET,
-    ]);
+    let v = fit_json(&[&GARNET_550[..], &["--json", GARNET]].concat());
     let st = &v["setting"];
     let path = st["input"]["path"].as_str().unwrap();
     assert!(Path::new(path).is_absolute(), "{path}");
@@ -126,15 +127,7 @@ fn json_carries_the_whole_setting() {
 
 #[test]
 fn astm_files_default_to_the_quantity_their_header_states() {
-    let args = [
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-    ];
+    let args = GARNET_550;
     let default = fit_json(&[&args[..], &["--json", GARNET]].concat());
     let brdf = fit_json(&[&args[..], &["--quantity", "brdf", "--json", GARNET]].concat());
     let radiance = fit_json(&[&args[..], &["--quantity", "radiance", "--json", GARNET]].concat());
@@ -441,17 +434,7 @@ fn a_flat_profile_gives_a_one_sided_or_open_interval() {
 
 #[test]
 fn undetermined_parameters_are_reported_by_their_bounds() {
-    let v = fit_json(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-        "--json",
-        GARNET,
-    ]);
+    let v = fit_json(&[&GARNET_550[..], &["--json", GARNET]].concat());
     for name in ["sigma", "T"] {
         let p = &v["params"][name];
         assert_eq!(p["determined"], false);
@@ -488,4 +471,52 @@ fn absolute_sigma_drops_the_residual_scale() {
         f(&rel["params"]["sigma"]["stderr"]),
     );
     assert!((a * s / r - 1.0).abs() < 1e-9, "{a} {r} {s}");
+}
+
+#[test]
+fn html_report_is_one_self_contained_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("report.html");
+    goniofit()
+        .args(["fit", "--wavelength", "633nm", "--html"])
+        .arg(&page)
+        .arg(HEMI)
+        .assert()
+        .code(0)
+        .stderr(contains("pictures inline"));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+    for part in [
+        "<h2>Reproduce</h2>",
+        "<h2>Setting</h2>",
+        "<h2>Parameters</h2>",
+        "<h2>Derived quantities</h2>",
+        "<h2>Identifiability and validity</h2>",
+        "<h2>Pictures</h2>",
+        "95 % interval",
+        "--wavelength 633nm",
+    ] {
+        assert!(html.contains(part), "missing {part}");
+    }
+    // Every picture inline (six SVGs), nothing fetched: no src/href to other files or hosts.
+    assert_eq!(html.matches("<svg").count(), 6);
+    for attr in ["src=\"", "href=\"", "url("] {
+        for (i, _) in html.match_indices(attr) {
+            let rest = &html[i + attr.len()..];
+            assert!(
+                rest.starts_with("data:") || rest.starts_with('#'),
+                "external {attr}{}",
+                &rest[..40.min(rest.len())]
+            );
+        }
+    }
+    // The parameter row of σ carries its unit and both intervals.
+    let row = html
+        .lines()
+        .find(|l| l.starts_with("<tr><td>sigma</td>"))
+        .unwrap();
+    assert!(
+        row.contains("<td>nm</td>") && row.matches('[').count() == 2,
+        "{row}"
+    );
 }

@@ -321,3 +321,28 @@ fn problem_jacobian_matches_central_differences() {
         }
     }
 }
+
+#[test]
+fn an_overflowing_fit_is_never_reported_converged() {
+    // The library takes any finite values (the CLI refuses these at input, naming the
+    // line): one L = 1e200 makes the cost ½Σr² overflow; the result must not say converged.
+    let mut input = synthetic("lambert", &[0.7], Layout::inplane(), 0.0, 1, 1.0);
+    input.y[5] = 1e200;
+    let mut c = config("lambert");
+    c.residual = goniofit::fit::problem::ResidualKind::Absolute;
+    let r = fit(&input, &c).unwrap();
+    assert!(!r.cost.is_finite() || !r.is_finite());
+    assert!(!r.converged());
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.starts_with("not a usable optimum")),
+        "{:?}",
+        r.notes
+    );
+    // With a finite outlier instead (sample 5 given sample 4's value) the fit converges,
+    // every number finite.
+    input.y[5] = input.y[4];
+    let r = fit(&input, &c).unwrap();
+    assert!(r.converged() && r.is_finite());
+}

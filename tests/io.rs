@@ -897,3 +897,134 @@ proptest! {
         prop_assert_eq!(fields, rows);
     }
 }
+
+// ---------------------------------------------------------------- hostile structure
+
+#[test]
+fn astm_duplicate_channels_and_conflicting_num_points_are_refused() {
+    let rd =
+        |t: &str, ch: &str| read_bytes(Path::new("x.astm"), t.as_bytes(), &astm_opts(Some(ch)));
+    // Two columns named 550nm (any case): `--channel all` would merge them under one scale.
+    let dup = ASTM_SMALL.replace("550nm,650nm", "550nm,550NM");
+    assert_ne!(dup, ASTM_SMALL);
+    for ch in ["all", "550nm"] {
+        let (l, c, m) = input_err(rd(&dup, ch));
+        assert_eq!((l, c.as_str()), (4, "550NM"), "{m}");
+        assert!(m.contains("twice (columns 5 and 6)"), "{m}");
+    }
+    // Two NUM_POINTS lines that disagree; the same count twice is harmless.
+    let two = ASTM_SMALL.replace("NUM_POINTS 3\n", "NUM_POINTS 3\nNUM_POINTS 4\n");
+    assert_ne!(two, ASTM_SMALL);
+    let (l, c, m) = input_err(rd(&two, "550nm"));
+    assert_eq!((l, c.as_str()), (4, "NUM_POINTS"), "{m}");
+    assert!(m.contains("'4'") && m.contains("line 3 said '3'"), "{m}");
+    let same = ASTM_SMALL.replace("NUM_POINTS 3\n", "NUM_POINTS 3\nNUM_POINTS 3\n");
+    assert_eq!(rd(&same, "550nm").unwrap().len(), 3);
+}
+
+#[test]
+fn a_row_of_too_many_fields_is_cut_off_while_it_is_read() {
+    // 200 000 fields on one line (1.2 MB): refused by the limit, naming the line.
+    let wide = format!("theta_i,theta_r,phi_r,L\n{}1.5\n", "1.5,".repeat(199_999));
+    let err = io::csv::split_records_limited(&wide, 16).unwrap_err();
+    assert_eq!(err.0, 2);
+    assert_eq!(err.1, "row has 200000 fields, the header on line 1 has 4");
+    // A header past the limit.
+    let err = io::csv::split_records_limited(&"h,".repeat(100), 16).unwrap_err();
+    assert_eq!(
+        err,
+        (
+            1,
+            "the header has more than 16 fields (a measurement table has a few columns)"
+                .to_string()
+        )
+    );
+    // Through the reader (default limit): the same message, an Error::Input on line 2.
+    let (l, c, m) = input_err(csv(&wide, &fit_opts()));
+    assert_eq!((l, c.as_str()), (2, "(row)"));
+    assert_eq!(m, "row has 200000 fields, the header on line 1 has 4");
+    let header = format!("{}L\n1\n", "x,".repeat(io::csv::MAX_FIELDS));
+    let (l, _, m) = input_err(csv(&header, &fit_opts()));
+    assert_eq!(l, 1);
+    assert!(
+        m.contains(&format!("more than {} fields", io::csv::MAX_FIELDS)),
+        "{m}"
+    );
+    // ASTM: a data row past the VARS count.
+    let astm = ASTM_SMALL.replace("0.5,0,0.3,0,0.1,0.2", &"0.5,".repeat(100_000));
+    let (l, c, m) = input_err(read_bytes(
+        Path::new("x.astm"),
+        astm.as_bytes(),
+        &astm_opts(Some("550nm")),
+    ));
+    assert_eq!((l, c.as_str()), (8, "(row)"));
+    assert!(
+        m.starts_with("row has more than 6 fields, VARS (line 4) names 6"),
+        "{m}"
+    );
+}
+
+#[test]
+fn other_delimiters_are_named() {
+    let msg = |t: &str| input_err(csv(t, &fit_opts())).2;
+    let m = msg("theta_i;theta_r;phi_r;L\n30;20;0;1\n");
+    assert!(
+        m.contains("separated by ';'") && !m.contains("decimal commas"),
+        "{m}"
+    );
+    let m = msg("theta_i;theta_r;phi_r;L\n30,5;20;0;1,25\n");
+    assert!(m.contains("separated by ';' with decimal commas"), "{m}");
+    let m = msg("theta_i\ttheta_r\tphi_r\tL\n30\t20\t0\t1\n");
+    assert!(m.contains("separated by 'tab'"), "{m}");
+    let m = msg("theta_i,theta_r,phi_r,L\n30,5,20,0,1,25\n");
+    assert!(m.contains("decimal commas?"), "{m}");
+    // A comma file with a ragged row of integers is not called decimal commas... unless
+    // digits touch a comma, which is all the hint can see: it is phrased as a question.
+    let m = msg("theta_i,theta_r,phi_r,L\n30,20,0\n");
+    assert!(
+        m.contains("row has 3 fields") && !m.contains("decimal"),
+        "{m}"
+    );
+    // ASTM VARS separated by semicolons.
+    let r = read_bytes(
+        Path::new("x.astm"),
+        b"VARS theta_i;phi_i;theta_s;phi_s;550nm\n0;0;0;0;1\n",
+        &astm_opts(None),
+    );
+    let (_, _, m) = input_err(r);
+    assert!(m.contains("separated by ';'"), "{m}");
+}
+
+#[test]
+fn hostile_names_are_escaped_in_messages() {
+    let name = "a\nfake: line\u{202e}lmth.exe";
+    let r = read_bytes(
+        Path::new(name),
+        b"theta_i,theta_r,phi_r\n100,0,0\n",
+        &ReadOptions::default(),
+    );
+    let text = r.unwrap_err().to_string();
+    assert_eq!(
+        text,
+        "a\\nfake: line\\u{202e}lmth.exe:2: column theta_i: theta_i = 100° is outside [0, 90°)"
+    );
+    assert_eq!(io::shown_text("550nm"), "550nm");
+    assert_eq!(
+        io::shown_text("x\u{2066}\ty\r\u{1b}"),
+        "x\\u{2066}\\ty\\r\\u{1b}"
+    );
+    // A hostile column name in the header.
+    let r = read_bytes(
+        Path::new("t.csv"),
+        "theta_i,theta_r,phi_r,L\u{202e}\n10,0,0,abc\n".as_bytes(),
+        &ReadOptions {
+            columns: vec![("L".into(), "L\u{202e}".into())],
+            ..fit_opts()
+        },
+    );
+    let text = r.unwrap_err().to_string();
+    assert!(
+        text.contains("column L\\u{202e}:") && !text.contains('\u{202e}'),
+        "{text}"
+    );
+}

@@ -63,14 +63,14 @@ fn work_precision(args: WorkPrecisionArgs) -> anyhow::Result<u8> {
     .context("work-precision benchmark")?;
     bar.finish_and_clear();
     let paths = workprec::write_plot(&wp, &args.out)
-        .with_context(|| format!("writing the plot to {}", args.out.display()))?;
+        .with_context(|| format!("writing the plot to {}", goniofit::io::shown(&args.out)))?;
     if args.json {
         goniofit::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&wp)?))?;
     } else {
         goniofit::io::print_stdout(&wp.table())?;
     }
     for p in &paths {
-        eprintln!("goniofit bench: wrote {}", p.display());
+        eprintln!("goniofit bench: wrote {}", goniofit::io::shown(p));
     }
     Ok(0)
 }

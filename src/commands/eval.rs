@@ -103,15 +103,19 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
             return Err(goniofit::Error::Usage(format!(
                 "model {} needs a wavelength: give --wavelength L (the unit of sigma and T) or a wavelength column in {}",
                 args.model,
-                args.file.display()
+                goniofit::io::shown(&args.file)
             ))
             .into())
         }
         (None, None) => vec![1.0],
     };
 
-    let geo = Geometry::new(&ds.samples, &wavelength, args.quantity.into())
-        .with_context(|| format!("preparing the samples of {}", args.file.display()))?;
+    let geo = Geometry::new(&ds.samples, &wavelength, args.quantity.into()).with_context(|| {
+        format!(
+            "preparing the samples of {}",
+            goniofit::io::shown(&args.file)
+        )
+    })?;
     for w in model::domain::accuracy_warnings(model.as_ref(), &params, &geo) {
         eprintln!("goniofit: warning: {w}");
     }

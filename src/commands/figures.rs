@@ -13,9 +13,9 @@ pub struct FiguresArgs {
 
 pub fn run(args: FiguresArgs) -> anyhow::Result<u8> {
     let paths = goniofit::plot::figures::write_all(&args.out)
-        .with_context(|| format!("writing figures into {}", args.out.display()))?;
+        .with_context(|| format!("writing figures into {}", goniofit::io::shown(&args.out)))?;
     for p in paths {
-        goniofit::io::print_stdout(&format!("{}\n", p.display()))?;
+        goniofit::io::print_stdout(&format!("{}\n", goniofit::io::shown(&p)))?;
     }
     Ok(0)
 }

@@ -124,6 +124,10 @@ pub struct FitArgs {
     /// quantity).
     #[arg(long)]
     pub no_intervals: bool,
+    /// Also write the report as one self-contained HTML page (tables, the pictures inline,
+    /// the command that reproduces it); one dataset only.
+    #[arg(long)]
+    pub html: Option<PathBuf>,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -184,6 +188,54 @@ impl FitArgs {
     }
 }
 
+/// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
+/// the Jacobian products square these, so beyond them double precision overflows (cost
+/// = inf, R² = NaN). The fit is the same in any unit of L (amplitudes scale with it) and
+/// under any common factor of the weights, so rescaling the file loses nothing.
+pub const MAGNITUDE_LIMIT: f64 = 1e100;
+
+/// Refuse values and weights the fit cannot square in double precision (see
+/// [`MAGNITUDE_LIMIT`]), naming the file, line and column of the first one.
+pub fn check_magnitudes(ds: &Dataset) -> anyhow::Result<()> {
+    let Some(y) = &ds.value else { return Ok(()) };
+    let column = |i: usize, what: &str| match &ds.channel {
+        Some(ch) if ds.headers.iter().any(|h| h == "channel") => ch[i].clone(),
+        _ => what.to_string(),
+    };
+    let lim = MAGNITUDE_LIMIT;
+    for (i, &v) in y.iter().enumerate() {
+        let w = ds.weight.as_ref().map_or(1.0, |w| w[i]);
+        let (col, msg) = if v.abs() > lim {
+            (
+                column(i, "L"),
+                format!(
+                    "value {} is beyond ±{lim:e}: the fit squares values (cost ½Σw r²) and would overflow double precision; express L in another unit (the fit is the same in any unit of L)",
+                    goniofit::model::domain::short_number(v)
+                ),
+            )
+        } else if !(1.0 / lim..=lim).contains(&w) || v.abs() * w.sqrt() > lim {
+            let col = if ds.sigma_l.is_some() {
+                "sigma_L"
+            } else {
+                "weight"
+            };
+            (
+                col.to_string(),
+                format!(
+                    "weight {} (with L = {}) is outside what the fit can square (weights in [{:e}, {lim:e}], |L|·√w ≤ {lim:e}); scale every weight or uncertainty by one factor (the fitted parameters do not change)",
+                    goniofit::model::domain::short_number(w),
+                    goniofit::model::domain::short_number(v),
+                    1.0 / lim
+                ),
+            )
+        } else {
+            continue;
+        };
+        return Err(Error::input(&ds.path, ds.lines[i], &col, msg).into());
+    }
+    Ok(())
+}
+
 /// `--wavelength`: a positive number with an optional unit (nm, um, µm).
 fn parse_wavelength_arg(text: &str) -> Result<(f64, Option<&'static str>), String> {
     io::parse_length(text).map_err(|e| e.to_string())
@@ -199,6 +251,7 @@ pub fn fit_input(
     residual: ResidualKind,
     floor: Option<f64>,
 ) -> anyhow::Result<FitInput> {
+    check_magnitudes(ds)?;
     let n = ds.samples.len();
     let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
         (_, Some(l)) => vec![l],
@@ -206,7 +259,7 @@ pub fn fit_input(
         (None, None) if needs_wavelength => {
             return Err(Error::Usage(format!(
                 "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
-                ds.path.display()
+                goniofit::io::shown(&ds.path)
             ))
             .into())
         }
@@ -237,6 +290,11 @@ pub fn fit_input(
                         names.len() - 1
                     }
                 })
+                .collect();
+            // Names as printed (reports, parameter names): control and bidi characters escaped.
+            let names = names
+                .iter()
+                .map(|n| io::shown_text(n).into_owned())
                 .collect();
             (idx, names)
         }
@@ -365,9 +423,12 @@ pub fn fit_config(
     })
 }
 
-/// The command line as typed, for the report.
+/// The command line as typed, for the report (control and bidi characters escaped).
 fn command_line() -> String {
-    std::env::args().collect::<Vec<_>>().join(" ")
+    std::env::args_os()
+        .map(|a| io::shown_text(&a.to_string_lossy()).into_owned())
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// One dataset's fit: every candidate model, and the chosen one (lowest BIC).
@@ -601,27 +662,31 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let mut files: Vec<(PathBuf, report::setting::InputInfo)> = Vec::new();
     for file in &args.file {
         let ds = io::read_dataset(file, &opts)?;
+        check_magnitudes(&ds)?;
         files.push((file.clone(), input_info(file)?));
         if args.by_group {
             let names = ds.channel_names();
             if names.is_empty() {
                 return Err(Error::Usage(format!(
                     "{}: --by-group needs groups: ASTM channels, a group column, or a wavelength column",
-                    file.display()
+                    io::shown(file)
                 ))
                 .into());
             }
             for name in names {
                 let mut sub = ds.subset(&ds.channel_indices(&name));
                 sub.channel = None;
-                jobs.push((format!("{} [{name}]", file.display()), sub));
+                jobs.push((
+                    format!("{} [{}]", io::shown(file), io::shown_text(&name)),
+                    sub,
+                ));
             }
         } else {
-            jobs.push((file.display().to_string(), ds));
+            jobs.push((io::shown(file), ds));
         }
     }
     let single = jobs.len() == 1;
-    if !single && (args.residuals.is_some() || args.plot.is_some()) {
+    if !single && (args.residuals.is_some() || args.plot.is_some() || args.html.is_some()) {
         return Err(Error::Usage(
             "--residuals and --plot take one dataset; fit several files one at a time for those"
                 .into(),
@@ -718,13 +783,16 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         if let Some(path) = &args.residuals {
             write_residuals(path, &o.dataset, &o.result)?;
         }
+        if let Some(path) = &args.html {
+            write_html(&args, path, o, &infos[0])?;
+        }
         if let Some(dir) = &args.plot {
             let config = fit_config(&args, &o.result.model, o.dataset.sigma_l.is_some())?;
             let written = plot_fit(dir, &config, &o.input, &o.result.layout, &o.result.values)?;
             eprintln!(
                 "goniofit: wrote {} pictures to {}",
                 written.len(),
-                dir.display()
+                goniofit::io::shown(dir)
             );
         }
     }
@@ -738,6 +806,44 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             3
         },
     )
+}
+
+/// Write the HTML page of one outcome: its pictures drawn into a temporary folder and
+/// inlined as SVG.
+fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
+    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+    let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
+    let written = plot_fit(
+        dir.path(),
+        &config,
+        &o.input,
+        &o.result.layout,
+        &o.result.values,
+    )?;
+    let mut pictures = Vec::new();
+    for p in written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+    {
+        let svg = std::fs::read_to_string(p).map_err(|source| Error::Io {
+            path: p.clone(),
+            source,
+        })?;
+        let title = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        pictures.push((title, svg));
+    }
+    let text = outcome_text(o, info);
+    let page = report::html::page(&o.result, info, &text, &pictures);
+    io::write_bytes(path, page.as_bytes())?;
+    eprintln!(
+        "goniofit: wrote {} (one page, {} pictures inline)",
+        path.display(),
+        pictures.len()
+    );
+    Ok(())
 }
 
 /// The summary rows as JSON objects (the CSV's columns).
@@ -769,7 +875,9 @@ fn joint_narrowing(
     };
     let names = &joint.layout.channel_names;
     let mid = &names[names.len() / 2];
-    let idx: Vec<usize> = (0..labels.len()).filter(|&i| &labels[i] == mid).collect();
+    let idx: Vec<usize> = (0..labels.len())
+        .filter(|&i| io::shown_text(&labels[i]) == mid.as_str())
+        .collect();
     let mut single = ds.subset(&idx);
     single.channel = None;
     let input = input_of(args, &single, true)?;
@@ -837,7 +945,10 @@ fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<(
 /// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
 /// arguments and the fitted values of every parameter (layout order).
 fn replay_json(r: &FitResult) -> serde_json::Value {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let args: Vec<String> = std::env::args_os()
+        .skip(1)
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
     serde_json::json!({
         "args": args,
         "model": r.model,
@@ -878,6 +989,10 @@ pub fn plot_fit(
     let mut title = format!("{}:", model.name());
     for (spec, v) in specs.iter().zip(&params) {
         title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
+    }
+    let named = |n: &str| specs.iter().position(|s| s.name == n).map(|j| params[j]);
+    if let (Some(sigma), Some(t)) = (named("sigma"), named("T")) {
+        title += &format!(" T/σ={}", goniofit::plot::fmt_num(t / sigma));
     }
     if layout.channel_names.len() > 1 {
         title += &format!(" [{}]", layout.channel_names[c]);

@@ -51,14 +51,18 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         Some(p) => PathBuf::from(p),
         None => fa.file.first().ok_or_else(|| bad("no input file"))?.clone(),
     };
-    let ds = io::read_dataset(&file, &opts)
-        .with_context(|| format!("re-reading the data of {}", args.report.display()))?;
+    let ds = io::read_dataset(&file, &opts).with_context(|| {
+        format!(
+            "re-reading the data of {}",
+            goniofit::io::shown(&args.report)
+        )
+    })?;
     if let Some(want) = saved["sha256"].as_str() {
         let now = super::fit::input_info(&file)?.sha256;
         if now != want {
             eprintln!(
                 "goniofit: warning: {} changed since the fit (sha256 {now}, the report has {want}); the pictures show the file as it is now",
-                file.display()
+                goniofit::io::shown(&file)
             );
         }
     }
@@ -73,7 +77,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     eprintln!(
         "goniofit: wrote {} pictures to {}",
         written.len(),
-        args.out.display()
+        goniofit::io::shown(&args.out)
     );
     Ok(0)
 }

@@ -63,16 +63,17 @@ fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
         negative: a.negative,
         marks: a.marks,
     };
-    write_picture(&pic, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    write_picture(&pic, &a.out)
+        .with_context(|| format!("writing {}", goniofit::io::shown(&a.out)))?;
     eprintln!(
         "goniofit: wrote {} ({}×{} px, a sphere lit from θ = {}°, model {} at {})",
-        a.out.display(),
+        goniofit::io::shown(&a.out),
         a.size,
         a.size,
         a.light_deg,
         model.name(),
-        a.params
+        goniofit::io::shown_text(&a.params)
     );
-    goniofit::io::print_stdout(&format!("{}\n", a.out.display()))?;
+    goniofit::io::print_stdout(&format!("{}\n", goniofit::io::shown(&a.out)))?;
     Ok(0)
 }

@@ -268,10 +268,10 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         eprintln!(
             "goniofit synth: wrote {} samples to {}{}",
             data.len(),
-            path.display(),
+            goniofit::io::shown(path),
             truth_file
                 .as_ref()
-                .map(|t| format!(" (truth: {})", t.display()))
+                .map(|t| format!(" (truth: {})", goniofit::io::shown(t)))
                 .unwrap_or_default()
         );
     }

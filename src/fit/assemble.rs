@@ -59,7 +59,7 @@ pub(super) fn assemble(
         *modes.entry(m.name().to_string()).or_insert(0) += 1;
     }
     notes.extend(validate::termination_note(run.lm.termination));
-    FitResult {
+    let mut result = FitResult {
         model: model.name().to_string(),
         params,
         derived,
@@ -98,7 +98,13 @@ pub(super) fn assemble(
         layout: layout.clone(),
         values: p.clone(),
         start: start.grid_start,
+    };
+    if !result.is_finite() {
+        result.notes.push(
+            "not a usable optimum: the cost, a parameter, a standard error or a correlation is not a finite number (the values overflow double precision; rescale L or the weights)".into(),
+        );
     }
+    result
 }
 
 /// Residuals, χ², rms, R², AIC and BIC at `p`.

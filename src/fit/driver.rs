@@ -169,9 +169,24 @@ pub struct FitResult {
 }
 
 impl FitResult {
-    /// Whether the solver met a convergence criterion.
+    /// Whether the fit is a usable optimum: the solver met a convergence criterion and the
+    /// cost, every parameter, standard error and correlation is a finite number (R² may be
+    /// undefined, NaN, only for data without spread).
     pub fn converged(&self) -> bool {
-        self.termination.converged()
+        self.termination.converged() && self.is_finite()
+    }
+
+    /// Whether the cost, parameters, standard errors and correlations are finite numbers (a
+    /// correlation is NaN by design where a standard error is 0: an exact fit).
+    pub fn is_finite(&self) -> bool {
+        self.cost.is_finite()
+            && !self.r2.is_infinite()
+            && self.values.iter().all(|v| v.is_finite())
+            && self
+                .params
+                .iter()
+                .all(|p| p.value.is_finite() && p.stderr.is_none_or(f64::is_finite))
+            && self.correlation.iter().all(|c| !c.is_infinite())
     }
 
     /// Value of a parameter by (base) name, first channel.

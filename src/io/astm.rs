@@ -38,7 +38,9 @@
 //! (the VARS names), `channel` and the measured quantity (the `MEAS_NAME`, e.g. `BRDF`, or
 //! `value`), one row per sample.
 
-use super::{check_angles, parse_finite, wavelength_nm_of_channel, Dataset, ReadOptions};
+use super::{
+    check_angles, parse_finite, shown, shown_text, wavelength_nm_of_channel, Dataset, ReadOptions,
+};
 use crate::error::{Error, Result};
 use std::f64::consts::PI;
 use std::path::Path;
@@ -53,13 +55,23 @@ pub fn is_key(token: &str) -> bool {
         && !token.eq_ignore_ascii_case("inf")
 }
 
-/// Split a data row on commas, or on whitespace when it has no comma.
-fn split_row(line: &str) -> Vec<&str> {
+/// Split a data row on commas, or on whitespace when it has no comma; `Err(())` as soon as
+/// it has more than `max` fields (so a hostile line is never held field by field).
+fn split_row(line: &str, max: usize) -> std::result::Result<Vec<&str>, ()> {
+    let mut out = Vec::new();
+    let mut push = |f| {
+        if out.len() == max {
+            return Err(());
+        }
+        out.push(f);
+        Ok(())
+    };
     if line.contains(',') {
-        line.split(',').map(str::trim).collect()
+        line.split(',').map(str::trim).try_for_each(&mut push)?;
     } else {
-        line.split_whitespace().collect()
+        line.split_whitespace().try_for_each(&mut push)?;
     }
+    Ok(out)
 }
 
 /// The parsed header of an ASTM file.
@@ -71,6 +83,29 @@ pub struct Header {
     pub vars: Vec<String>,
     /// 1-based line of VARS.
     pub vars_line: usize,
+    /// Every key line: key, 1-based line, value (for messages about repeated keys).
+    lines: Vec<(String, usize, String)>,
+}
+
+/// Refuse VARS lines that name a column twice (case-insensitively, as columns are found):
+/// `--channel all` would merge two columns under one name and one scale.
+fn check_vars(path: &Path, line: usize, vars: &[String]) -> Result<()> {
+    for (j, v) in vars.iter().enumerate() {
+        if let Some(i) = vars[..j].iter().position(|u| u.eq_ignore_ascii_case(v)) {
+            return Err(Error::input(
+                path,
+                line,
+                v,
+                format!(
+                    "VARS names column '{}' twice (columns {} and {}): each channel needs its own name",
+                    shown_text(v),
+                    i + 1,
+                    j + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl Header {
@@ -103,13 +138,38 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
                 if !header.vars.is_empty() {
                     return Err(input_err(line_no, "VARS", "a second VARS line".into()));
                 }
-                header.vars = split_row(&value)
+                header.vars = split_row(&value, super::csv::MAX_FIELDS)
+                    .map_err(|_| {
+                        input_err(
+                            line_no,
+                            "VARS",
+                            format!(
+                                "more than {} column names (a BRDF file has a few dozen)",
+                                super::csv::MAX_FIELDS
+                            ),
+                        )
+                    })?
                     .into_iter()
                     .filter(|v| !v.is_empty())
                     .map(str::to_string)
                     .collect();
                 header.vars_line = line_no;
+                check_vars(path, line_no, &header.vars)?;
             }
+            if let Some((_, earlier, old)) = header.lines.iter().find(|(k, _, _)| k == first) {
+                if first == "NUM_POINTS" && old != &value {
+                    return Err(input_err(
+                        line_no,
+                        "NUM_POINTS",
+                        format!(
+                            "a second NUM_POINTS line says '{value}', line {earlier} said '{old}': which is the row count?"
+                        ),
+                    ));
+                }
+            }
+            header
+                .lines
+                .push((first.to_string(), line_no, value.clone()));
             header.keys.push((first.to_string(), value));
             continue;
         }
@@ -141,12 +201,21 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
             .iter()
             .position(|v| names.iter().any(|n| v.eq_ignore_ascii_case(n)))
     };
+    let separator = match header.vars.as_slice() {
+        [one] if one.contains(';') => {
+            " (the names seem to be separated by ';': ASTM files use commas or blanks)"
+        }
+        [one] if one.contains('|') => {
+            " (the names seem to be separated by '|': ASTM files use commas or blanks)"
+        }
+        _ => "",
+    };
     let missing = |what: &str| {
         input_err(
             vars_line,
             what,
             format!(
-                "VARS has no {what} column (it has: {})",
+                "VARS has no {what} column (it has: {}){separator}",
                 header.vars.join(", ")
             ),
         )
@@ -183,7 +252,7 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
             None => {
                 return Err(Error::Usage(format!(
                     "{}: no channel '{c}' (channels: {}; or 'all')",
-                    path.display(),
+                    shown(path),
                     channel_list()
                 )))
             }
@@ -192,7 +261,7 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         None => {
             return Err(Error::Usage(format!(
                 "{}: {} channels; choose one with --channel NAME or all with --channel all (channels: {})",
-                path.display(),
+                shown(path),
                 channels.len(),
                 channel_list()
             )))
@@ -259,7 +328,18 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         quantity: stated_quantity(header.get("MEAS_NAME")),
     };
     for (line_no, line) in data {
-        let fields = split_row(line);
+        let fields = split_row(line, header.vars.len()).map_err(|()| {
+            input_err(
+                line_no,
+                "(row)",
+                format!(
+                    "row has more than {} fields, VARS (line {vars_line}) names {}{}",
+                    header.vars.len(),
+                    header.vars.len(),
+                    super::csv::decimal_comma_hint(line)
+                ),
+            )
+        })?;
         if fields.len() != header.vars.len() {
             return Err(input_err(
                 line_no,

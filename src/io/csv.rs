@@ -143,7 +143,7 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
     let input_err = |line, column: &str, message| Error::input(path, line, column, message);
     let file_err = |message| Error::file(path, message);
 
-    let mut records = split_records(text)
+    let mut records = split_records_limited(text, MAX_FIELDS)
         .map_err(|(line, m)| input_err(line, "(row)", m))?
         .into_iter();
     let Some((header_line, headers)) = records.next() else {
@@ -251,6 +251,10 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         }
     }
 
+    let first_row = records.first().map_or(String::new(), |(_, f)| f.join(","));
+    if let Some(m) = delimiter_hint(&headers, &first_row) {
+        return Err(input_err(header_line, "(header)", m));
+    }
     let missing = |what: &str, hint: &str| {
         input_err(
             header_line,
@@ -325,9 +329,14 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
                 line,
                 "(row)",
                 format!(
-                    "row has {} fields, the header on line {header_line} has {}",
+                    "row has {} fields, the header on line {header_line} has {}{}",
                     fields.len(),
-                    headers.len()
+                    headers.len(),
+                    if fields.len() > headers.len() {
+                        decimal_comma_hint(&fields.join(","))
+                    } else {
+                        ""
+                    }
                 ),
             ));
         }
@@ -449,18 +458,43 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
 /// One CSV record: the 1-based line it starts on, and its fields.
 pub type Record = (usize, Vec<String>);
 
+/// The most fields a header may have ([`split_records`]); a data row may have at most as
+/// many as its header. Rows are cut off at that many fields while they are read, so a
+/// hostile line of millions of fields is refused without holding them (reading stays
+/// O(file size) in memory).
+pub const MAX_FIELDS: usize = 10_000;
+
 /// Split CSV text into records, each with the 1-based line it starts on. Unquoted fields are
 /// trimmed of surrounding blanks; quoted fields are kept verbatim.
 /// Skips blank (or whitespace-only) lines and lines whose first non-blank character is `#`.
 /// Fields may be quoted (`"a, b"`, `""` for a quote, line breaks inside); line ends are
 /// `\n`, `\r\n` or `\r`. Errors: (line, message) for an unterminated quote or text after
 /// a closing quote.
+/// At most [`MAX_FIELDS`] fields per record.
 pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, String)> {
+    split(text, MAX_FIELDS, false)
+}
+
+/// [`split_records`] for a table: at most `max_fields` fields in the header (the first
+/// record) and at most the header's count in every later record; a longer record is an
+/// error as soon as its field `max + 1` starts, so it is never held field by field.
+pub fn split_records_limited(
+    text: &str,
+    max_fields: usize,
+) -> std::result::Result<Vec<Record>, (usize, String)> {
+    split(text, max_fields, true)
+}
+
+fn split(
+    text: &str,
+    max_fields: usize,
+    rows_by_header: bool,
+) -> std::result::Result<Vec<Record>, (usize, String)> {
     let b = text.as_bytes();
     let n = b.len();
     let mut i = 0;
     let mut line = 1;
-    let mut out = Vec::new();
+    let mut out: Vec<Record> = Vec::new();
     // Consume one line end at i (if any); returns whether one was consumed.
     let eol = |i: &mut usize, line: &mut usize| -> bool {
         if *i < n && b[*i] == b'\r' {
@@ -496,6 +530,7 @@ pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, Str
             continue;
         }
         let start_line = line;
+        let record_start = j;
         let mut fields = Vec::new();
         loop {
             while i < n && (b[i] == b' ' || b[i] == b'\t') {
@@ -546,6 +581,14 @@ pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, Str
             }
             if i < n && b[i] == b',' {
                 i += 1;
+                let limit = match out.first() {
+                    Some(h) if rows_by_header => h.1.len(),
+                    _ => max_fields,
+                };
+                if fields.len() >= limit {
+                    let m = too_many_fields(&out, limit, &text[record_start..], rows_by_header);
+                    return Err((start_line, m));
+                }
                 continue;
             }
             eol(&mut i, &mut line);
@@ -556,6 +599,65 @@ pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, Str
         }
     }
     Ok(out)
+}
+
+/// The message for a record cut off after `limit` fields; `line_text` is the record's
+/// first line (from its first field on), `rows_by_header` whether `limit` is the header's
+/// count.
+fn too_many_fields(out: &[Record], limit: usize, line_text: &str, rows_by_header: bool) -> String {
+    let line_text = line_text.split(['\n', '\r']).next().unwrap_or("");
+    match out.first() {
+        None => format!(
+            "the header has more than {limit} fields (a measurement table has a few columns)"
+        ),
+        Some((line, header)) if rows_by_header => {
+            if let Some(m) = delimiter_hint(header, line_text) {
+                return m;
+            }
+            // The count (exact for unquoted fields) without holding the fields.
+            let count = 1 + line_text.matches(',').count();
+            format!(
+                "row has {count} fields, the header on line {line} has {limit}{}",
+                decimal_comma_hint(line_text)
+            )
+        }
+        Some(_) => format!("a record has more than {limit} fields"),
+    }
+}
+
+/// A hint when `text` looks like numbers written with decimal commas (`0,5`): a comma
+/// between digits and no decimal point anywhere.
+pub(crate) fn decimal_comma_hint(text: &str) -> &'static str {
+    let b = text.as_bytes();
+    let comma_between_digits = !text.contains('.')
+        && (1..b.len().saturating_sub(1))
+            .any(|k| b[k] == b',' && b[k - 1].is_ascii_digit() && b[k + 1].is_ascii_digit());
+    if comma_between_digits {
+        " (decimal commas? goniofit reads numbers with a decimal point, 0.5 not 0,5, and commas between fields)"
+    } else {
+        ""
+    }
+}
+
+/// When a one-field header holds `;`, a tab or `|`: the message naming that delimiter
+/// (goniofit reads only commas).
+fn delimiter_hint(headers: &[String], row_text: &str) -> Option<String> {
+    if headers.len() != 1 {
+        return None;
+    }
+    let h = &headers[0];
+    let (name, _) = [(";", ';'), ("tab", '\t'), ("|", '|')]
+        .into_iter()
+        .find(|(_, c)| h.contains(*c))?;
+    let decimal = if decimal_comma_hint(row_text).is_empty() {
+        ""
+    } else {
+        " with decimal commas"
+    };
+    Some(format!(
+        "the header is one field '{}': the file seems to be separated by '{name}'{decimal}; goniofit reads comma-separated values with a decimal point (convert the file, e.g. save it as CSV with ',' between fields and '.' in numbers)",
+        super::shown_text(h)
+    ))
 }
 
 /// Convert NIST-convention angles (absolute azimuths of outward directions; θi < 0 puts the

@@ -365,6 +365,35 @@ pub fn csv_field(f: &str, first: bool) -> std::borrow::Cow<'_, str> {
     }
 }
 
+/// `s` as printed in messages and reports: line breaks, tabs and other control characters,
+/// and the bidirectional-text controls (U+061C, U+200E, U+200F, U+202A–U+202E,
+/// U+2066–U+2069) are written as escapes (`\n`, `\u{202e}`), everything else as is; so a
+/// file or group name cannot fake a line of a report or reverse the text after it.
+pub fn shown_text(s: &str) -> std::borrow::Cow<'_, str> {
+    let hostile = |c: char| {
+        c.is_control()
+            || matches!(c, '\u{061c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+    };
+    if !s.chars().any(hostile) {
+        return s.into();
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        if hostile(c) {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out.into()
+}
+
+/// A path as printed in messages and reports: [`shown_text`] of its text (invalid UTF-8
+/// shown as U+FFFD).
+pub fn shown(path: &Path) -> String {
+    shown_text(&path.to_string_lossy()).into_owned()
+}
+
 /// Format a value with full precision: the shortest decimal that parses back to the same
 /// `f64`, in scientific notation (`1.2345e-3`, `5e-1`, `NaN`, `inf`).
 pub fn format_value(v: f64) -> String {

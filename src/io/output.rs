@@ -27,6 +27,7 @@
 //! file after following symlinks, or the same path yet to be created), before anything is
 //! written.
 
+use super::shown;
 use crate::error::{Error, Result};
 use std::io::{ErrorKind, Write};
 use std::path::{Component, Path, PathBuf};
@@ -154,10 +155,10 @@ fn open_error(path: &Path, dir: Option<&Path>, e: std::io::Error) -> Error {
         };
     }
     let why = match dir {
-        Some(d) if !d.is_dir() => format!("no such directory: {}", d.display()),
+        Some(d) if !d.is_dir() => format!("no such directory: {}", shown(d)),
         Some(d) => format!(
             "cannot create a file in directory {}: {}",
-            d.display(),
+            shown(d),
             e.kind()
         ),
         None => format!("cannot open: {}", e.kind()),

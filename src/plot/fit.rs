@@ -327,7 +327,7 @@ pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
         } else {
             "θr, view angle from the surface normal (degrees)"
         },
-        "standardized residual (measured − fitted) / u",
+        "standardized residual (fitted − measured) / u",
     );
     plot.x_range = if over_phi {
         (-180.0, 180.0)

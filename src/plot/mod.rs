@@ -82,7 +82,7 @@ impl Format {
             Some("svg") => Ok(Format::Svg),
             _ => Err(Error::Usage(format!(
                 "{}: the output file must end in .png or .svg",
-                path.display()
+                crate::io::shown(path)
             ))),
         }
     }

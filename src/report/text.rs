@@ -31,6 +31,10 @@ pub fn fixed(v: f64, digits: usize) -> String {
     if !v.is_finite() {
         return "n/a".into();
     }
+    if v.abs() >= 1e6 {
+        // Never a 280-digit number (R² of a fit far worse than the mean).
+        return format!("{v:.digits$e}");
+    }
     let s = format!("{v:.digits$}");
     if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
         s[1..].to_string()
@@ -386,5 +390,7 @@ mod tests {
         assert_eq!(fixed(-1e-12, 7), "0.0000000");
         assert_eq!(fixed(-0.5, 2), "-0.50");
         assert_eq!(fixed(f64::NAN, 2), "n/a");
+        assert_eq!(fixed(-1.5e280, 7), "-1.5000000e280");
+        assert_eq!(fixed(0.67525804, 7), "0.6752580");
     }
 }

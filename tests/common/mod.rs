@@ -7,8 +7,8 @@ pub fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
 }
 
-/// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
-pub fn fit_json(args: &[&str]) -> serde_json::Value {
+/// Run goniofit with `args`, expect exit 0, and return its standard output as text.
+pub fn success_stdout<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
     let out = goniofit().args(args).output().unwrap();
     assert_eq!(
         out.status.code(),
@@ -16,5 +16,18 @@ pub fn fit_json(args: &[&str]) -> serde_json::Value {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).unwrap()
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
+pub fn fit_json(args: &[&str]) -> serde_json::Value {
+    serde_json::from_str(&success_stdout(args)).unwrap()
+}
+
+/// A file of the bundled `data/` folder.
+#[allow(dead_code)]
+pub fn data(p: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(p)
 }

@@ -1,0 +1,208 @@
+//! The fit report as one self-contained HTML page (`fit --html report.html`): no network,
+//! no external files. Tables for the setting, statistics, parameters with their intervals,
+//! derived quantities and identifiability; the pictures inline as SVG (their bitmaps are
+//! already embedded as base64 PNG); the command that reproduces the fit; the text report.
+
+use super::text::{interval_text, verdict_text};
+use super::RunInfo;
+use crate::fit::driver::{FitResult, Verdict};
+use crate::fit::profile::LEVELS;
+use std::fmt::Write;
+
+/// Text with `&`, `<`, `>`, `"` escaped for HTML.
+pub fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// An SVG document as an inline element: the XML declaration and doctype dropped.
+fn inline_svg(svg: &str) -> &str {
+    svg.find("<svg").map_or(svg, |i| &svg[i..])
+}
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\
+table{border-collapse:collapse;margin:0.5em 0 1em}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}\
+th{background:#eee}td.num{font-family:monospace;text-align:right;white-space:nowrap}pre{background:#f6f6f6;padding:0.5em;overflow-x:auto}\
+figure{display:inline-block;margin:0.5em;vertical-align:top}figure svg{max-width:520px;height:auto}\
+.no{color:#a00}.yes{color:#060}";
+
+/// A two-column table of (key, value) rows.
+fn kv_table(s: &mut String, rows: &[(&str, String)]) {
+    s.push_str("<table>\n");
+    for (k, v) in rows {
+        let _ = writeln!(s, "<tr><th>{}</th><td>{}</td></tr>", escape(k), escape(v));
+    }
+    s.push_str("</table>\n");
+}
+
+/// The intervals of a quantity, `68%: … / 95%: …`, or empty.
+fn intervals_of(info: &RunInfo, name: &str) -> (String, String) {
+    let Some(iv) = info.intervals.iter().find(|i| i.name == name) else {
+        return (String::new(), String::new());
+    };
+    let at = |p: f64| iv.at(p).map(interval_text).unwrap_or_default();
+    (at(LEVELS[0]), at(LEVELS[1]))
+}
+
+/// The parameter and derived-quantity tables.
+fn quantity_tables(s: &mut String, r: &FitResult, info: &RunInfo) {
+    let units = &info.setting.units;
+    s.push_str("<h2>Parameters</h2>\n<table>\n<tr><th>name</th><th>value</th><th>standard error</th><th>unit</th><th>determined</th><th>68.27 % interval</th><th>95 % interval</th></tr>\n");
+    for p in &r.params {
+        let (i68, i95) = intervals_of(info, &p.name);
+        let det = if p.fixed {
+            "fixed".to_string()
+        } else if p.determined {
+            "yes".into()
+        } else {
+            "no: see the interval".into()
+        };
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td class=num>{:.7e}</td><td class=num>{}</td><td>{}</td><td class={}>{}</td><td class=num>{}</td><td class=num>{}</td></tr>",
+            escape(&p.name),
+            p.value,
+            p.stderr.map_or(String::new(), |e| format!("{e:.3e}")),
+            escape(&units.of_param(&p.name)),
+            if p.determined || p.fixed { "yes" } else { "no" },
+            escape(&det),
+            escape(&i68),
+            escape(&i95)
+        );
+    }
+    s.push_str("</table>\n");
+    if r.derived.is_empty() {
+        return;
+    }
+    s.push_str("<h2>Derived quantities</h2>\n<table>\n<tr><th>name</th><th>value</th><th>standard error</th><th>unit</th><th>68.27 % interval</th><th>95 % interval</th><th>meaning</th></tr>\n");
+    for d in &r.derived {
+        let (i68, i95) = intervals_of(info, &d.name);
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td class=num>{:.7e}</td><td class=num>{}</td><td>{}</td><td class=num>{}</td><td class=num>{}</td><td>{}</td></tr>",
+            escape(&d.name),
+            d.value,
+            d.stderr.map_or(String::new(), |e| format!("{e:.3e}")),
+            escape(&units.of_derived(&d.name, r.verdict == Verdict::Smooth)),
+            escape(&i68),
+            escape(&i95),
+            escape(&d.doc)
+        );
+    }
+    s.push_str("</table>\n");
+}
+
+/// The page. `text` is the plain-text report; `pictures` are (title, SVG document) pairs.
+pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, String)]) -> String {
+    let st = &info.setting;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>goniofit: {} on {}</title><style>{STYLE}</style></head><body>",
+        escape(&r.model),
+        escape(&info.input)
+    );
+    let _ = writeln!(
+        s,
+        "<h1>goniofit fit report: {} on {}</h1>",
+        escape(&r.model),
+        escape(&info.input)
+    );
+    let _ = writeln!(
+        s,
+        "<p class={}>{}: {}</p>",
+        if r.converged() { "yes" } else { "no" },
+        if r.converged() {
+            "Converged"
+        } else {
+            "Did not converge"
+        },
+        escape(r.termination.describe())
+    );
+    s.push_str("<h2>Reproduce</h2>\n");
+    let _ = writeln!(s, "<pre id=\"command\">{}</pre>", escape(&info.command));
+    s.push_str("<h2>Setting</h2>\n");
+    let wl: Vec<String> = st.wavelength.values.iter().map(|v| v.to_string()).collect();
+    kv_table(
+        &mut s,
+        &[
+            ("input file", st.input.path.clone()),
+            ("sha256", st.input.sha256.clone()),
+            (
+                "wavelength",
+                format!(
+                    "{} {} (from {})",
+                    wl.join(", "),
+                    st.units.length_name(),
+                    st.wavelength.source
+                ),
+            ),
+            (
+                "quantity",
+                format!(
+                    "{:?} ({}; values in {})",
+                    st.quantity,
+                    st.quantity_source,
+                    st.units.value_name()
+                )
+                .to_lowercase(),
+            ),
+            (
+                "residual",
+                format!("{:?}, fitted − measured", st.residual).to_lowercase(),
+            ),
+            (
+                "floor",
+                if st.floor.used {
+                    format!("{:.3e} (raised {} values)", st.floor.value, st.floor.raised)
+                } else {
+                    "not used".into()
+                },
+            ),
+            (
+                "weights",
+                format!("{}: {}", st.weights.source, st.weights.transform),
+            ),
+            ("loss", st.loss.clone()),
+            ("absolute sigma", st.absolute_sigma.to_string()),
+        ],
+    );
+    s.push_str("<h2>Fit statistics</h2>\n");
+    kv_table(
+        &mut s,
+        &[
+            ("samples", r.n.to_string()),
+            ("free parameters", r.n_free.to_string()),
+            ("cost ½Σwr²", format!("{:.7e}", r.cost)),
+            ("reduced χ²", format!("{:.7e}", r.reduced_chi2)),
+            ("R²", super::text::fixed(r.r2, 7)),
+            ("iterations", r.iterations.to_string()),
+        ],
+    );
+    quantity_tables(&mut s, r, info);
+    s.push_str("<h2>Identifiability and validity</h2>\n");
+    let _ = writeln!(
+        s,
+        "<p id=\"verdict\">{}</p>\n<ul>",
+        escape(verdict_text(r.verdict))
+    );
+    for n in &r.notes {
+        let _ = writeln!(s, "<li>{}</li>", escape(n));
+    }
+    let _ = writeln!(s, "</ul>\n<p>condition number {:.3e}</p>", r.condition);
+    s.push_str("<h2>Pictures</h2>\n");
+    for (title, svg) in pictures {
+        let _ = writeln!(
+            s,
+            "<figure>{}<figcaption>{}</figcaption></figure>",
+            inline_svg(svg),
+            escape(title)
+        );
+    }
+    s.push_str("<h2>Text report</h2>\n<details><summary>the report as printed</summary>\n");
+    let _ = writeln!(s, "<pre>{}</pre></details>", escape(text));
+    s.push_str("</body></html>\n");
+    s
+}
