@@ -4,7 +4,7 @@ use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
-use goniofit::fit::lm::LmConfig;
+use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::fit::weights::{floor_raised, residual_weights};
 use goniofit::geometry::{Geometry, Quantity};
@@ -443,11 +443,14 @@ pub struct Outcome {
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC.
+/// Every fit shares `stop` (the command's `--timeout` and signals): once it fires, the
+/// running fit ends at its best point, and candidates not yet started are skipped.
 fn fit_dataset(
     args: &FitArgs,
     label: String,
     ds: Dataset,
     progress: bool,
+    stop: &Stop,
 ) -> anyhow::Result<Outcome> {
     let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
         AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect()
@@ -464,9 +467,15 @@ fn fit_dataset(
     let input = input_of(args, &ds, needs_wavelength)?;
     let uncertainties = ds.sigma_l.is_some();
     let mut results: Vec<FitResult> = Vec::new();
+    let mut not_fitted = Vec::new();
     for m in &candidates {
+        if stop.is_requested() && !results.is_empty() {
+            not_fitted.push(m.as_str());
+            continue;
+        }
         let mut config = fit_config(args, m, uncertainties)?;
         config.lm.progress = progress && args.progress;
+        config.lm.stop = Some(stop.clone());
         results.push(
             driver::fit(&input, &config).with_context(|| format!("{label}: fitting model {m}"))?,
         );
@@ -474,6 +483,12 @@ fn fit_dataset(
     let (best, skipped) = lowest_bic_usable(&results);
     let mut result = results[best].clone();
     result.notes.extend(skipped);
+    if !not_fitted.is_empty() {
+        result.notes.push(format!(
+            "the fit was stopped before the candidates {} were fitted",
+            not_fitted.join(", ")
+        ));
+    }
     if args.absolute_sigma {
         report::use_absolute_sigma(&mut result);
     }
@@ -484,7 +499,7 @@ fn fit_dataset(
             ..Default::default()
         },
     );
-    if input.channel_names.len() > 1 {
+    if input.channel_names.len() > 1 && !stop.is_requested() {
         if let Some(note) = joint_narrowing(args, &ds, &result)? {
             result.notes.push(note);
         }
@@ -704,6 +719,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         )
         .into());
     }
+    // From here on Ctrl-C, SIGTERM and SIGHUP stop the fits (which report their best point
+    // and exit 3) instead of ending the process; `--timeout` bounds the whole command.
+    let stop = Stop::new(args.timeout.map(std::time::Duration::from_secs_f64), None);
     let t0 = std::time::Instant::now();
     let threads = args.threads.unwrap_or(0);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -712,12 +730,12 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
     let outcomes: Vec<anyhow::Result<Outcome>> = if single {
         let (label, ds) = jobs.pop().expect("one job");
-        vec![pool.install(|| fit_dataset(&args, label, ds, true))]
+        vec![pool.install(|| fit_dataset(&args, label, ds, true, &stop))]
     } else {
         use rayon::prelude::*;
         pool.install(|| {
             jobs.into_par_iter()
-                .map(|(label, ds)| fit_dataset(&args, label, ds, false))
+                .map(|(label, ds)| fit_dataset(&args, label, ds, false, &stop))
                 .collect()
         })
     };
@@ -804,11 +822,16 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             );
         }
     }
-    Ok(if outcomes.iter().all(|o| o.result.converged()) {
-        0
-    } else {
-        3
-    })
+    // A signal that came after the fits (while the outputs were written) still says the
+    // run was interrupted: every output is complete, and the exit code is 3.
+    let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
+    Ok(
+        if outcomes.iter().all(|o| o.result.converged()) && !interrupted {
+            0
+        } else {
+            3
+        },
+    )
 }
 
 /// Write the HTML page of one outcome: its pictures drawn into a temporary folder and

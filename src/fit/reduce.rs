@@ -44,7 +44,9 @@ pub(super) fn reduce<'m>(
     };
     let sig = solved.problem.layout.find("sigma")[0];
     let regime = matches!(id.verdict, Verdict::Rough | Verdict::Smooth);
-    if regime && solved.problem.layout.params[sig].fixed.is_none() {
+    // After a stop request the first solve's point is the best so far: no refit.
+    let stopped = super::driver::stop_requested(config);
+    if regime && !stopped && solved.problem.layout.params[sig].fixed.is_none() {
         let mut reduced = solved.problem.layout.clone();
         reduced.params[sig].fixed = Some(solved.run.values[sig]);
         let p_start = solved.run.values.clone();
@@ -56,7 +58,11 @@ pub(super) fn reduce<'m>(
         solved.run = red;
         solved.problem = problem_red;
     }
-    solved.notes.push(regime_note(id.verdict, g_median));
+    solved.notes.push(if stopped && regime {
+        format!("the fit was stopped before the reduced refit (median g = {g_median:.3e}): the data determines only a regime's combinations, and σ, T, scale are those of the unreduced fit")
+    } else {
+        regime_note(id.verdict, g_median)
+    });
     Ok(solved)
 }
 
