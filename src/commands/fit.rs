@@ -4,7 +4,7 @@ use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
-use goniofit::fit::lm::LmConfig;
+use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::fit::weights::{floor_raised, residual_weights};
 use goniofit::geometry::{Geometry, Quantity};
@@ -453,11 +453,14 @@ pub struct Outcome {
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC.
+/// Every fit shares `stop` (the command's `--timeout` and signals): once it fires, the
+/// running fit ends at its best point, and candidates not yet started are skipped.
 fn fit_dataset(
     args: &FitArgs,
     label: String,
     mut ds: Dataset,
     progress: bool,
+    stop: &Stop,
 ) -> anyhow::Result<Outcome> {
     let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
         AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect()
@@ -482,20 +485,28 @@ fn fit_dataset(
     }
     let uncertainties = ds.sigma_l.is_some();
     let mut results: Vec<FitResult> = Vec::new();
+    let mut not_fitted = Vec::new();
     for m in &candidates {
+        if stop.is_requested() && !results.is_empty() {
+            not_fitted.push(m.as_str());
+            continue;
+        }
         let mut config = fit_config(args, m, uncertainties)?;
         config.lm.progress = progress && args.show_progress();
+        config.lm.stop = Some(stop.clone());
         results.push(
             driver::fit(&input, &config).with_context(|| format!("{label}: fitting model {m}"))?,
         );
     }
-    let best = results
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
-        .map(|(i, _)| i)
-        .expect("at least one candidate");
+    let (best, skipped) = lowest_bic_usable(&results);
     let mut result = results[best].clone();
+    result.notes.extend(skipped);
+    if !not_fitted.is_empty() {
+        result.notes.push(format!(
+            "the fit was stopped before the candidates {} were fitted",
+            not_fitted.join(", ")
+        ));
+    }
     if args.absolute_sigma {
         report::use_absolute_sigma(&mut result);
     }
@@ -506,7 +517,7 @@ fn fit_dataset(
             ..Default::default()
         },
     );
-    if input.channel_names.len() > 1 {
+    if input.channel_names.len() > 1 && !stop.is_requested() {
         if let Some(note) = joint_narrowing(args, &ds, &result)? {
             result.notes.push(note);
         }
@@ -526,6 +537,36 @@ fn fit_dataset(
         result,
         intervals,
     })
+}
+
+/// The candidate with the lowest BIC among the converged fits (among all when none
+/// converged), and a note for each candidate with a lower BIC that was skipped because its
+/// fit is not a usable optimum (degenerate, or stopped without converging).
+fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
+    let any_converged = results.iter().any(|r| r.converged());
+    let best = results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.converged() || !any_converged)
+        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
+        .map(|(i, _)| i)
+        .expect("at least one candidate");
+    let skipped = results
+        .iter()
+        .filter(|r| !r.converged() && any_converged && r.bic < results[best].bic)
+        .map(|r| {
+            format!(
+                "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
+                r.model,
+                r.bic,
+                r.notes
+                    .last()
+                    .map(String::as_str)
+                    .unwrap_or(r.termination.describe())
+            )
+        })
+        .collect();
+    (best, skipped)
 }
 
 /// Fits with more free parameters than this get no profile intervals (each needs two
@@ -701,6 +742,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         )
         .into());
     }
+    // From here on Ctrl-C, SIGTERM and SIGHUP stop the fits (which report their best point
+    // and exit 3) instead of ending the process; `--timeout` bounds the whole command.
+    let stop = Stop::new(args.timeout.map(std::time::Duration::from_secs_f64), None);
     let t0 = std::time::Instant::now();
     let threads = args.threads.unwrap_or(0);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -709,7 +753,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
     let outcomes: Vec<anyhow::Result<Outcome>> = if single {
         let (label, ds) = jobs.pop().expect("one job");
-        vec![pool.install(|| fit_dataset(&args, label, ds, true))]
+        vec![pool.install(|| fit_dataset(&args, label, ds, true, &stop))]
     } else {
         use rayon::prelude::*;
         let bar = if args.show_progress() {
@@ -720,7 +764,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         let done = pool.install(|| {
             jobs.into_par_iter()
                 .map(|(label, ds)| {
-                    let outcome = fit_dataset(&args, label, ds, false);
+                    let outcome = fit_dataset(&args, label, ds, false, &stop);
                     bar.inc(1);
                     outcome
                 })
@@ -812,11 +856,16 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             );
         }
     }
-    Ok(if outcomes.iter().all(|o| o.result.converged()) {
-        0
-    } else {
-        3
-    })
+    // A signal that came after the fits (while the outputs were written) still says the
+    // run was interrupted: every output is complete, and the exit code is 3.
+    let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
+    Ok(
+        if outcomes.iter().all(|o| o.result.converged()) && !interrupted {
+            0
+        } else {
+            3
+        },
+    )
 }
 
 /// A bar of bytes read from `file` on standard error (hidden unless `show`).

@@ -2,11 +2,11 @@
 //! standard errors and whether each is determined, derived quantities, evaluation modes.
 //! The conventions (cost, χ², covariance, AIC/BIC) are in [`super::driver`]'s module doc.
 
-use super::driver::{standardized_residuals, DETERMINED_MAX_LOG_SE};
-use super::driver::{Derived, FitConfig, FitResult, ParamResult, Verdict};
-use super::identify::log_covariance;
+use super::config::FitConfig;
+use super::identify::{log_covariance, DETERMINED_MAX_LOG_SE};
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind, Transform};
 use super::reduce::Solved;
+use super::result::{Derived, FitResult, ParamResult, Verdict};
 use super::start::Start;
 use super::stats;
 use super::validate;
@@ -327,4 +327,31 @@ fn g_range(layout: &ParamLayout, input: &FitInput, p: &[f64]) -> Option<(f64, f6
                 (lo.min(g), hi.max(g))
             }),
     )
+}
+
+/// Standardized residuals √wᵢ rᵢ / s with s² = χ²/(n − p), or √wᵢ rᵢ when the weights are
+/// inverse variances from stated uncertainties (or s = 0).
+pub fn standardized_residuals(
+    residuals: &[f64],
+    sqrt_w: &[f64],
+    n_free: usize,
+    weights_are_uncertainties: bool,
+) -> Vec<f64> {
+    let chi2: f64 = residuals
+        .iter()
+        .zip(sqrt_w)
+        .map(|(r, s)| (r * s).powi(2))
+        .sum();
+    let dof = residuals.len().saturating_sub(n_free).max(1) as f64;
+    let s_hat = (chi2 / dof).sqrt();
+    let scale = if weights_are_uncertainties || s_hat == 0.0 {
+        1.0
+    } else {
+        1.0 / s_hat
+    };
+    residuals
+        .iter()
+        .zip(sqrt_w)
+        .map(|(r, s)| r * s * scale)
+        .collect()
 }

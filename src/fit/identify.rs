@@ -2,12 +2,30 @@
 //! parameters, and for KBS models whether the weakest direction of (ln σ, ln T, ln s) is
 //! a known regime's ridge (rough: σ and T together at fixed T/σ; smooth: s σ² fixed).
 
-use super::driver::{Verdict, ALIGN, DETERMINED_MAX_LOG_SE, LOOSE_LOG_SE, RANK_THRESHOLD};
-use super::driver::{ROUGH_G, SMOOTH_G};
 use super::problem::{FitInput, FitProblem, ParamLayout};
+use super::result::Verdict;
 use super::solve::Run;
 use super::stats;
 use nalgebra::{DMatrix, DVector};
+
+/// Largest standard error of ln p for a parameter to count as determined.
+pub const DETERMINED_MAX_LOG_SE: f64 = 1.0;
+
+/// Standard error of ln σ above which a ridge along a regime's known direction counts as
+/// undetermined (see `kbs_verdict`).
+pub const LOOSE_LOG_SE: f64 = 0.05;
+
+/// Alignment |cos| of the weakest direction with a regime's known direction.
+pub const ALIGN: f64 = 0.98;
+
+/// Median g above which the rough regime's ridge is expected.
+pub const ROUGH_G: f64 = 3.0;
+
+/// Median g below which the smooth regime's ridge is expected.
+pub const SMOOTH_G: f64 = 0.3;
+
+/// Relative singular-value threshold below which a direction is undetermined.
+pub const RANK_THRESHOLD: f64 = 1e-9;
 
 /// The identifiability of one solved problem.
 pub(super) struct Identified {

@@ -33,7 +33,7 @@ pub const CANDIDATES: usize = 3;
 pub const REFINE_SAMPLES: usize = 256;
 
 /// Parameters that enter the model linearly (solved exactly at each grid point).
-pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
+pub use super::problem::LINEAR;
 
 /// Grid values for a nonlinear parameter, in the unit of the reference wavelength `lambda`.
 fn grid_for(name: &str, lambda: f64) -> Vec<f64> {

@@ -14,8 +14,10 @@ pub mod stats;
 pub mod weights;
 
 mod assemble;
+mod config;
 mod identify;
 mod reduce;
+mod result;
 mod solve;
 mod start;
 mod validate;

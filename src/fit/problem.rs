@@ -12,7 +12,7 @@
 //! Joint multi-channel fits share every parameter except the linear scales (`scale`,
 //! `scale_d`), which get one copy per channel (named `scale[550nm]`, ...).
 
-use super::lm::LeastSquaresProblem;
+use super::lm::{LeastSquaresProblem, Stop};
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
 use crate::model::{Mode, Model};
@@ -50,11 +50,15 @@ pub enum Transform {
     NonNegative,
 }
 
+/// Parameters that enter the model linearly: amplitudes, non-negative, and solved exactly
+/// at each point of the starting-value grid ([`super::init`]).
+pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
+
 impl Transform {
     /// The transform for a model parameter: log for positive nonlinear parameters,
     /// non-negative for the linear amplitudes, identity otherwise.
     pub fn for_spec(spec: &crate::model::ParamSpec) -> Self {
-        match (spec.positive, super::init::LINEAR.contains(&spec.name)) {
+        match (spec.positive, LINEAR.contains(&spec.name)) {
             (true, false) => Transform::Log,
             (true, true) => Transform::NonNegative,
             _ => Transform::Identity,
@@ -339,18 +343,27 @@ impl<'a> FitProblem<'a> {
     /// Every block's model values and, on request, its model Jacobian (column-major,
     /// block rows × model parameters), evaluated in parallel; `finish(block, f, jac)` runs
     /// on each block's result in the same task.
+    ///
+    /// With `stop`, a block that starts after the stop was requested is not evaluated: its
+    /// values (and Jacobian) are NaN, so the evaluation ends within one block's time
+    /// ([`BLOCK`] samples) of the request and the solver rejects the point.
     fn eval_blocks(
         &self,
         p: &[f64],
         want_jac: bool,
+        stop: Option<&Stop>,
         finish: impl Fn(&Block, &mut [f64], &mut [f64]) + Sync,
     ) -> Vec<(Vec<f64>, Vec<f64>)> {
         let n_spec = self.model.params().len();
         let run = |b: &Block| {
-            let mp = self.layout.model_params(p, b.channel);
             let m = b.geo.len();
+            let jac_len = if want_jac { m * n_spec } else { 0 };
+            if stop.is_some_and(Stop::is_requested) {
+                return (vec![f64::NAN; m], vec![f64::NAN; jac_len]);
+            }
+            let mp = self.layout.model_params(p, b.channel);
             let mut f = vec![0.0; m];
-            let mut jac = vec![0.0; if want_jac { m * n_spec } else { 0 }];
+            let mut jac = vec![0.0; jac_len];
             self.model
                 .eval(&b.geo, &mp, &mut f, want_jac.then_some(&mut jac[..]));
             finish(b, &mut f, &mut jac);
@@ -367,7 +380,7 @@ impl<'a> FitProblem<'a> {
     /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
     pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
         let n_spec = self.model.params().len();
-        let parts = self.eval_blocks(p, want_jac, |_, _, _| {});
+        let parts = self.eval_blocks(p, want_jac, None, |_, _, _| {});
         let mut f = vec![0.0; self.n];
         let mut jac = want_jac.then(|| DMatrix::zeros(self.n, self.layout.len()));
         for (b, (out, bj)) in self.blocks.iter().zip(parts) {
@@ -522,6 +535,16 @@ impl FitProblem<'_> {
     /// model pass per block (blocks in parallel): r̃ᵢ = √wᵢ rᵢ and
     /// ∂r̃ᵢ/∂x_j = √wᵢ (∂rᵢ/∂fᵢ) (∂fᵢ/∂p_k) (dp_k/dx_j) for the free parameter k of column j.
     pub fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
+        self.residuals_and_jacobian_until(x, None)
+    }
+
+    /// [`Self::residuals_and_jacobian`], cut short once `stop` is requested (the rows of
+    /// blocks not evaluated are NaN).
+    fn residuals_and_jacobian_until(
+        &self,
+        x: &DVector<f64>,
+        stop: Option<&Stop>,
+    ) -> (DVector<f64>, DMatrix<f64>) {
         let p = self.layout.from_x(x);
         let free = self.layout.free();
         if !self.in_domain(&p) {
@@ -538,7 +561,7 @@ impl FitProblem<'_> {
         let n_spec = self.model.params().len();
         // Residuals in place of f; the model Jacobian scaled in place by √w ∂r/∂f (the
         // chain factor dp/dx is applied when scattering).
-        let parts = self.eval_blocks(&p, true, |b, f, jac| {
+        let parts = self.eval_blocks(&p, true, stop, |b, f, jac| {
             let m = f.len();
             for (r, &i) in b.idx.iter().enumerate() {
                 let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
@@ -567,13 +590,22 @@ impl FitProblem<'_> {
     }
 }
 
-impl LeastSquaresProblem for FitProblem<'_> {
-    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
-        let (r, j) = self.residuals_and_jacobian(x);
+impl FitProblem<'_> {
+    /// Weighted residuals at solver variables `x` (the Jacobian is kept for the solver's
+    /// next request at `x`), cut short once `stop` is requested: then some rows are NaN and
+    /// the solver rejects the point.
+    pub fn residuals_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DVector<f64> {
+        let (r, j) = self.residuals_and_jacobian_until(x, stop);
         if let Ok(mut c) = self.cache.lock() {
             *c = Some((x.clone(), j));
         }
         r
+    }
+}
+
+impl LeastSquaresProblem for FitProblem<'_> {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        self.residuals_until(x, None)
     }
 
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {

@@ -2,9 +2,10 @@
 //! s·(T/σ)²; smooth: T and s·σ²), refit the reduced problem with σ held at its estimate,
 //! so that T and the scales carry the determined combinations with a finite covariance.
 
-use super::driver::{FitConfig, Verdict};
+use super::config::FitConfig;
 use super::identify::{uncertainty_of, Identified};
 use super::problem::{FitInput, FitProblem};
+use super::result::Verdict;
 use super::solve::{run_lm, Run};
 use super::stats;
 use crate::error::Result;
@@ -43,7 +44,9 @@ pub(super) fn reduce<'m>(
     };
     let sig = solved.problem.layout.find("sigma")[0];
     let regime = matches!(id.verdict, Verdict::Rough | Verdict::Smooth);
-    if regime && solved.problem.layout.params[sig].fixed.is_none() {
+    // After a stop request the first solve's point is the best so far: no refit.
+    let stopped = super::driver::stop_requested(config);
+    if regime && !stopped && solved.problem.layout.params[sig].fixed.is_none() {
         let mut reduced = solved.problem.layout.clone();
         reduced.params[sig].fixed = Some(solved.run.values[sig]);
         let p_start = solved.run.values.clone();
@@ -55,7 +58,11 @@ pub(super) fn reduce<'m>(
         solved.run = red;
         solved.problem = problem_red;
     }
-    solved.notes.push(regime_note(id.verdict, g_median));
+    solved.notes.push(if stopped && regime {
+        format!("the fit was stopped before the reduced refit (median g = {g_median:.3e}): the data determines only a regime's combinations, and σ, T, scale are those of the unreduced fit")
+    } else {
+        regime_note(id.verdict, g_median)
+    });
     Ok(solved)
 }
 

@@ -1,6 +1,8 @@
 //! Solve: one Levenberg–Marquardt run of a problem from a point in parameter space.
 
-use super::lm::{self, LmConfig};
+use nalgebra::{DMatrix, DVector};
+
+use super::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 use super::problem::FitProblem;
 
 /// An LM run in parameter space.
@@ -14,7 +16,10 @@ pub(super) struct Run {
 /// transformed space x of the layout, and the result is mapped back.
 pub(super) fn run_lm(problem: &FitProblem, p0: &[f64], config: &LmConfig) -> Run {
     let x0 = problem.layout.to_x(p0);
-    let lm = lm::minimize(problem, x0, config);
+    let lm = match &config.stop {
+        Some(stop) => lm::minimize(&Stoppable::new(problem, stop), x0, config),
+        None => lm::minimize(problem, x0, config),
+    };
     let values = problem.layout.from_x(&lm.x);
     Run { lm, values }
 }
@@ -27,5 +32,38 @@ impl Run {
         self.lm.evaluations += earlier.evaluations;
         self.lm.jacobian_evaluations += earlier.jacobian_evaluations;
         self.lm.seconds += earlier.seconds;
+    }
+}
+
+/// A fit problem whose trial evaluations end within one block of samples once `stop` is
+/// requested. The first evaluation (the solver's start) is never cut, so every run has a
+/// finite point to report.
+struct Stoppable<'p, 'm> {
+    problem: &'p FitProblem<'m>,
+    stop: &'p Stop,
+    started: std::sync::atomic::AtomicBool,
+}
+
+impl<'p, 'm> Stoppable<'p, 'm> {
+    fn new(problem: &'p FitProblem<'m>, stop: &'p Stop) -> Self {
+        Stoppable {
+            problem,
+            stop,
+            started: std::sync::atomic::AtomicBool::new(false),
+        }
+    }
+}
+
+impl LeastSquaresProblem for Stoppable<'_, '_> {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        let first = !self
+            .started
+            .swap(true, std::sync::atomic::Ordering::Relaxed);
+        let stop = (!first).then_some(self.stop);
+        self.problem.residuals_until(x, stop)
+    }
+
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        self.problem.jacobian(x)
     }
 }

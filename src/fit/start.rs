@@ -5,7 +5,7 @@
 //! and the lowest refined cost inside the models' domain (on the full data) wins. All of
 //! it runs on subsamples, beside the setup of the full problem.
 
-use super::driver::{FitConfig, GRID_TOL, REFINE_TOL};
+use super::config::FitConfig;
 use super::init;
 use super::lm::LmConfig;
 use super::problem::{FitInput, FitProblem, ParamLayout};
@@ -14,6 +14,13 @@ use crate::error::Result;
 use crate::model::{self, EvalMode, Model, ModelOptions};
 use rayon::prelude::*;
 use std::time::Instant;
+
+/// Accuracy of the model on the starting-value grid (it only ranks candidates).
+pub const GRID_TOL: f64 = 1e-4;
+
+/// Model accuracy of the quick refinement on a subsample (it only has to land near the
+/// optimum; the full fit then works at the requested accuracy).
+pub const REFINE_TOL: f64 = 1e-6;
 
 /// Where the full fit starts, and when the search for it ended.
 pub(super) struct Start {
@@ -25,6 +32,9 @@ pub(super) struct Start {
     pub start_seconds: f64,
     /// Seconds from the fit's start to the end of the refinement.
     pub init_seconds: f64,
+    /// The other usable refined candidates, lowest cost first: where the full fit starts
+    /// again when its first solve runs to an edge of the domain.
+    pub alternatives: Vec<Vec<f64>>,
 }
 
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
@@ -125,12 +135,17 @@ pub(super) fn starting_point(
     // subsample has g beyond the fit's limit. Without any refined start inside, the first
     // grid candidate inside is taken.
     let inside = |p: &[f64]| input.in_domain(model, layout, p);
+    // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
+    // worth starting from: another candidate's valley wins.
+    let usable = |p: &[f64]| inside(p) && !super::validate::at_kbs_edge(layout, input, p);
     let first_grid = candidates.iter().position(|(_, c)| inside(c)).unwrap_or(0);
     let mut grid_start = candidates[first_grid].1.clone();
     let mut p0 = grid_start.clone();
     let coarse = coarse_config(config);
+    let mut alternatives = Vec::new();
     if refiners.sub.y.len() > layout.free().len() {
-        let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
+        let refined = refine_candidates(&refiners, &candidates, &coarse, &usable);
+        alternatives = other_usable(&refined, &candidates, coarse.ftol);
         if let Some((values, start)) = lowest_refined(refined, &candidates, coarse.ftol) {
             p0 = values;
             grid_start = start;
@@ -141,6 +156,7 @@ pub(super) fn starting_point(
         grid_start,
         start_seconds,
         init_seconds: t0.elapsed().as_secs_f64(),
+        alternatives,
     })
 }
 
@@ -197,4 +213,19 @@ fn lowest_refined(
         .zip(candidates)
         .find(|(r, _)| r.0.is_finite() && r.0 <= lowest * (1.0 + ftol))
         .map(|((_, values), (_, start))| (values, start.clone()))
+}
+
+/// The usable refined points other than the winner of [`lowest_refined`], lowest cost first.
+fn other_usable(
+    refined: &[(f64, Vec<f64>)],
+    candidates: &[(f64, Vec<f64>)],
+    ftol: f64,
+) -> Vec<Vec<f64>> {
+    let winner = lowest_refined(refined.to_vec(), candidates, ftol).map(|w| w.0);
+    let mut rest: Vec<&(f64, Vec<f64>)> = refined
+        .iter()
+        .filter(|r| r.0.is_finite() && Some(&r.1) != winner.as_ref())
+        .collect();
+    rest.sort_by(|a, b| a.0.total_cmp(&b.0));
+    rest.into_iter().map(|r| r.1.clone()).collect()
 }

@@ -56,13 +56,17 @@
 //!   This is what takes the NIST StRD suite from a mean LRE of 9.3 (plain `lmder` rules,
 //!   this code with polishing off) to 10.7; see `docs/nist.md`.
 //!
-//! # Ctrl-C
+//! # Ctrl-C, SIGTERM, time limits
 //! [`minimize`] turns the Executor's own handler off (argmin binds it to the first run in the
-//! process: later runs could not be interrupted) and installs one process-wide handler on
-//! first use: while a fit runs, Ctrl-C (or SIGTERM/SIGHUP) ends every running fit with
-//! [`Termination::Interrupted`] after its current step, with a full report; when no fit is
-//! running it exits the process with status 130, as the default handler would. A caller's own
-//! flag can be passed in [`LmConfig::interrupt`].
+//! process: later runs could not be interrupted). A [`Stop`] carries the stop request: one
+//! process-wide handler, installed on first use, interrupts every live `Stop` on Ctrl-C (or
+//! SIGTERM/SIGHUP), and a `Stop` may carry a deadline. The solver checks it before every
+//! trial step and after every trial evaluation, and ends with [`Termination::Interrupted`] or
+//! [`Termination::Timeout`] at the best point so far, with a full report; an evaluation cut
+//! short by the request (the fit layer checks it between blocks of samples) is no step. One
+//! `Stop` shared through [`LmConfig::stop`] ends every run of a fit. When no `Stop` is alive
+//! the handler exits the process with status 130, as the default handler would. A caller's
+//! own flag can be passed in [`LmConfig::interrupt`].
 //!
 //! Defaults: `ftol = xtol = 1e-10`, `gtol = 1e-12`. MINPACK's driver `lmder1` uses
 //! `ftol = xtol = √ε ≈ 1.5e-8`, `gtol = 0`; our defaults are tighter because a fit's standard
@@ -78,12 +82,11 @@
 //! * `polish.rs`: Gauss–Newton polishing after convergence.
 //! * `qr.rs`: MINPACK `qrfac` and `qrsolv`; `lmpar.rs`: MINPACK `lmpar`; `norm.rs`: `enorm`.
 //! * `run.rs`: [`LeastSquaresProblem`], [`LmConfig`], [`LmReport`] and [`minimize`], the
-//!   driver through argmin's Executor; `interrupt.rs`: the Ctrl-C handler;
+//!   driver through argmin's Executor; `stop.rs`: [`Stop`], the Ctrl-C handler and deadlines;
 //!   `progress.rs`: the progress line.
 //! * `transform.rs`: [`Transformed`] (log and fixed parameters); `fd.rs`: finite differences.
 
 mod fd;
-mod interrupt;
 mod lmpar;
 mod norm;
 mod polish;
@@ -91,6 +94,7 @@ mod progress;
 mod qr;
 mod run;
 mod step;
+mod stop;
 mod termination;
 #[cfg(test)]
 mod tests;
@@ -110,6 +114,7 @@ use crate::Error;
 
 pub use fd::finite_difference_jacobian;
 pub use run::{minimize, ArgminAdapter, LeastSquaresProblem, LmConfig, LmReport};
+pub use stop::Stop;
 pub use termination::Termination;
 pub use transform::Transformed;
 
@@ -139,7 +144,7 @@ pub struct LevenbergMarquardt {
     stepbound: f64,
     max_evals: u64,
     interrupt: Option<Arc<AtomicBool>>,
-    interrupt_generation: u64,
+    stop: Option<Stop>,
     polish: bool,
     predicted_stop: bool,
     work: Option<Work>,
@@ -164,7 +169,7 @@ impl LevenbergMarquardt {
             stepbound: 100.0,
             max_evals: u64::MAX,
             interrupt: None,
-            interrupt_generation: 0,
+            stop: None,
             polish: false,
             predicted_stop: false,
             work: None,
@@ -298,11 +303,13 @@ impl LevenbergMarquardt {
             .map(|w| w.jac.rows(0, w.m).into_owned())
     }
 
-    fn interrupted(&self) -> bool {
-        self.interrupt
-            .as_ref()
-            .is_some_and(|f| f.load(Ordering::SeqCst))
-            || interrupt::generation() != self.interrupt_generation
+    /// Stop the run (after the current step) when `stop` is requested: a signal, its flag, or
+    /// its deadline; the run then ends with [`Termination::Interrupted`] or
+    /// [`Termination::Timeout`]. Without one, the solver makes its own at `init` (signals
+    /// from then on, and the flag of [`Self::with_interrupt`]).
+    pub fn with_stop(mut self, stop: Stop) -> Self {
+        self.stop = Some(stop);
+        self
     }
 }
 
@@ -326,7 +333,9 @@ where
             .ok_or_else(|| argmin::core::ArgminError::NotInitialized {
                 text: "LevenbergMarquardt needs an initial parameter vector".to_string(),
             })?;
-        self.interrupt_generation = interrupt::generation();
+        if self.stop.is_none() {
+            self.stop = Some(Stop::new(None, None));
+        }
         self.termination = None;
         let n = x.len();
         let r = problem.apply(&x)?;
@@ -389,13 +398,21 @@ where
             return Ok((state.param(w.x.clone()).cost(w.cost()), None));
         }
         let outcome = w.evaluate(problem, trial)?;
-        match w.convergence(&outcome, tol) {
-            Some(t) if self.polish && t.converged() && w.nfev < tol.max_evals && w.fnorm > 0.0 => {
-                // Converged: polish from the current point (its Jacobian is needed first).
-                w.polish = Some(Polish::start(t, w.fnorm));
+        // A stop request wins over the tests: a trial evaluation it cut short is no step.
+        let stop = stop_reason(self.interrupt.as_deref(), self.stop.as_ref());
+        if stop.is_some() {
+            self.termination = stop;
+        } else {
+            match w.convergence(&outcome, tol) {
+                Some(t)
+                    if self.polish && t.converged() && w.nfev < tol.max_evals && w.fnorm > 0.0 =>
+                {
+                    // Converged: polish from the current point (its Jacobian is needed first).
+                    w.polish = Some(Polish::start(t, w.fnorm));
+                }
+                Some(t) => self.termination = Some(t),
+                None => {}
             }
-            Some(t) => self.termination = Some(t),
-            None => {}
         }
         let kv = argmin::kv!(
             "delta" => w.delta;
@@ -408,14 +425,15 @@ where
     }
 
     fn terminate(&mut self, _state: &LmState) -> TerminationStatus {
-        if self.termination.is_none() && self.interrupted() {
-            self.termination = Some(Termination::Interrupted);
+        if self.termination.is_none() {
+            self.termination = stop_reason(self.interrupt.as_deref(), self.stop.as_ref());
         }
         match self.termination {
             None => TerminationStatus::NotTerminated,
             Some(Termination::Interrupted) => {
                 TerminationStatus::Terminated(TerminationReason::Interrupt)
             }
+            Some(Termination::Timeout) => TerminationStatus::Terminated(TerminationReason::Timeout),
             Some(t) if t.converged() => {
                 TerminationStatus::Terminated(TerminationReason::SolverConverged)
             }
@@ -424,4 +442,12 @@ where
             )),
         }
     }
+}
+
+/// Why a run must stop now, if it must: the caller's flag, or the stop request.
+fn stop_reason(flag: Option<&AtomicBool>, stop: Option<&Stop>) -> Option<Termination> {
+    if flag.is_some_and(|f| f.load(Ordering::SeqCst)) {
+        return Some(Termination::Interrupted);
+    }
+    stop.and_then(Stop::requested)
 }

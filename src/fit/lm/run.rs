@@ -12,9 +12,9 @@ use argmin::core::{
 };
 use nalgebra::{DMatrix, DVector};
 
-use super::interrupt::{self, ActiveRun};
 use super::norm::enorm;
 use super::progress::ProgressObserver;
+use super::stop::Stop;
 use super::{LevenbergMarquardt, LmState, Termination};
 
 /// A least-squares problem in the form the fit layer supplies. Residuals are already
@@ -70,12 +70,17 @@ pub struct LmConfig {
     pub max_iters: u64,
     /// Residual evaluations, including the one at the start. Default 2000.
     pub max_evals: u64,
-    /// Wall-clock limit. Default none.
+    /// Wall-clock limit of this run (ignored with [`Self::stop`], which carries its own
+    /// deadline). Default none.
     pub timeout: Option<Duration>,
     /// Show a progress line on the terminal (stderr, via indicatif). Default false.
     pub progress: bool,
     /// Stop when this flag becomes true (in addition to Ctrl-C). Default none.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// The stop request of the whole piece of work this run belongs to (a fit's start
+    /// search, solves and refits share one, so that a signal or the fit's deadline ends them
+    /// all). Default none: the run makes its own from `timeout` and the signals.
+    pub stop: Option<Stop>,
     /// Gauss–Newton polishing after convergence, see [`LevenbergMarquardt::with_polish`].
     /// Default false: with measurement noise, parameters converged to `ftol = 1e-10` are
     /// already far more precise than their standard errors; turn it on when the last digits
@@ -97,6 +102,7 @@ impl Default for LmConfig {
             timeout: None,
             progress: false,
             interrupt: None,
+            stop: None,
             polish: false,
             predicted_stop: false,
         }
@@ -132,14 +138,9 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     config: &LmConfig,
 ) -> LmReport {
     let start = Instant::now();
-    interrupt::install_handler();
-    let _active = ActiveRun::start();
     let mut exec = Executor::new(ArgminAdapter(problem), solver_for(config))
         .configure(|s| s.param(x0.clone()).max_iters(config.max_iters))
         .ctrlc(false);
-    if let Some(t) = config.timeout {
-        exec = exec.timeout(t);
-    }
     if config.progress {
         exec = exec.add_observer(ProgressObserver::new(), ObserverMode::Always);
     }
@@ -162,10 +163,15 @@ fn solver_for(config: &LmConfig) -> LevenbergMarquardt {
         predicted_stop: config.predicted_stop,
         ..LevenbergMarquardt::new()
     };
+    let stop = match &config.stop {
+        Some(stop) => stop.clone(),
+        None => Stop::new(config.timeout, None),
+    };
     match &config.interrupt {
         Some(flag) => solver.with_interrupt(flag.clone()),
         None => solver,
     }
+    .with_stop(stop)
 }
 
 /// The report of a finished Executor run: the solver's own termination, or argmin's

@@ -33,6 +33,10 @@ pub enum Termination {
     /// The trust region collapsed without any other criterion holding (e.g. every trial
     /// point has non-finite residuals).
     NoProgress,
+    /// Set by the fit, not the solver: the point reached is not a usable optimum — a
+    /// parameter ran to an edge of the model's physical domain, or the Jacobian lost rank
+    /// without a declared reduction (the report's notes say which, in plain words).
+    Degenerate,
 }
 
 impl Termination {
@@ -68,6 +72,9 @@ impl Termination {
             Termination::NonFiniteJacobian => "stopped: Jacobian is not finite",
             Termination::NoProgress => {
                 "stopped: no further progress possible (trust region collapsed)"
+            }
+            Termination::Degenerate => {
+                "not converged: degenerate — the fit ran to an edge of the model's domain or the data do not determine it (see the notes)"
             }
         }
     }

@@ -1,0 +1,51 @@
+//! What a fit is asked to do: the model, residual kind, starting values, fixed parameters
+//! and solver settings ([`FitConfig`]), and the residual floor that follows from them.
+
+use super::lm::LmConfig;
+use super::problem::ResidualKind;
+use crate::model::ModelOptions;
+
+/// Everything about a fit except the data.
+#[derive(Debug, Clone)]
+pub struct FitConfig {
+    pub model: String,
+    pub model_opts: ModelOptions,
+    pub residual: ResidualKind,
+    /// Floor for relative/log residuals; None: 1e-6 × max |y|.
+    pub floor: Option<f64>,
+    /// Starting values given by the user (name, value); names may carry `[channel]`.
+    pub init: Vec<(String, f64)>,
+    /// Parameters held fixed (name, value).
+    pub fix: Vec<(String, f64)>,
+    pub lm: LmConfig,
+    /// Whether weights are inverse variances from a stated uncertainty column.
+    pub weights_are_uncertainties: bool,
+    /// Refit the reduced problem when the data determines only combinations.
+    pub reduce: bool,
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        FitConfig {
+            model: "kbs".into(),
+            model_opts: ModelOptions::default(),
+            residual: ResidualKind::Absolute,
+            floor: None,
+            init: Vec::new(),
+            fix: Vec::new(),
+            lm: LmConfig {
+                predicted_stop: true,
+                ..LmConfig::default()
+            },
+            weights_are_uncertainties: false,
+            reduce: true,
+        }
+    }
+}
+
+/// The floor of relative and log residuals: `config.floor`, or 1e-6 × max |y|.
+pub fn residual_floor(config: &FitConfig, y: &[f64]) -> f64 {
+    config
+        .floor
+        .unwrap_or(1e-6 * y.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+}

@@ -1,0 +1,120 @@
+//! What a finished fit reports: parameters with their standard errors and whether the data
+//! determines each, derived quantities, the verdict, goodness of fit and residuals
+//! ([`FitResult`]). The conventions are in [`super::driver`]'s module doc.
+
+use super::lm::Termination;
+use super::problem::ParamLayout;
+use crate::model::Mode;
+use nalgebra::DMatrix;
+use std::collections::BTreeMap;
+
+/// One fitted parameter.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ParamResult {
+    pub name: String,
+    pub value: f64,
+    /// Standard error; None when fixed or undetermined.
+    pub stderr: Option<f64>,
+    pub determined: bool,
+    pub fixed: bool,
+    pub unit: String,
+}
+
+/// A quantity derived from the parameters (T/σ, rms slope, determined combinations).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Derived {
+    pub name: String,
+    pub value: f64,
+    pub stderr: Option<f64>,
+    pub determined: bool,
+    pub doc: String,
+}
+
+/// What the data determines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Verdict {
+    /// Every free parameter is determined.
+    Full,
+    /// Rough regime: only T/σ and the amplitude s·(T/σ)² are determined.
+    Rough,
+    /// Smooth regime: only T and the amplitude s·σ² are determined.
+    Smooth,
+    /// Some directions are undetermined and match no known regime.
+    Partial,
+}
+
+/// A finished fit (converged or not).
+#[derive(Debug, Clone)]
+pub struct FitResult {
+    pub model: String,
+    pub params: Vec<ParamResult>,
+    pub derived: Vec<Derived>,
+    /// Names and correlation matrix of the free parameters of the reported fit.
+    pub corr_names: Vec<String>,
+    pub correlation: DMatrix<f64>,
+    pub singular_values: Vec<f64>,
+    pub condition: f64,
+    pub verdict: Verdict,
+    pub notes: Vec<String>,
+    pub cost: f64,
+    pub chi2: f64,
+    pub reduced_chi2: f64,
+    pub rms: f64,
+    pub max_abs_residual: f64,
+    pub r2: f64,
+    pub aic: f64,
+    pub bic: f64,
+    pub n: usize,
+    pub n_free: usize,
+    pub iterations: u64,
+    pub evaluations: u64,
+    pub jacobian_evaluations: u64,
+    pub termination: Termination,
+    /// Wall time of the whole fit (starting values, refinement, LM, verdict).
+    pub seconds: f64,
+    /// Of which: up to the end of the starting-value refinement.
+    pub init_seconds: f64,
+    /// Of which: up to the grid's candidates (the automatic starting values, before any
+    /// LM iteration).
+    pub start_seconds: f64,
+    pub modes: BTreeMap<String, usize>,
+    /// Range of g = (2πσ/λ)²(cos θi + cos θr)² over the samples (KBS models).
+    pub g_range: Option<(f64, f64)>,
+    pub fitted: Vec<f64>,
+    pub residuals: Vec<f64>,
+    pub std_residuals: Vec<f64>,
+    pub sample_modes: Vec<Mode>,
+    /// Full parameter values in layout order (for plotting per channel).
+    pub layout: ParamLayout,
+    pub values: Vec<f64>,
+    /// The grid point (layout order) whose quick refinement won, before any LM iteration.
+    pub start: Vec<f64>,
+}
+
+impl FitResult {
+    /// Whether the fit is a usable optimum: the solver met a convergence criterion and the
+    /// cost, every parameter, standard error and correlation is a finite number (R² may be
+    /// undefined, NaN, only for data without spread).
+    pub fn converged(&self) -> bool {
+        self.termination.converged() && self.is_finite()
+    }
+
+    /// Whether the cost, parameters, standard errors and correlations are finite numbers (a
+    /// correlation is NaN by design where a standard error is 0: an exact fit).
+    pub fn is_finite(&self) -> bool {
+        self.cost.is_finite()
+            && !self.r2.is_infinite()
+            && self.values.iter().all(|v| v.is_finite())
+            && self
+                .params
+                .iter()
+                .all(|p| p.value.is_finite() && p.stderr.is_none_or(f64::is_finite))
+            && self.correlation.iter().all(|c| !c.is_infinite())
+    }
+
+    /// Value of a parameter by (base) name, first channel.
+    pub fn value(&self, name: &str) -> Option<f64> {
+        self.layout.find(name).first().map(|&k| self.values[k])
+    }
+}
