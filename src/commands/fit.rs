@@ -3,19 +3,17 @@
 use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
+pub use goniofit::fit::dataset::fit_input;
+use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
 use goniofit::fit::lm::LmConfig;
 use goniofit::fit::problem::ResidualKind;
-use goniofit::geometry::{Geometry, Quantity};
 use goniofit::io::{self, Dataset, ReadOptions};
 use goniofit::model::{parse_assignments, ModelOptions};
 use goniofit::report::{self, RunInfo};
 use goniofit::Error;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
-
-/// Candidate models for `--model auto`, compared by BIC.
-pub const AUTO_CANDIDATES: [&str; 4] = ["lambert", "lambert-specular", "kbs", "kbs+lambert"];
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum ResidualArg {
@@ -130,58 +128,6 @@ impl FitArgs {
     }
 }
 
-/// The fit's data from a dataset: geometry, values, weights, channels.
-pub fn fit_input(
-    ds: &Dataset,
-    quantity: Quantity,
-    wavelength: Option<f64>,
-    needs_wavelength: bool,
-) -> anyhow::Result<FitInput> {
-    let n = ds.samples.len();
-    let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
-        (_, Some(l)) => vec![l],
-        (Some(w), None) => w.clone(),
-        (None, None) if needs_wavelength => {
-            return Err(Error::Usage(format!(
-                "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
-                ds.path.display()
-            ))
-            .into())
-        }
-        (None, None) => vec![1.0],
-    };
-    let geo = Geometry::new(&ds.samples, &lambda, quantity)?;
-    let y = ds.value.clone().ok_or_else(|| Error::File {
-        path: ds.path.clone(),
-        message: "no measured value column (L)".into(),
-    })?;
-    let weight = ds.weight.clone().unwrap_or_else(|| vec![1.0; n]);
-    let (channel, channel_names) = match &ds.channel {
-        Some(labels) => {
-            let mut names: Vec<String> = Vec::new();
-            let idx = labels
-                .iter()
-                .map(|l| match names.iter().position(|x| x == l) {
-                    Some(i) => i,
-                    None => {
-                        names.push(l.clone());
-                        names.len() - 1
-                    }
-                })
-                .collect();
-            (idx, names)
-        }
-        None => (vec![0; n], vec![String::new()]),
-    };
-    Ok(FitInput {
-        geo,
-        y,
-        weight,
-        channel,
-        channel_names,
-    })
-}
-
 /// The fit configuration from the arguments, for a given model name.
 pub fn fit_config(
     args: &FitArgs,
@@ -216,95 +162,17 @@ fn command_line() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
 }
 
-/// One dataset's fit: every candidate model, and the chosen one (lowest BIC).
-pub struct Outcome {
-    pub label: String,
-    pub dataset: Dataset,
-    pub input: FitInput,
-    pub candidates: Vec<FitResult>,
-    pub result: FitResult,
-}
-
-/// Fit one dataset with every candidate model; keep the lowest BIC.
-fn fit_dataset(
-    args: &FitArgs,
-    label: String,
-    ds: Dataset,
-    progress: bool,
-) -> anyhow::Result<Outcome> {
-    let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
-        AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect()
-    } else {
-        goniofit::model::by_name(&args.model, &ModelOptions::default())?;
-        vec![args.model.to_ascii_lowercase()]
-    };
-    let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
-    let input = fit_input(&ds, args.quantity.into(), args.wavelength, needs_wavelength)?;
-    let uncertainties = ds.sigma_l.is_some();
-    let mut results: Vec<FitResult> = Vec::new();
-    for m in &candidates {
-        let mut config = fit_config(args, m, uncertainties)?;
-        config.lm.progress = progress && args.progress;
-        results.push(
-            driver::fit(&input, &config).with_context(|| format!("{label}: fitting model {m}"))?,
-        );
-    }
-    let best = results
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
-        .map(|(i, _)| i)
-        .expect("at least one candidate");
-    let mut result = results[best].clone();
-    if input.channel_names.len() > 1 {
-        if let Some(note) = joint_narrowing(args, &ds, &result)? {
-            result.notes.push(note);
-        }
-    }
-    Ok(Outcome {
-        label,
-        dataset: ds,
-        input,
-        candidates: results,
-        result,
+/// The library's settings of a dataset's fit from the arguments (`progress`: show the
+/// progress line, for a single dataset).
+fn dataset_fit(args: &FitArgs, progress: bool) -> anyhow::Result<DatasetFit> {
+    let mut config = fit_config(args, &args.model, false)?;
+    config.lm.progress = progress && args.progress;
+    Ok(DatasetFit {
+        model: args.model.clone(),
+        quantity: args.quantity.into(),
+        wavelength: args.wavelength,
+        config,
     })
-}
-
-/// The report of one outcome as JSON.
-fn outcome_json(o: &Outcome, info: &RunInfo) -> serde_json::Value {
-    let mut v = report::json::to_json(&o.result, info);
-    v["replay"] = replay_json(&o.result);
-    if o.candidates.len() > 1 {
-        v["comparison"] = serde_json::json!(o
-            .candidates
-            .iter()
-            .map(|r| serde_json::json!({"model": r.model, "bic": r.bic, "aic": r.aic, "cost": r.cost, "converged": r.converged()}))
-            .collect::<Vec<_>>());
-    }
-    v
-}
-
-/// The report of one outcome as text.
-fn outcome_text(o: &Outcome, info: &RunInfo) -> String {
-    let mut s = String::new();
-    if o.candidates.len() > 1 {
-        s += "[[Model comparison]] (lowest BIC wins)\n";
-        for r in &o.candidates {
-            s += &format!(
-                "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}{}\n",
-                r.model,
-                r.bic,
-                r.aic,
-                r.cost,
-                if r.model == o.result.model {
-                    "  <- chosen"
-                } else {
-                    ""
-                }
-            );
-        }
-    }
-    s + &report::text::render(&o.result, info)
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
@@ -345,16 +213,17 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .num_threads(threads)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
+    let spec = dataset_fit(&args, single)?;
+    let fit_one = |(label, ds): (String, Dataset)| {
+        let context = format!("{label}: fitting model {}", args.model);
+        fit_dataset(&spec, label, ds).context(context)
+    };
     let outcomes: Vec<anyhow::Result<Outcome>> = if single {
-        let (label, ds) = jobs.pop().expect("one job");
-        vec![pool.install(|| fit_dataset(&args, label, ds, true))]
+        let job = jobs.pop().expect("one job");
+        vec![pool.install(|| fit_one(job))]
     } else {
         use rayon::prelude::*;
-        pool.install(|| {
-            jobs.into_par_iter()
-                .map(|(label, ds)| fit_dataset(&args, label, ds, false))
-                .collect()
-        })
+        pool.install(|| jobs.into_par_iter().map(fit_one).collect())
     };
     let wall = t0.elapsed().as_secs_f64();
     let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
@@ -365,9 +234,10 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         version: env!("CARGO_PKG_VERSION").to_string(),
     };
     if args.json {
+        let replay_args: Vec<String> = std::env::args().skip(1).collect();
         let values: Vec<serde_json::Value> = outcomes
             .iter()
-            .map(|o| outcome_json(o, &info_for(o)))
+            .map(|o| report::outcome::to_json(o, &info_for(o), &replay_args))
             .collect();
         let v = if single {
             values.into_iter().next().expect("one outcome")
@@ -382,7 +252,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
         for o in &outcomes {
-            write!(out, "{}", outcome_text(o, &info_for(o)))?;
+            write!(out, "{}", report::outcome::to_text(o, &info_for(o)))?;
         }
     }
     if !single {
@@ -416,52 +286,6 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     })
 }
 
-/// For a joint fit: how much narrower σ and T are than from the middle channel alone.
-fn joint_narrowing(
-    args: &FitArgs,
-    ds: &Dataset,
-    joint: &FitResult,
-) -> anyhow::Result<Option<String>> {
-    let Some(labels) = &ds.channel else {
-        return Ok(None);
-    };
-    let names = &joint.layout.channel_names;
-    let mid = &names[names.len() / 2];
-    let idx: Vec<usize> = (0..labels.len()).filter(|&i| &labels[i] == mid).collect();
-    let mut single = ds.subset(&idx);
-    single.channel = None;
-    let input = fit_input(&single, args.quantity.into(), args.wavelength, true)?;
-    let mut config = fit_config(args, &joint.model, ds.sigma_l.is_some())?;
-    config.lm.progress = false;
-    let alone = driver::fit(&input, &config)?;
-    let mut parts = Vec::new();
-    for name in ["sigma", "T"] {
-        let se = |r: &FitResult| {
-            r.params
-                .iter()
-                .find(|p| p.name == name)
-                .and_then(|p| p.stderr)
-        };
-        match (se(joint), se(&alone)) {
-            (Some(j), Some(a)) => parts.push(format!(
-                "{name}: ±{j:.3e} joint vs ±{a:.3e} from {mid} alone ({:.1}× narrower)",
-                a / j
-            )),
-            (Some(j), None) => parts.push(format!(
-                "{name}: ±{j:.3e} joint, not determined from {mid} alone"
-            )),
-            _ => {}
-        }
-    }
-    Ok((!parts.is_empty()).then(|| {
-        format!(
-            "joint fit over {} channels: {}",
-            names.len(),
-            parts.join("; ")
-        )
-    }))
-}
-
 /// Write the input rows with L_fit, residual, std_residual and mode (atomically).
 fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<()> {
     let mut headers = ds.headers.clone();
@@ -481,19 +305,6 @@ fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<(
         .collect();
     io::write_csv(path, &headers, &rows)?;
     Ok(())
-}
-
-/// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
-/// arguments and the fitted values of every parameter (layout order).
-fn replay_json(r: &FitResult) -> serde_json::Value {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    serde_json::json!({
-        "args": args,
-        "model": r.model,
-        "names": r.layout.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
-        "values": r.values,
-        "n_free": r.n_free,
-    })
 }
 
 /// Draw the pictures of a fit at parameter values `values` (layout order). For a joint fit

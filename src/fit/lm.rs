@@ -1241,6 +1241,10 @@ pub struct LmConfig {
     pub progress: bool,
     /// Stop when this flag becomes true (in addition to Ctrl-C). Default none.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// Install goniofit's process-wide Ctrl-C/SIGTERM/SIGHUP handler (see "Ctrl-C" in the
+    /// module docs). Default true. False for a host that owns its signals, such as the
+    /// Python interpreter: its own handler stays in place and the host sets `interrupt`.
+    pub install_signal_handler: bool,
     /// Gauss–Newton polishing after convergence, see [`LevenbergMarquardt::with_polish`].
     /// Default false: with measurement noise, parameters converged to `ftol = 1e-10` are
     /// already far more precise than their standard errors; turn it on when the last digits
@@ -1262,6 +1266,7 @@ impl Default for LmConfig {
             timeout: None,
             progress: false,
             interrupt: None,
+            install_signal_handler: true,
             polish: false,
             predicted_stop: false,
         }
@@ -1333,7 +1338,9 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     config: &LmConfig,
 ) -> LmReport {
     let start = Instant::now();
-    install_interrupt_handler();
+    if config.install_signal_handler {
+        install_interrupt_handler();
+    }
     let _active = ActiveRun::start();
     let tol = |v: f64| if v.is_finite() && v >= 0.0 { v } else { 0.0 };
     let mut solver = LevenbergMarquardt {

@@ -1,6 +1,8 @@
 //! Reporters for a finished fit: one per output format.
 
+pub mod html;
 pub mod json;
+pub mod outcome;
 pub mod text;
 
 /// How the fit was run, for reproducing it.
