@@ -55,9 +55,10 @@ _PER_SAMPLE = ("weights", "sigma_L")
 
 
 def _f64(name: str, x: Any) -> np.ndarray:
-    """``x`` as a contiguous 1-D float64 array (a number stays a 0-d error below)."""
+    """``x`` as a contiguous, aligned 1-D float64 array (buffers unpickled on a Dask worker
+    can be misaligned views)."""
     try:
-        a = np.ascontiguousarray(x, dtype=np.float64)
+        a = np.require(np.asarray(x, dtype=np.float64), requirements=["C", "A"])
     except (TypeError, ValueError) as e:
         raise ValueError(f"{name}: not an array of numbers ({e})") from None
     if a.ndim != 1:
@@ -284,7 +285,8 @@ def fit_frame(
     opts = _options(len(df), opts)
     arrays = [_f64(role, df[roles[role]].to_numpy()) for role in ("theta_i", "theta_r", "phi_r", "L")]
     labels = [str(u) for u in index]
-    cols = _goniofit._fit_codes(*arrays, codes.astype(np.int64), labels, True, **opts)
+    codes = np.require(codes, dtype=np.int64, requirements=["C", "A"])
+    cols = _goniofit._fit_codes(*arrays, codes, labels, True, **opts)
     return pd.DataFrame(cols, index=index)
 
 

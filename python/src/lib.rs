@@ -43,8 +43,7 @@ fn _fit<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<FitResult> {
     let opts = FitOptions::from_kwargs(options)?;
-    let samples = SampleArrays::new(&opts, &theta_i, &theta_r, &phi_r, &L)?;
-    let ds = run::guard(|| samples.dataset("arrays", &opts))?.map_err(to_py_err)?;
+    let ds = SampleArrays::new(&opts, &theta_i, &theta_r, &phi_r, &L)?.dataset(&opts)?;
     let mut outcomes = run::fit_all(py, &opts, vec![("arrays".to_string(), ds)])?;
     let outcome = outcomes.pop().expect("one job, one outcome");
     Ok(FitResult::new(outcome, &opts))
@@ -70,8 +69,7 @@ fn _fit_codes<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
     let opts = FitOptions::from_kwargs(options)?;
-    let samples = SampleArrays::new(&opts, &theta_i, &theta_r, &phi_r, &L)?;
-    let ds = run::guard(|| samples.dataset("arrays", &opts))?.map_err(to_py_err)?;
+    let ds = SampleArrays::new(&opts, &theta_i, &theta_r, &phi_r, &L)?.dataset(&opts)?;
     let jobs = run::split_codes(&ds, codes.as_slice()?, &labels)?;
     let outcomes = run::fit_all(py, &opts, jobs)?;
     if summary {
@@ -241,6 +239,9 @@ fn _goniofit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_json_roundtrip, m)?)?;
     m.add_class::<FitResult>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("AUTO_CANDIDATES", goniofit::fit::dataset::AUTO_CANDIDATES.to_vec())?;
+    m.add(
+        "AUTO_CANDIDATES",
+        goniofit::fit::dataset::AUTO_CANDIDATES.to_vec(),
+    )?;
     Ok(())
 }

@@ -136,9 +136,9 @@ fn residual(name: &str) -> PyResult<ResidualKind> {
 
 /// A 1-D float64 array (the Python layer converts array-likes before the call).
 fn vector(v: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
-    let a: PyReadonlyArray1<f64> = v.extract().map_err(|_| {
-        PyTypeError::new_err(format!("{name}: expected a 1-D float64 array"))
-    })?;
+    let a: PyReadonlyArray1<f64> = v
+        .extract()
+        .map_err(|_| PyTypeError::new_err(format!("{name}: expected a 1-D float64 array")))?;
     Ok(a.as_slice()?.to_vec())
 }
 
@@ -170,9 +170,9 @@ fn assignments(v: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<(String, f64)>>
     d.iter()
         .map(|(k, val)| {
             let key: String = k.extract()?;
-            let x: f64 = val.extract().map_err(|_| {
-                PyTypeError::new_err(format!("{name}['{key}']: expected a number"))
-            })?;
+            let x: f64 = val
+                .extract()
+                .map_err(|_| PyTypeError::new_err(format!("{name}['{key}']: expected a number")))?;
             Ok((key, x))
         })
         .collect()
@@ -414,8 +414,13 @@ impl SampleArrays {
         })
     }
 
-    /// The library's checked dataset of these samples, named `name` in messages.
-    pub fn dataset(&self, name: &str, o: &FitOptions) -> goniofit::Result<goniofit::io::Dataset> {
+    /// The library's checked dataset of these samples (`arrays` in reports); a bad
+    /// element is a `ValueError` naming its array and index.
+    pub fn dataset(&self, o: &FitOptions) -> PyResult<goniofit::io::Dataset> {
+        crate::run::guard(|| self.checked(o))?.map_err(to_py_err)
+    }
+
+    fn checked(&self, o: &FitOptions) -> goniofit::Result<goniofit::io::Dataset> {
         let cols = arrays::Columns {
             theta_i: &self.theta_i,
             theta_r: &self.theta_r,
@@ -426,6 +431,6 @@ impl SampleArrays {
             wavelength: self.wavelength.as_deref(),
             channel: self.channel.as_deref(),
         };
-        arrays::dataset(name, &cols, o.radians, o.signed_theta_r)
+        arrays::dataset("arrays", &cols, o.radians, o.signed_theta_r)
     }
 }

@@ -179,24 +179,60 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
     }
     let text = |f: &dyn Fn(&Outcome) -> String| outcomes.iter().map(f).collect::<Vec<String>>();
     out.set_item("model", text(&|o| r(o).model.clone()))?;
-    out.set_item("n", outcomes.iter().map(|o| r(o).n as u64).collect::<Vec<_>>().into_pyarray(py))?;
-    out.set_item("converged", outcomes.iter().map(|o| r(o).converged()).collect::<Vec<_>>())?;
+    out.set_item(
+        "n",
+        outcomes
+            .iter()
+            .map(|o| r(o).n as u64)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "converged",
+        outcomes
+            .iter()
+            .map(|o| r(o).converged())
+            .collect::<Vec<_>>(),
+    )?;
     let info = empty_info();
-    let reports: Vec<Value> = outcomes.iter().map(|o| report::json::to_json(r(o), &info)).collect();
+    let reports: Vec<Value> = outcomes
+        .iter()
+        .map(|o| report::json::to_json(r(o), &info))
+        .collect();
     let json_text = |key: &str| {
-        reports.iter().map(|v| v[key].as_str().unwrap_or_default().to_string()).collect::<Vec<String>>()
+        reports
+            .iter()
+            .map(|v| v[key].as_str().unwrap_or_default().to_string())
+            .collect::<Vec<String>>()
     };
     out.set_item("termination", json_text("termination"))?;
     out.set_item("verdict", json_text("verdict"))?;
-    let num = |f: &dyn Fn(&Outcome) -> f64| outcomes.iter().map(f).collect::<Vec<f64>>().into_pyarray(py);
+    let num = |f: &dyn Fn(&Outcome) -> f64| {
+        outcomes
+            .iter()
+            .map(f)
+            .collect::<Vec<f64>>()
+            .into_pyarray(py)
+    };
     out.set_item("cost", num(&|o| r(o).cost))?;
     out.set_item("reduced_chi2", num(&|o| r(o).reduced_chi2))?;
     out.set_item("r2", num(&|o| r(o).r2))?;
-    out.set_item("iterations", outcomes.iter().map(|o| r(o).iterations).collect::<Vec<_>>().into_pyarray(py))?;
+    out.set_item(
+        "iterations",
+        outcomes
+            .iter()
+            .map(|o| r(o).iterations)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
     // Parameters, then derived quantities, by name in first-appearance order.
     let mut names: Vec<String> = Vec::new();
     for o in outcomes {
-        let all = r(o).params.iter().map(|p| &p.name).chain(r(o).derived.iter().map(|d| &d.name));
+        let all = r(o)
+            .params
+            .iter()
+            .map(|p| &p.name)
+            .chain(r(o).derived.iter().map(|d| &d.name));
         for n in all {
             if !names.contains(n) {
                 names.push(n.clone());
@@ -208,8 +244,17 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
         let mut stderr = Vec::with_capacity(outcomes.len());
         let mut determined = Vec::with_capacity(outcomes.len());
         for o in outcomes {
-            let p = r(o).params.iter().find(|p| &p.name == name).map(|p| (p.value, p.stderr, p.determined));
-            let d = || r(o).derived.iter().find(|d| &d.name == name).map(|d| (d.value, d.stderr, d.determined));
+            let p = r(o)
+                .params
+                .iter()
+                .find(|p| &p.name == name)
+                .map(|p| (p.value, p.stderr, p.determined));
+            let d = || {
+                r(o).derived
+                    .iter()
+                    .find(|d| &d.name == name)
+                    .map(|d| (d.value, d.stderr, d.determined))
+            };
             let (v, se, det) = p.or_else(d).unwrap_or((f64::NAN, None, false));
             value.push(v);
             stderr.push(se.unwrap_or(f64::NAN));

@@ -130,10 +130,16 @@ pub fn fit_all(
 ) -> PyResult<Vec<Outcome>> {
     let spec = o.dataset_fit();
     let interrupt = spec.config.lm.interrupt.clone();
+    let stop = interrupt.clone();
     let results = interruptible(py, interrupt, o.threads, move || {
         Ok(jobs
             .into_par_iter()
             .map(|(label, ds)| {
+                // After Ctrl-C the jobs not yet started are skipped (the call raises
+                // KeyboardInterrupt and drops every result).
+                if stop.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
+                    return Err((label, goniofit::Error::Usage("interrupted".into())));
+                }
                 let r = fit_dataset(&spec, label.clone(), ds);
                 r.map_err(|e| (label, e))
             })

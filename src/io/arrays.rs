@@ -200,7 +200,10 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.starts_with("theta_i[1]: theta_i = 95° is outside [0, 90°)"), "{e}");
+        assert!(
+            e.starts_with("theta_i[1]: theta_i = 95° is outside [0, 90°)"),
+            "{e}"
+        );
         let e = dataset(
             "arrays",
             &cols(&[30.0, 10.0], &[45.0, 10.0], &[0.0, f64::NAN], &[1.0, 2.0]),
@@ -225,6 +228,9 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.starts_with("theta_r has 1 elements, theta_i has 2"), "{e}");
+        assert!(
+            e.starts_with("theta_r has 1 elements, theta_i has 2"),
+            "{e}"
+        );
     }
 }

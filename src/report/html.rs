@@ -31,13 +31,24 @@ fn value_se(v: f64, se: Option<f64>) -> String {
     }
 }
 
-/// One table row of cells (already escaped).
-fn row(s: &mut String, cells: &[String]) {
-    s.push_str("<tr>");
-    for c in cells {
-        let _ = write!(s, "<td style=\"text-align:left\">{c}</td>");
+/// The tag of a parameter the data does not determine.
+const UNDETERMINED: &str = "not determined by the data";
+
+/// A table with a header row and rows of cells (already escaped).
+fn table(s: &mut String, header: [&str; 4], rows: impl Iterator<Item = [String; 4]>) {
+    s.push_str("<table>\n<tr>");
+    for h in header {
+        let _ = write!(s, "<th>{h}</th>");
     }
     s.push_str("</tr>\n");
+    for cells in rows {
+        s.push_str("<tr>");
+        for c in cells {
+            let _ = write!(s, "<td style=\"text-align:left\">{c}</td>");
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table>\n");
 }
 
 /// The report of `r` as an HTML fragment: a heading with the model and input, the fit
@@ -56,48 +67,46 @@ pub fn fit_summary(r: &FitResult, info: &RunInfo) -> String {
     let _ = writeln!(
         s,
         "<p>{} — {} ({}); cost ½Σwr² = {:.7e}, reduced χ² = {:.7e}, R² = {:.7}</p>",
-        if r.converged() { "converged" } else { "<b>not converged</b>" },
+        if r.converged() {
+            "converged"
+        } else {
+            "<b>not converged</b>"
+        },
         escape(&termination),
         escape(r.termination.describe()),
         r.cost,
         r.reduced_chi2,
         r.r2
     );
-    s.push_str("<table>\n<tr><th>parameter</th><th>value</th><th>unit</th><th></th></tr>\n");
-    for p in &r.params {
+    let params = r.params.iter().map(|p| {
         let tag = if p.fixed {
             "fixed"
         } else if p.determined {
             ""
         } else {
-            "not determined by the data"
+            UNDETERMINED
         };
-        row(
-            &mut s,
-            &[
-                escape(&p.name),
-                value_se(p.value, p.stderr),
-                escape(&p.unit),
-                tag.into(),
-            ],
-        );
-    }
-    s.push_str("</table>\n");
+        [
+            p.name.as_str(),
+            value_se(p.value, p.stderr).as_str(),
+            p.unit.as_str(),
+            tag,
+        ]
+        .map(escape)
+    });
+    table(&mut s, ["parameter", "value", "unit", ""], params);
     if !r.derived.is_empty() {
-        s.push_str("<table>\n<tr><th>derived</th><th>value</th><th>meaning</th><th></th></tr>\n");
-        for d in &r.derived {
-            let tag = if d.determined { "" } else { "not determined by the data" };
-            row(
-                &mut s,
-                &[
-                    escape(&d.name),
-                    value_se(d.value, d.stderr),
-                    escape(&d.doc),
-                    tag.into(),
-                ],
-            );
-        }
-        s.push_str("</table>\n");
+        let derived = r.derived.iter().map(|d| {
+            let tag = if d.determined { "" } else { UNDETERMINED };
+            [
+                d.name.as_str(),
+                value_se(d.value, d.stderr).as_str(),
+                d.doc.as_str(),
+                tag,
+            ]
+            .map(escape)
+        });
+        table(&mut s, ["derived", "value", "meaning", ""], derived);
     }
     let _ = writeln!(
         s,
