@@ -33,6 +33,14 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
+    /// Writing an output failed after it started (disk full, I/O error): not the user's
+    /// input, exit code 1. (A path that cannot be created is an [`Error::File`].)
+    #[error("{path}: writing failed: {source}")]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
     /// A model name that goniofit does not know.
     #[error("unknown model '{0}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular)")]
     UnknownModel(String),
@@ -81,7 +89,10 @@ impl Error {
     /// Whether the error is the user's input or usage (CLI exit code 2) rather than an
     /// internal failure (exit code 1).
     pub fn is_user_error(&self) -> bool {
-        !matches!(self, Error::Numerical(_) | Error::Plot { .. })
+        !matches!(
+            self,
+            Error::Numerical(_) | Error::Plot { .. } | Error::Write { .. }
+        )
     }
 }
 

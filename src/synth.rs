@@ -57,6 +57,7 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::{wrap_phi, Geometry, Quantity, Sample};
+use crate::model::domain::short_number;
 use crate::model::{EvalMode, Model, ModelOptions};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -625,6 +626,17 @@ pub fn add_noise(exact: &[f64], noise: &Noise) -> Result<Noisy> {
         });
         sigma_l.push(sd);
     }
+    let bad = (0..value.len()).find(|&i| !(value[i].is_finite() && sigma_l[i].is_finite()));
+    if let Some(i) = bad {
+        return Err(Error::Usage(format!(
+            "noise level {} overflows double precision: sample {} would get the value {} (standard deviation {}) from the exact {}; give a smaller --noise",
+            short_number(eps),
+            i + 1,
+            short_number(value[i]),
+            short_number(sigma_l[i]),
+            short_number(exact[i])
+        )));
+    }
     Ok(Noisy { value, sigma_l })
 }
 
@@ -676,25 +688,9 @@ pub fn generate(
 }
 
 /// The model's values on a prepared batch, checked: right parameter count, every value
-/// finite.
+/// finite ([`crate::model::domain::evaluate_checked`]).
 pub fn evaluate(model: &dyn Model, params: &[f64], geo: &Geometry) -> Result<Vec<f64>> {
-    crate::model::check_param_count(model, params)?;
-    for (spec, v) in model.params().iter().zip(params) {
-        crate::model::check_param_value(spec, *v)?;
-    }
-    let mut exact = vec![0.0; geo.len()];
-    model.eval(geo, params, &mut exact, None);
-    if let Some(i) = exact.iter().position(|v| !v.is_finite()) {
-        return Err(Error::Numerical(format!(
-            "model {} gave {} at theta_i={}°, theta_r={}°, phi_r={}°",
-            model.name(),
-            exact[i],
-            geo.theta_i[i].to_degrees(),
-            geo.theta_r[i].to_degrees(),
-            geo.phi_r[i].to_degrees()
-        )));
-    }
-    Ok(exact)
+    crate::model::domain::evaluate_checked(model, params, geo)
 }
 
 /// Which optional columns [`SynthData::write_csv`] writes.

@@ -595,7 +595,7 @@ fn write_atomic_writes_and_cleans_up() {
         w.write_all(b"partial")?;
         Err(std::io::Error::other("boom"))
     });
-    assert!(matches!(r, Err(Error::Io { .. })));
+    assert!(matches!(r, Err(Error::Write { .. })));
     assert_eq!(std::fs::read_to_string(&p).unwrap(), "hello\n");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 

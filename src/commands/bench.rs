@@ -65,9 +65,9 @@ fn work_precision(args: WorkPrecisionArgs) -> anyhow::Result<u8> {
     let paths = workprec::write_plot(&wp, &args.out)
         .with_context(|| format!("writing the plot to {}", args.out.display()))?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&wp)?);
+        goniofit::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&wp)?))?;
     } else {
-        print!("{}", wp.table());
+        goniofit::io::print_stdout(&wp.table())?;
     }
     for p in &paths {
         eprintln!("goniofit bench: wrote {}", p.display());

@@ -82,6 +82,8 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let model = model::by_name(&args.model, &mopts)?;
     let params = model::parse_params(model.as_ref(), &args.params)?;
 
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    io::check_distinct(&[("input", &args.file)], &[("--out", &out)])?;
     let ds = io::read_dataset(&args.file, &opts)?;
 
     let needs_wavelength =
@@ -110,8 +112,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
 
     let geo = Geometry::new(&ds.samples, &wavelength, args.quantity.into())
         .with_context(|| format!("preparing the samples of {}", args.file.display()))?;
-    let mut values = vec![0.0; geo.len()];
-    model.eval(&geo, &params, &mut values, None);
+    for w in model::domain::accuracy_warnings(model.as_ref(), &params, &geo) {
+        eprintln!("goniofit: warning: {w}");
+    }
+    let values = model::domain::evaluate_checked(model.as_ref(), &params, &geo)?;
 
     // Append L_model; a file that already has one (an earlier eval's output) gets it replaced.
     let mut headers = ds.headers.clone();
@@ -132,7 +136,6 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
             r
         })
         .collect();
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
     io::write_csv(&out, &headers, &rows)?;
     Ok(0)
 }

@@ -15,7 +15,7 @@ pub fn run(args: FiguresArgs) -> anyhow::Result<u8> {
     let paths = goniofit::plot::figures::write_all(&args.out)
         .with_context(|| format!("writing figures into {}", args.out.display()))?;
     for p in paths {
-        println!("{}", p.display());
+        goniofit::io::print_stdout(&format!("{}\n", p.display()))?;
     }
     Ok(0)
 }

@@ -12,7 +12,6 @@ use goniofit::io::{self, Dataset, ReadOptions};
 use goniofit::model::{parse_assignments, ModelOptions};
 use goniofit::report::{self, RunInfo};
 use goniofit::Error;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -177,6 +176,10 @@ fn dataset_fit(args: &FitArgs, progress: bool) -> anyhow::Result<DatasetFit> {
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let opts = args.read_options()?;
+    if let Some(r) = &args.residuals {
+        let inputs: Vec<(&str, &Path)> = args.file.iter().map(|f| ("input", f.as_path())).collect();
+        io::check_distinct(&inputs, &[("--residuals", r)])?;
+    }
     // Every input is read (and checked) before any fit starts.
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
     for file in &args.file {
@@ -227,7 +230,6 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     };
     let wall = t0.elapsed().as_secs_f64();
     let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
-    let mut out = std::io::stdout().lock();
     let info_for = |o: &Outcome| RunInfo {
         input: o.label.clone(),
         command: command_line(),
@@ -249,11 +251,13 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
                 "threads": pool.current_num_threads(),
             })
         };
-        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&v)?))?;
     } else {
-        for o in &outcomes {
-            write!(out, "{}", report::outcome::to_text(o, &info_for(o)))?;
-        }
+        let text: String = outcomes
+            .iter()
+            .map(|o| report::outcome::to_text(o, &info_for(o)))
+            .collect();
+        io::print_stdout(&text)?;
     }
     if !single {
         eprintln!(

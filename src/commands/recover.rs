@@ -63,9 +63,9 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     let report = recover::run(&config, &|_r| bar.inc(1));
     bar.finish_and_clear();
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        goniofit::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report)?))?;
     } else {
-        print!("{}", report.table());
+        goniofit::io::print_stdout(&report.table())?;
     }
     Ok(0)
 }

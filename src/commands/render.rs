@@ -64,6 +64,6 @@ fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
         marks: a.marks,
     };
     write_picture(&pic, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
-    println!("{}", a.out.display());
+    goniofit::io::print_stdout(&format!("{}\n", a.out.display()))?;
     Ok(0)
 }

@@ -9,9 +9,9 @@ use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::geometry::Quantity;
+use goniofit::io;
 use goniofit::model::{by_name, parse_params, ModelOptions};
 use goniofit::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
@@ -194,6 +194,18 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         level: a.noise,
         seed: a.seed,
     };
+    if let Ok(geo) = goniofit::geometry::Geometry::new(
+        &angles
+            .iter()
+            .map(synth::AnglesDeg::sample)
+            .collect::<Vec<_>>(),
+        &[a.wavelength],
+        quantity,
+    ) {
+        for w in goniofit::model::domain::accuracy_warnings(model.as_ref(), &params, &geo) {
+            eprintln!("goniofit: warning: {w}");
+        }
+    }
     let data = synth::generate(
         model.as_ref(),
         &params,
@@ -215,6 +227,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         .truth
         .clone()
         .or_else(|| a.out.as_deref().map(synth::truth_path));
+    check_outputs(&a, &layout, truth_file.as_deref())?;
     let truth = Truth {
         model: model.name().to_string(),
         params: Truth::params_by_name(model.as_ref(), &params),
@@ -239,19 +252,12 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         goniofit_version: env!("CARGO_PKG_VERSION").to_string(),
     };
 
-    match &a.out {
-        Some(path) => write_atomic(path, &csv_bytes)?,
-        None => {
-            let mut out = std::io::stdout().lock();
-            out.write_all(&csv_bytes)
-                .and_then(|_| out.flush())
-                .context("writing to standard output")?;
-        }
-    }
+    let out_path = a.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    io::write_bytes(&out_path, &csv_bytes)?;
     if let Some(tp) = &truth_file {
         let mut json = serde_json::to_vec_pretty(&truth).context("formatting the truth JSON")?;
         json.push(b'\n');
-        write_atomic(tp, &json)?;
+        io::write_bytes(tp, &json)?;
     }
     if let Some(path) = &a.out {
         eprintln!(
@@ -267,23 +273,27 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     Ok(0)
 }
 
-/// Write `bytes` to `path` through a temporary file in the same folder, so a reader never
-/// sees a half-written file and a failure leaves any old file intact.
-fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let io = |source| -> anyhow::Error {
-        goniofit::Error::Io {
-            path: path.to_path_buf(),
-            source,
-        }
-        .into()
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io)?;
-    tmp.write_all(bytes).map_err(io)?;
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(path).map_err(|e| io(e.error))?;
+/// Refuse outputs that are the layout file or each other (`--out s.csv --truth s.csv`).
+fn check_outputs(a: &SynthArgs, layout: &Layout, truth: Option<&Path>) -> anyhow::Result<()> {
+    let layout_file = PathBuf::from(&a.layout);
+    let mut inputs: Vec<(&str, &Path)> = Vec::new();
+    if matches!(layout, Layout::Angles(_)) {
+        inputs.push(("--layout", &layout_file));
+    }
+    let mut outputs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(o) = &a.out {
+        outputs.push(("--out", o));
+    }
+    if let Some(t) = truth {
+        outputs.push((
+            if a.truth.is_some() {
+                "--truth"
+            } else {
+                "the truth file"
+            },
+            t,
+        ));
+    }
+    io::check_distinct(&inputs, &outputs)?;
     Ok(())
 }

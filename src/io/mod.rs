@@ -9,9 +9,10 @@
 //! its first non-blank line starts with an upper-case `KEY` token (e.g. `LAB_NAME ...`) and
 //! some line starts with `VARS`. Everything else is CSV.
 //!
-//! Writing: [`write_atomic`] writes through a temporary file in the target directory and
-//! renames it into place, so a failed write leaves nothing behind; [`write_csv`] writes a
-//! table that way, or to stdout for the path `-`.
+//! Writing ([`output`]): [`write_atomic`] replaces a regular file through a temporary in
+//! its folder and a rename, so a failed or interrupted write leaves nothing behind, and
+//! writes devices, FIFOs and `-` (stdout) straight through; [`write_csv`] writes a table
+//! that way; [`check_distinct`] refuses an output that is also an input.
 //!
 //! ```
 //! use goniofit::io::{read_dataset, ReadOptions};
@@ -30,6 +31,9 @@
 pub mod arrays;
 pub mod astm;
 pub mod csv;
+pub mod output;
+
+pub use output::{check_distinct, print_stdout, write_atomic, write_bytes};
 
 use crate::error::{Error, Result};
 use crate::geometry::Sample;
@@ -188,75 +192,17 @@ pub fn is_astm(path: &Path, text: &str) -> bool {
             .any(|l| l.split_whitespace().next() == Some("VARS"))
 }
 
-/// Write a file atomically: a temporary file in the same directory, then a rename; on any
-/// error nothing is left behind (neither a partial file nor the temporary).
-pub fn write_atomic(
-    path: &Path,
-    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<()> {
-    let io_err = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".goniofit-").suffix(".tmp");
-    // An ordinary output file: 0o666 less the umask, not the temporary's private 0o600.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let tmp = builder.tempfile_in(&dir).map_err(|e| {
-        // tempfile's message names its random temporary; name the directory instead.
-        let why = if dir.is_dir() {
-            e.kind().to_string()
-        } else {
-            "no such directory".to_string()
-        };
-        Error::File {
-            path: path.to_path_buf(),
-            message: format!("cannot create a file in directory {}: {why}", dir.display()),
-        }
-    })?;
-    {
-        let mut w = std::io::BufWriter::new(tmp.as_file());
-        f(&mut w).map_err(io_err)?;
-        w.flush().map_err(io_err)?;
-    }
-    tmp.as_file().sync_all().map_err(io_err)?;
-    tmp.persist(path).map_err(|e| io_err(e.error))?;
-    Ok(())
-}
-
-/// Write a CSV table (headers + rows) atomically, or to stdout when `path` is `-`. Fields
-/// are quoted where reading them back needs it (see [`csv_field`]), so the readers here
-/// return exactly the fields written. A closed stdout pipe is not an error.
+/// Write a CSV table (headers + rows) with [`write_atomic`] (`-` is standard output).
+/// Fields are quoted where reading them back needs it (see [`csv_field`]), so the readers
+/// here return exactly the fields written.
 pub fn write_csv(path: &Path, headers: &[String], rows: &[Vec<String>]) -> Result<()> {
-    let write = |w: &mut dyn Write| -> std::io::Result<()> {
+    write_atomic(path, |w: &mut dyn Write| -> std::io::Result<()> {
         write_record(w, headers)?;
         for r in rows {
             write_record(w, r)?;
         }
         Ok(())
-    };
-    if path.as_os_str() == "-" {
-        let stdout = std::io::stdout();
-        let mut lock = std::io::BufWriter::new(stdout.lock());
-        match write(&mut lock).and_then(|()| lock.flush()) {
-            // A closed pipe (`goniofit eval ... | head`) is the reader's choice, not a failure.
-            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-            r => r.map_err(|source| Error::Io {
-                path: PathBuf::from("<stdout>"),
-                source,
-            }),
-        }
-    } else {
-        write_atomic(path, write)
-    }
+    })
 }
 
 /// Write one CSV record, comma-separated, `\n`-terminated.

@@ -3,6 +3,7 @@
 //!
 //! The model layer knows nothing of files, fits or plots.
 
+pub mod domain;
 pub mod kbs;
 pub mod lambert;
 mod lanes;
@@ -202,27 +203,29 @@ pub fn by_name(name: &str, opts: &ModelOptions) -> Result<Box<dyn Model>> {
 /// exactly once, and positive parameters must be > 0.
 pub fn parse_params(model: &dyn Model, text: &str) -> Result<Vec<f64>> {
     let specs = model.params();
-    let mut values = vec![f64::NAN; specs.len()];
+    let mut values: Vec<Option<f64>> = vec![None; specs.len()];
     for (name, value) in parse_assignments(text)? {
         let j = model.param_index(&name)?;
-        if !values[j].is_nan() {
+        if values[j].is_some() {
             return Err(Error::Param {
                 name,
                 message: "given twice".into(),
             });
         }
-        values[j] = value;
+        values[j] = Some(value);
     }
-    for (spec, v) in specs.iter().zip(&values) {
-        if v.is_nan() {
-            return Err(Error::Param {
+    specs
+        .iter()
+        .zip(&values)
+        .map(|(spec, v)| {
+            let v = v.ok_or_else(|| Error::Param {
                 name: spec.name.into(),
                 message: format!("missing (model {} needs it)", model.name()),
-            });
-        }
-        check_param_value(spec, *v)?;
-    }
-    Ok(values)
+            })?;
+            check_param_value(spec, v)?;
+            Ok(v)
+        })
+        .collect()
 }
 
 /// Check a parameter value against its domain.
@@ -239,7 +242,8 @@ pub fn check_param_value(spec: &ParamSpec, v: f64) -> Result<()> {
     Ok(())
 }
 
-/// Parse `k=v,k=v` pairs (empty text gives none).
+/// Parse `k=v,k=v` pairs (empty text gives none); every value must be a finite number
+/// (`nan`, `inf`, `1e400` are refused, naming the parameter).
 pub fn parse_assignments(text: &str) -> Result<Vec<(String, f64)>> {
     let mut out = Vec::new();
     for part in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
@@ -251,6 +255,20 @@ pub fn parse_assignments(text: &str) -> Result<Vec<(String, f64)>> {
             name: k.trim().to_string(),
             message: format!("'{}' is not a number", v.trim()),
         })?;
+        if !value.is_finite() {
+            return Err(Error::Param {
+                name: k.trim().to_string(),
+                message: format!(
+                    "'{}' is not a finite number{}",
+                    v.trim(),
+                    if value.is_nan() {
+                        " (NaN: not a number)"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
         out.push((k.trim().to_string(), value));
     }
     Ok(out)

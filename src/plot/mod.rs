@@ -95,39 +95,43 @@ fn plot_error<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
     }
 }
 
-/// Write `pic` to `path` as PNG or SVG (by extension), creating the parent folder if needed.
+/// Write `pic` to `path` as PNG or SVG (by extension), creating the parent folder if
+/// needed. The picture is rendered in memory and written with
+/// [`crate::io::write_atomic`]: a failure (a full disk) leaves no empty or cut file and any
+/// old picture intact.
 pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
     let format = Format::of(path)?;
     ensure_font()?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).map_err(|source| Error::Io {
+        std::fs::create_dir_all(parent).map_err(|source| Error::File {
             path: parent.to_path_buf(),
-            source,
+            message: format!("cannot create the folder: {}", source.kind()),
         })?;
     }
-    let size = pic.size();
-    match format {
-        Format::Png => {
-            let root = BitMapBackend::new(path, size).into_drawing_area();
-            root.fill(&WHITE).map_err(plot_error(path))?;
-            pic.draw(&root).map_err(plot_error(path))?;
-            root.present().map_err(plot_error(path))?;
-        }
-        Format::Svg => {
-            let text = svg_string(pic).map_err(|e| match e {
-                Error::Plot { message, .. } => Error::Plot {
-                    path: path.to_path_buf(),
-                    message,
-                },
-                other => other,
-            })?;
-            std::fs::write(path, text).map_err(|source| Error::Io {
-                path: path.to_path_buf(),
-                source,
-            })?;
-        }
-    }
-    Ok(())
+    let renamed = |e: Error| match e {
+        Error::Plot { message, .. } => Error::Plot {
+            path: path.to_path_buf(),
+            message,
+        },
+        other => other,
+    };
+    let bytes = match format {
+        Format::Png => png_bytes(pic).map_err(renamed)?,
+        Format::Svg => svg_string(pic).map_err(renamed)?.into_bytes(),
+    };
+    crate::io::write_bytes(path, &bytes)
+}
+
+/// Render `pic` to a PNG file's bytes in memory.
+pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
+    use image::ImageEncoder;
+    let (w, h) = pic.size();
+    let rgb = rgb_buffer(pic)?;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(&rgb, w, h, image::ColorType::Rgb8)
+        .map_err(plot_error(Path::new("<png in memory>")))?;
+    Ok(out)
 }
 
 /// Write `pic` as `dir/stem.png` and `dir/stem.svg`; returns both paths.

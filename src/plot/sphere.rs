@@ -83,11 +83,17 @@ pub fn sphere_radiance(
     }
     if !samples.is_empty() {
         let geo = Geometry::new(&samples, &[wavelength], Quantity::Radiance)?;
-        let mut out = vec![0.0; samples.len()];
-        model.radiance(&geo, params, &mut out, None);
+        let out = crate::model::domain::evaluate_checked(model, params, &geo)?;
         for (&k, v) in index.iter().zip(out) {
-            radiance[k] = if v.is_finite() && v > 0.0 { v } else { 0.0 };
+            radiance[k] = v.max(0.0);
         }
+    }
+    if !radiance.iter().any(|&v| v > 0.0) {
+        return Err(Error::Usage(format!(
+            "model {} gives no light anywhere on the sphere for {} (every value is zero or negative, or underflows): the picture would be all black",
+            model.name(),
+            crate::model::domain::describe_params(model, params)
+        )));
     }
     Ok(SphereImage {
         size,
