@@ -112,6 +112,7 @@ def read(
     channel: Optional[str] = None,
     *,
     radians: bool = False,
+    csv_radians: bool = False,
     columns: Optional[str] = None,
     signed_theta_r: bool = False,
     require_value: bool = False,

@@ -151,29 +151,35 @@ fn evaluate<'py>(
 /// arrays: ``theta_i``, ``theta_r``, ``phi_r`` (degrees, or radians with ``radians=True``,
 /// in goniofit's convention: φr = 0 the forward side), and where the file has them ``L``,
 /// ``weights``, ``sigma_L``, ``wavelength``, ``channel`` (labels). ``channel``: an ASTM
-/// channel such as ``"550nm"``, or ``"all"``. Errors carry the CLI's located messages
-/// (file, line, column, value) as ``ValueError``; a missing file is ``OSError``.
+/// channel such as ``"550nm"``, or ``"all"``; ``csv_radians``, ``columns``,
+/// ``signed_theta_r``: the CLI's ``--radians``, ``--columns``, ``--signed-theta-r``.
+/// Errors carry the CLI's located messages (file, line, column, value) as ``ValueError``;
+/// a missing file is ``FileNotFoundError``. Degrees are converted from the radians the
+/// reader stores (one rounding): ``radians=True`` here and in ``fit`` reproduces the CLI's
+/// numbers bit for bit.
 #[pyfunction]
-#[pyo3(signature = (path, channel=None, *, radians=false, columns=None, signed_theta_r=false, require_value=false))]
+#[pyo3(signature = (path, channel=None, *, radians=false, csv_radians=false, columns=None, signed_theta_r=false, require_value=false))]
+#[allow(clippy::too_many_arguments)]
 fn read<'py>(
     py: Python<'py>,
     path: PathBuf,
     channel: Option<String>,
     radians: bool,
+    csv_radians: bool,
     columns: Option<&str>,
     signed_theta_r: bool,
     require_value: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let ds = run::guard(|| {
         let opts = ReadOptions {
-            radians: false,
+            radians: csv_radians,
             signed_theta_r,
             columns: io::csv::parse_columns(columns.unwrap_or(""))?,
             require_value,
             channel,
         };
-        // Angles are read as the file gives them (degrees for CSV) and handed back in the
-        // unit asked for.
+        // The file's angles (CSV: degrees, or radians with `csv_radians`; ASTM: radians)
+        // are handed back in the unit asked for (`radians`).
         let ds = io::read_dataset(&path, &opts)?;
         Ok::<_, goniofit::Error>(ds)
     })?
