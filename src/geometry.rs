@@ -1,7 +1,7 @@
 //! Geometry of a measurement (Peters 2000, eq. 1–8) and the per-sample quantities the
 //! models need, computed once per dataset.
 //!
-//! Conventions (MODEL.md): θi, θr from the surface normal, θi ∈ [0, π/2), θr ∈ [0, π/2];
+//! Conventions (docs/conventions.md): θi, θr from the surface normal, θi ∈ [0, π/2), θr ∈ [0, π/2];
 //! φr from the plane of incidence, **φr = 0 is the forward (specular) side**. All angles
 //! here are radians. Lengths (σ, T, X, Y, λ) share one unit; only ratios to λ enter.
 

@@ -3,7 +3,7 @@
 //! (data-driven) starting values, and compare what the fit reports with the truth.
 //!
 //! For every scene only the quantities the fit says the data determines are scored
-//! (MODEL.md, *Identifiability*):
+//! (docs/conventions.md, "Models"):
 //!
 //! | verdict | scored quantities | truth |
 //! |---|---|---|

@@ -22,7 +22,7 @@
 //! | `grazing` | `n_theta_i` evenly from 70 to 89 inclusive (89 alone if n = 1) | as hemisphere | as hemisphere | 5 × 18 × 36 = 3240 |
 //! | a CSV file | columns `theta_i,theta_r,phi_r` in degrees (a signed θr < 0 means \|θr\| at φr + 180) | | | its rows |
 //!
-//! In-plane samples with θr < 0 are stored as θr = |θr| at φr = 180° (MODEL.md). The CSV
+//! In-plane samples with θr < 0 are stored as θr = |θr| at φr = 180° (docs/conventions.md). The CSV
 //! writer can put them back as signed θr at φr = 0 ([`CsvOptions::signed_theta_r`]).
 //!
 //! # Noise ([`Noise`], [`NoiseKind`])

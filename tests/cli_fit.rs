@@ -1,26 +1,12 @@
 //! `goniofit fit` from the command line: the report (snapshot), JSON keys, residuals file,
 //! exit codes for each kind of bad input, and batch fits.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{fit_json, goniofit};
 use std::path::Path;
 
-fn goniofit() -> Command {
-    Command::cargo_bin("goniofit").unwrap()
-}
-
 /// The text report without the lines that vary between runs (timings, the command path).
-/// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
-fn fit_json(args: &[&str]) -> serde_json::Value {
-    let out = goniofit().args(args).output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
 fn stable(report: &str) -> String {
     report
         .lines()

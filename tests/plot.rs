@@ -300,7 +300,11 @@ fn render_sphere_command_writes_png_and_svg() {
             .arg(&path)
             .args(extra)
             .assert()
-            .success();
+            .success()
+            .stderr(predicates::str::contains(format!(
+                "wrote {} (64×64 px",
+                path.display()
+            )));
         let bytes = std::fs::read(&path).unwrap();
         if name.ends_with(".png") {
             assert_eq!(png_size(&bytes), (64, 64));

@@ -10,6 +10,13 @@ use std::path::{Path, PathBuf};
 
 const KBS: [&str; 4] = ["--model", "kbs", "--params", "sigma=0.3,T=2,scale=1"];
 
+/// `goniofit synth` writes a wavelength column for the KBS models.
+const WITH_WAVELENGTH: goniofit::synth::CsvOptions = goniofit::synth::CsvOptions {
+    sigma: false,
+    wavelength: true,
+    signed_theta_r: false,
+};
+
 fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
 }
@@ -50,7 +57,7 @@ impl Table {
         self.rows.iter().map(|r| r[j]).collect()
     }
 
-    /// Samples as a reader following MODEL.md would build them (signed θr < 0 → |θr| at
+    /// Samples as a reader following docs/conventions.md would build them (signed θr < 0 → |θr| at
     /// φr = 180°).
     fn samples(&self) -> Vec<Sample> {
         self.rows
@@ -403,7 +410,7 @@ fn truth_file_round_trips_and_names_every_parameter() {
     )
     .unwrap();
     let mut bytes = Vec::new();
-    data.write_csv(&mut bytes, &Default::default()).unwrap();
+    data.write_csv(&mut bytes, &WITH_WAVELENGTH).unwrap();
     assert_eq!(bytes, std::fs::read(&out).unwrap());
     let again = truth.regenerate().unwrap();
     assert_eq!(bits(&again.value), bits(&data.value));
@@ -437,7 +444,7 @@ fn truth_file_round_trips_and_names_every_parameter() {
     assert_eq!(t2.patch, Some((40.0, 30.0)));
     let d2 = t2.regenerate().unwrap();
     let mut bytes = Vec::new();
-    d2.write_csv(&mut bytes, &Default::default()).unwrap();
+    d2.write_csv(&mut bytes, &WITH_WAVELENGTH).unwrap();
     assert_eq!(bytes, std::fs::read(&out2).unwrap());
 
     // --truth puts it elsewhere; a truth missing a parameter is refused by name.

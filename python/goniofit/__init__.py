@@ -20,7 +20,8 @@ Example::
     import goniofit
     d = goniofit.read("data/cornell/garnet_red.astm", channel="550nm")
     r = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], model="kbs+lambert",
-                     quantity="brdf", residual="log", wavelength=d["wavelength"])
+                     quantity="brdf", residual="log", wavelength=d["wavelength"],
+                     wavelength_unit=d["wavelength_unit"])
     print(r.report())
 """
 
@@ -82,7 +83,7 @@ def _options(n: int, opts: Dict[str, Any]) -> Dict[str, Any]:
         if out.get(key) is not None:
             out[key] = _f64(key, out[key])
     w = out.get("wavelength")
-    if w is not None and not isinstance(w, (int, float, np.number)):
+    if w is not None and not isinstance(w, (int, float, str, np.number)):
         out["wavelength"] = _f64("wavelength", w)
     if out.get("channel") is not None:
         out["channel"] = _labels("channel", out["channel"], n)
@@ -134,8 +135,11 @@ def fit(
         ``kbs``, ``kbs-smooth``, ``kbs-rough``, ``kbs+lambert``, ``lambert``,
         ``lambert-specular``, or ``auto`` (fits lambert, lambert-specular, kbs, kbs+lambert
         and keeps the lowest BIC).
-    wavelength : float or array-like, optional
-        λ, the unit of σ and T (required for KBS models); one number or one per sample.
+    wavelength : float, str or array-like, optional
+        λ, the unit of σ and T (required for KBS models); one number, one per sample, or
+        as the CLI's ``--wavelength`` a number with its unit (``"633nm"``, ``"0.633um"``).
+        ``wavelength_unit="nm"`` (an option) names the unit of numbers; the report then
+        gives σ and T in it.
     quantity : {"radiance", "brdf"}
     residual : {"absolute", "relative", "log"}
         f − y, (f − y)/|y|, or ln f − ln y (values below ``floor`` raised to it).
@@ -155,7 +159,9 @@ def fit(
         relative accuracy, default 1e-10), ``patch`` ((X, Y) half-sizes in the unit of λ:
         the coherent term), ``floor`` (for relative/log residuals; default 1e-6 × max |L|),
         ``max_iter`` (default 500), ``timeout`` (seconds), ``reduce`` (default True: refit
-        the reduced problem when only combinations are determined), ``threads``.
+        the reduced problem when only combinations are determined), ``threads``,
+        ``wavelength_unit``, ``absolute_sigma`` (standard errors from ``sigma_L`` as stated,
+        as scipy's ``curve_fit(absolute_sigma=True)``).
 
     Returns
     -------

@@ -208,6 +208,9 @@ fn read<'py>(
     if let Some(c) = &ds.channel {
         out.set_item("channel", PyList::new(py, c)?)?;
     }
+    if let Some(u) = &ds.wavelength_unit {
+        out.set_item("wavelength_unit", u)?;
+    }
     Ok(out)
 }
 

@@ -11,6 +11,7 @@ use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::arrays;
 use goniofit::model::{self, EvalMode, Model, ModelOptions};
+use goniofit::report::outcome::SettingSource;
 use numpy::PyReadonlyArray1;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -19,7 +20,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 /// The option names the fit functions take (besides the four sample arrays).
-pub const OPTION_NAMES: [&str; 19] = [
+pub const OPTION_NAMES: [&str; 21] = [
     "model",
     "wavelength",
     "quantity",
@@ -39,6 +40,8 @@ pub const OPTION_NAMES: [&str; 19] = [
     "timeout",
     "reduce",
     "threads",
+    "absolute_sigma",
+    "wavelength_unit",
 ];
 
 /// The fit options of one call.
@@ -49,6 +52,8 @@ pub struct FitOptions {
     pub wavelength: Option<f64>,
     /// Per-sample wavelengths.
     pub wavelengths: Option<Vec<f64>>,
+    /// The unit of λ (and so of σ, T), e.g. `nm`; None when not stated.
+    pub wavelength_unit: Option<String>,
     pub quantity: Quantity,
     quantity_name: String,
     pub residual: ResidualKind,
@@ -68,6 +73,10 @@ pub struct FitOptions {
     pub reduce: bool,
     /// Threads for parallel group fits (None: all cores).
     pub threads: Option<usize>,
+    /// Standard errors from `sigma_L` as stated (scipy's `absolute_sigma=True`).
+    pub absolute_sigma: bool,
+    /// Whether `quantity` was given (the report says where the quantity came from).
+    quantity_given: bool,
 }
 
 impl Default for FitOptions {
@@ -76,6 +85,7 @@ impl Default for FitOptions {
             model: "kbs".into(),
             wavelength: None,
             wavelengths: None,
+            wavelength_unit: None,
             quantity: Quantity::Radiance,
             quantity_name: "radiance".into(),
             residual: ResidualKind::Absolute,
@@ -94,6 +104,8 @@ impl Default for FitOptions {
             timeout: None,
             reduce: true,
             threads: None,
+            absolute_sigma: false,
+            quantity_given: false,
         }
     }
 }
@@ -234,6 +246,16 @@ impl FitOptions {
     fn set(&mut self, key: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
         match key {
             "model" => self.model = v.extract()?,
+            "wavelength_unit" => self.wavelength_unit = Some(v.extract()?),
+            "wavelength" if v.is_instance_of::<PyString>() => {
+                // As the CLI's --wavelength: a number with an optional unit (633nm, 0.633um).
+                let text: String = v.extract()?;
+                let (l, unit) = goniofit::io::parse_length(&text).map_err(to_py_err)?;
+                self.wavelength = Some(l);
+                if let Some(u) = unit {
+                    self.wavelength_unit = Some(u.to_string());
+                }
+            }
             "wavelength" => match v.extract::<f64>() {
                 Ok(l) => {
                     if !(l.is_finite() && l > 0.0) {
@@ -248,6 +270,7 @@ impl FitOptions {
             "quantity" => {
                 self.quantity_name = v.extract()?;
                 self.quantity = quantity(&self.quantity_name)?;
+                self.quantity_given = true;
             }
             "residual" => {
                 self.residual_name = v.extract()?;
@@ -279,6 +302,7 @@ impl FitOptions {
             "timeout" => self.timeout = Some(positive(v, "timeout")?),
             "reduce" => self.reduce = v.extract()?,
             "threads" => self.threads = Some(v.extract()?),
+            "absolute_sigma" => self.absolute_sigma = v.extract()?,
             _ => return Err(unknown(key)),
         }
         Ok(())
@@ -310,6 +334,31 @@ impl FitOptions {
                 weights_are_uncertainties: false,
                 reduce: self.reduce,
             },
+            absolute_sigma: self.absolute_sigma,
+        }
+    }
+
+    /// What the report's setting says about where the fit's choices came from.
+    pub fn setting_source(&self) -> SettingSource {
+        let wavelength_source = match (self.wavelength, &self.wavelengths) {
+            (Some(_), _) => "wavelength keyword",
+            (None, Some(_)) => "wavelength array",
+            (None, None) => "none",
+        };
+        SettingSource {
+            quantity: self.quantity,
+            quantity_source: if self.quantity_given {
+                "quantity keyword"
+            } else {
+                "default"
+            }
+            .into(),
+            residual: self.residual,
+            floor: self.floor,
+            wavelength_source: wavelength_source.into(),
+            wavelength_unit: self.wavelength_unit.clone(),
+            absolute_sigma: self.absolute_sigma,
+            ..SettingSource::default()
         }
     }
 
@@ -358,6 +407,9 @@ impl FitOptions {
         }
         if !self.reduce {
             a.push("--no-reduce".into());
+        }
+        if self.absolute_sigma {
+            a.push("--absolute-sigma".into());
         }
         a
     }

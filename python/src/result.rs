@@ -32,10 +32,13 @@ impl FitResult {
     /// equivalent CLI command).
     pub fn new(outcome: Outcome, o: &FitOptions) -> Self {
         let args = o.cli_args();
+        let setting =
+            report::outcome::setting(&outcome.dataset, &outcome.input, &o.setting_source());
         let info = RunInfo {
             input: outcome.label.clone(),
             command: format!("goniofit {} ({})", args.join(" "), outcome.label),
             version: env!("CARGO_PKG_VERSION").to_string(),
+            setting,
         };
         FitResult {
             outcome,
@@ -269,9 +272,5 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
 
 /// Run info for a report whose run fields are not read.
 fn empty_info() -> RunInfo {
-    RunInfo {
-        input: String::new(),
-        command: String::new(),
-        version: String::new(),
-    }
+    RunInfo::default()
 }

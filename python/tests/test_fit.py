@@ -14,6 +14,10 @@ from conftest import DATA
 # Fields that describe the run, not the fit: wall times, where the samples came from, and
 # the command line (the CLI's argv; the Python report writes the equivalent CLI options).
 RUN_FIELDS = {"seconds", "init_seconds", "start_seconds", "input", "command"}
+# Where the setting's choices came from: a file and flags for the CLI, arrays and keywords
+# for Python (the values themselves, floor, weights, residual, quantity, units, agree).
+PROVENANCE = {".setting.input", ".setting.wavelength.source", ".setting.quantity_source",
+              ".setting.channel"}
 
 
 def assert_same_report(cli, py, rtol=1e-12, path=""):
@@ -23,6 +27,8 @@ def assert_same_report(cli, py, rtol=1e-12, path=""):
         assert sorted(cli) == sorted(py), f"{path}: keys {sorted(cli)} vs {sorted(py)}"
         for k in cli:
             if path == "" and k in RUN_FIELDS or (path == ".replay" and k == "args"):
+                continue
+            if f"{path}.{k}" in PROVENANCE:
                 continue
             assert_same_report(cli[k], py[k], rtol, f"{path}.{k}")
     elif isinstance(cli, list):
@@ -48,7 +54,7 @@ def test_garnet_matches_cli_json(cli_json):
     d = goniofit.read(DATA / "cornell" / "garnet_red.astm", channel="550nm", radians=True)
     r = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], model="kbs+lambert",
                      quantity="brdf", residual="log", wavelength=d["wavelength"],
-                     channel=d["channel"], radians=True)
+                     wavelength_unit=d["wavelength_unit"], channel=d["channel"], radians=True)
     assert_same_report(cli, r.to_dict())
     assert r.verdict == "rough" and r.converged and r.termination == cli["termination"]
     assert r.cost == cli["cost"]
@@ -82,9 +88,11 @@ def test_text_report_is_the_cli_report(cli):
     assert code == 0
     d = read_csv(path)
     r = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], wavelength=1)
-    skip = ("input ", "command ", "run time ")
+    # Run lines, and where λ and the quantity came from (flags vs keywords).
+    skip = ("input ", "command ", "run time ", "wavelength ", "quantity ")
     keep = lambda s: [l for l in s.splitlines() if not l.strip().startswith(skip)]
     assert keep(r.report()) == keep(text)
+    assert "wavelength      = 1 unit of λ (from the wavelength keyword" in r.report()
     html = r._repr_html_()
     assert "<table>" in html and "sigma" in html and r.model in html
 
@@ -97,7 +105,7 @@ def test_by_group_matches_cli(cli_json):
     d = goniofit.read(path, channel="all", radians=True)
     fits = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], model="kbs+lambert",
                         quantity="brdf", residual="log", wavelength=d["wavelength"],
-                        group=d["channel"], radians=True)
+                        wavelength_unit="nm", group=d["channel"], radians=True)
     assert len(fits) == cli["datasets"] == 31
     for (label, r), c in zip(fits.items(), cli["fits"]):
         assert c["input"].endswith(f"[{label}]")

@@ -28,7 +28,7 @@ of σ, T, scale from a fit, in that mode, of noise-free reference data (4x12x24 
 σ=0.3, T=2, scale=1.5). Fit rows: the same fit in auto mode with each solver setting; \
 seconds = median solver time.")]
 pub struct WorkPrecisionArgs {
-    /// Print {\"rows\": [...]} as JSON instead of the table.
+    /// Print `{"rows": [...]}` as JSON instead of the table.
     #[arg(long)]
     pub json: bool,
     /// Timing repeats (the median is reported).

@@ -3,13 +3,14 @@
 use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-pub use goniofit::fit::dataset::fit_input;
 use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
 use goniofit::fit::lm::LmConfig;
 use goniofit::fit::problem::ResidualKind;
+use goniofit::geometry::Quantity;
 use goniofit::io::{self, Dataset, ReadOptions};
 use goniofit::model::{parse_assignments, ModelOptions};
+use goniofit::report::outcome::SettingSource;
 use goniofit::report::{self, RunInfo};
 use goniofit::Error;
 use std::path::{Path, PathBuf};
@@ -31,22 +32,43 @@ impl From<ResidualArg> for ResidualKind {
     }
 }
 
+/// Examples shown by `goniofit fit --help`.
+const FIT_EXAMPLES: &str = "\
+Examples:
+  goniofit fit --model kbs+lambert --channel 550nm --residual log data/cornell/garnet_red.astm
+      one channel of a Cornell paint BRDF (λ = 550 nm from the channel name; σ, T in nm)
+  goniofit fit --model kbs+lambert --channel all --residual log data/cornell/garnet_red.astm
+      every channel jointly: shared σ, T, one scale per channel
+  goniofit fit --model kbs+lambert --by-group --summary fits.csv data/cornell/garnet_red.astm
+      every channel on its own, with a one-line-per-fit table
+  goniofit fit --model lambert --channel 0.633 data/nist-ptfe/PTFE.data.csv
+      the 633 nm rows of a CSV with a wavelength column (its unit, µm here)
+  goniofit fit --model kbs --wavelength 633nm --json data/synthetic/kbs_hemisphere.csv > fit.json
+      a CSV without a wavelength column; the report as JSON (goniofit plot fit.json redraws it)
+  goniofit fit --model auto --wavelength 1 data/synthetic/kbs_hemisphere.csv
+      compare lambert, lambert-specular, kbs and kbs+lambert by BIC";
+
 #[derive(Debug, Args)]
+#[command(after_help = FIT_EXAMPLES)]
 pub struct FitArgs {
     /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
     /// (fits lambert, lambert-specular, kbs, kbs+lambert and keeps the lowest BIC).
     #[arg(long, default_value = "kbs")]
     pub model: String,
-    /// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi). A
+    /// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi). Default:
+    /// what the file states (ASTM `MEAS_NAME BRDF`, NIST PTFE `f_r11`), else radiance. A
     /// reflectance factor is a BRDF × π.
-    #[arg(long, value_enum, default_value = "radiance")]
-    pub quantity: QuantityArg,
-    /// Wavelength (the unit of σ and T in the report); required for KBS models unless a
-    /// `wavelength` column or an ASTM channel name gives it.
-    #[arg(long)]
-    pub wavelength: Option<f64>,
-    /// ASTM E1392 channel to fit (e.g. 550nm), or `all` for a joint fit over every channel
-    /// with shared σ, T and per-channel scales.
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Wavelength, with its unit (633nm, 0.633um) or as a bare number (then σ and T are in
+    /// that number's unknown unit); σ and T are reported in this unit. Required for KBS
+    /// models unless a `wavelength` column or an ASTM channel name gives it.
+    #[arg(long, value_parser = parse_wavelength_arg)]
+    pub wavelength: Option<(f64, Option<&'static str>)>,
+    /// One channel: an ASTM channel (e.g. 550nm); for CSV a `group` label, or a wavelength
+    /// (0.532 in the file's unit, or 532nm) selecting the rows of that wavelength. `all`: a
+    /// joint fit over every channel (CSV without a group column: every wavelength) with
+    /// shared σ, T and per-channel scales.
     #[arg(long)]
     pub channel: Option<String>,
     /// CSV angles are in radians (default degrees).
@@ -75,7 +97,7 @@ pub struct FitArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub mode: ModeArg,
     /// Relative accuracy target of the KBS evaluation.
-    #[arg(long, default_value_t = 1e-10)]
+    #[arg(long, default_value = "1e-10")]
     pub tol: f64,
     /// Patch half-sizes X,Y (unit of λ): include the coherent term.
     #[arg(long)]
@@ -92,6 +114,10 @@ pub struct FitArgs {
     /// Show a progress line while fitting.
     #[arg(long)]
     pub progress: bool,
+    /// Standard errors and intervals from `sigma_L` as stated (a true standard
+    /// uncertainty), not rescaled by the residual scatter (scipy's `absolute_sigma=True`).
+    #[arg(long)]
+    pub absolute_sigma: bool,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -101,7 +127,12 @@ pub struct FitArgs {
     /// Write the fit's pictures (PNG and SVG) into this folder.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// Fit each group (a `group` column, or each ASTM channel) on its own.
+    /// Also write the one-line-per-fit summary (group, n, converged, cost, R², σ, T, T/σ,
+    /// verdict) to this CSV file.
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+    /// Fit each group on its own: each ASTM channel, each label of a `group` column, or
+    /// (CSV without one) each wavelength.
     #[arg(long)]
     pub by_group: bool,
     /// Threads (default: all cores): datasets are fitted in parallel, and one dataset's
@@ -117,14 +148,83 @@ impl FitArgs {
     /// How the input files are read (`--radians`, `--signed-theta-r`, `--columns`,
     /// `--channel`); values are required.
     pub fn read_options(&self) -> anyhow::Result<ReadOptions> {
+        // --by-group needs every channel (ASTM) or every wavelength (CSV) read.
+        let channel = match (&self.channel, self.by_group) {
+            (None, true) => Some("all".to_string()),
+            (c, _) => c.clone(),
+        };
         Ok(ReadOptions {
             radians: self.radians,
             signed_theta_r: self.signed_theta_r,
             columns: io::csv::parse_columns(self.columns.as_deref().unwrap_or(""))?,
             require_value: true,
-            channel: self.channel.clone(),
+            channel,
         })
     }
+
+    /// The measured quantity for a dataset and where it came from: `--quantity`, what the
+    /// file states, or radiance by default.
+    pub fn quantity_for(&self, ds: &Dataset) -> (Quantity, &'static str) {
+        match (self.quantity, ds.quantity) {
+            (Some(q), _) => (q.into(), "--quantity"),
+            (None, Some(q)) => (q, "stated by the file"),
+            (None, None) => (Quantity::Radiance, "default"),
+        }
+    }
+
+    /// The wavelength given on the command line, as a number.
+    pub fn wavelength_value(&self) -> Option<f64> {
+        self.wavelength.map(|w| w.0)
+    }
+}
+
+/// `--wavelength`: a positive number with an optional unit (nm, um, µm).
+fn parse_wavelength_arg(text: &str) -> Result<(f64, Option<&'static str>), String> {
+    io::parse_length(text).map_err(|e| e.to_string())
+}
+
+/// The whole setting of one dataset's fit, for the report (`report::Setting`).
+pub fn setting_of(
+    args: &FitArgs,
+    ds: &Dataset,
+    input: &FitInput,
+    file: &report::setting::InputInfo,
+) -> report::Setting {
+    let (quantity, quantity_source) = args.quantity_for(ds);
+    let (unit, source) = match (args.wavelength, &ds.wavelength) {
+        (Some((_, u)), _) => (u.map(String::from), "--wavelength"),
+        (None, Some(_)) if io::is_astm(&ds.path, "") => {
+            (ds.wavelength_unit.clone(), "channel name")
+        }
+        (None, Some(_)) => (ds.wavelength_unit.clone(), "wavelength column"),
+        (None, None) => (None, "none"),
+    };
+    let source = SettingSource {
+        file: file.clone(),
+        channel: args.channel.clone(),
+        quantity,
+        quantity_source: quantity_source.into(),
+        residual: args.residual.into(),
+        floor: args.floor,
+        wavelength_unit: unit,
+        wavelength_source: source.into(),
+        absolute_sigma: args.absolute_sigma,
+    };
+    report::outcome::setting(ds, input, &source)
+}
+
+/// The input file's absolute path, size and SHA-256.
+pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    Ok(report::setting::InputInfo {
+        path: abs.display().to_string(),
+        sha256: report::checksum::sha256_hex(&bytes),
+        bytes: bytes.len() as u64,
+    })
 }
 
 /// The fit configuration from the arguments, for a given model name.
@@ -161,17 +261,30 @@ fn command_line() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
 }
 
-/// The library's settings of a dataset's fit from the arguments (`progress`: show the
-/// progress line, for a single dataset).
-fn dataset_fit(args: &FitArgs, progress: bool) -> anyhow::Result<DatasetFit> {
+/// The library's settings of a dataset's fit from the arguments, for dataset `ds` (its
+/// quantity may come from the file); `progress`: show the progress line (one dataset).
+fn dataset_fit(args: &FitArgs, ds: &Dataset, progress: bool) -> anyhow::Result<DatasetFit> {
     let mut config = fit_config(args, &args.model, false)?;
     config.lm.progress = progress && args.progress;
     Ok(DatasetFit {
         model: args.model.clone(),
-        quantity: args.quantity.into(),
-        wavelength: args.wavelength,
+        quantity: args.quantity_for(ds).0,
+        wavelength: args.wavelength_value(),
         config,
+        absolute_sigma: args.absolute_sigma,
     })
+}
+
+/// The fit input of a dataset with the quantity, wavelength, residual and floor of `args`.
+pub fn input_of(args: &FitArgs, ds: &Dataset, needs_wavelength: bool) -> anyhow::Result<FitInput> {
+    Ok(dataset_fit(args, ds, false)?.input(ds, needs_wavelength)?)
+}
+
+/// Fit one dataset with every candidate model; keep the lowest BIC.
+fn fit_one(args: &FitArgs, label: String, ds: Dataset, progress: bool) -> anyhow::Result<Outcome> {
+    let spec = dataset_fit(args, &ds, progress)?;
+    let context = format!("{label}: fitting model {}", args.model);
+    fit_dataset(&spec, label, ds).context(context)
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
@@ -182,13 +295,15 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     }
     // Every input is read (and checked) before any fit starts.
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
+    let mut files: Vec<(PathBuf, report::setting::InputInfo)> = Vec::new();
     for file in &args.file {
         let ds = io::read_dataset(file, &opts)?;
+        files.push((file.clone(), input_info(file)?));
         if args.by_group {
             let names = ds.channel_names();
             if names.is_empty() {
                 return Err(Error::Usage(format!(
-                    "{}: --by-group needs a group column (or ASTM channels)",
+                    "{}: --by-group needs groups: ASTM channels, a group column, or a wavelength column",
                     file.display()
                 ))
                 .into());
@@ -216,30 +331,44 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .num_threads(threads)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let spec = dataset_fit(&args, single)?;
-    let fit_one = |(label, ds): (String, Dataset)| {
-        let context = format!("{label}: fitting model {}", args.model);
-        fit_dataset(&spec, label, ds).context(context)
-    };
     let outcomes: Vec<anyhow::Result<Outcome>> = if single {
-        let job = jobs.pop().expect("one job");
-        vec![pool.install(|| fit_one(job))]
+        let (label, ds) = jobs.pop().expect("one job");
+        vec![pool.install(|| fit_one(&args, label, ds, true))]
     } else {
         use rayon::prelude::*;
-        pool.install(|| jobs.into_par_iter().map(fit_one).collect())
+        pool.install(|| {
+            jobs.into_par_iter()
+                .map(|(label, ds)| fit_one(&args, label, ds, false))
+                .collect()
+        })
     };
     let wall = t0.elapsed().as_secs_f64();
     let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
-    let info_for = |o: &Outcome| RunInfo {
-        input: o.label.clone(),
-        command: command_line(),
-        version: env!("CARGO_PKG_VERSION").to_string(),
+    let info_for = |o: &Outcome| {
+        let file = files
+            .iter()
+            .find(|(p, _)| *p == o.dataset.path)
+            .map(|(_, i)| i.clone())
+            .unwrap_or_default();
+        RunInfo {
+            input: o.label.clone(),
+            command: command_line(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            setting: setting_of(&args, &o.dataset, &o.input, &file),
+        }
     };
+    let infos: Vec<RunInfo> = outcomes.iter().map(info_for).collect();
+    let rows: Vec<report::summary::Row> = outcomes
+        .iter()
+        .zip(&infos)
+        .map(|(o, i)| report::summary::row(&o.label, &o.result, &i.setting.units))
+        .collect();
     if args.json {
         let replay_args: Vec<String> = std::env::args().skip(1).collect();
         let values: Vec<serde_json::Value> = outcomes
             .iter()
-            .map(|o| report::outcome::to_json(o, &info_for(o), &replay_args))
+            .zip(&infos)
+            .map(|(o, i)| report::outcome::to_json(o, i, &replay_args))
             .collect();
         let v = if single {
             values.into_iter().next().expect("one outcome")
@@ -249,15 +378,25 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
                 "datasets": outcomes.len(),
                 "seconds": wall,
                 "threads": pool.current_num_threads(),
+                "summary": summary_json(&rows),
             })
         };
         io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&v)?))?;
     } else {
-        let text: String = outcomes
+        let mut text: String = outcomes
             .iter()
-            .map(|o| report::outcome::to_text(o, &info_for(o)))
+            .zip(&infos)
+            .map(|(o, i)| report::outcome::to_text(o, i))
             .collect();
+        let joint = outcomes.iter().any(|o| o.input.channel_names.len() > 1);
+        if !single || joint {
+            text += &report::summary::table(&rows);
+        }
         io::print_stdout(&text)?;
+    }
+    if let Some(path) = &args.summary {
+        let headers: Vec<String> = report::summary::CSV_HEADER.map(String::from).to_vec();
+        io::write_csv(path, &headers, &report::summary::csv_rows(&rows))?;
     }
     if !single {
         eprintln!(
@@ -288,6 +427,23 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     } else {
         3
     })
+}
+
+/// The summary rows as JSON objects (the CSV's columns).
+fn summary_json(rows: &[report::summary::Row]) -> serde_json::Value {
+    let csv = report::summary::csv_rows(rows);
+    serde_json::Value::Array(
+        csv.into_iter()
+            .map(|r| {
+                let m: serde_json::Map<String, serde_json::Value> = report::summary::CSV_HEADER
+                    .iter()
+                    .zip(r)
+                    .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
+                    .collect();
+                serde_json::Value::Object(m)
+            })
+            .collect(),
+    )
 }
 
 /// Write the input rows with L_fit, residual, std_residual and mode (atomically).

@@ -2,7 +2,7 @@
 //! --json > fit.json`), without fitting again: the report carries the fit's arguments and
 //! the fitted values.
 
-use super::fit::{fit_config, fit_input, plot_fit};
+use super::fit::{fit_config, input_of, plot_fit};
 use crate::cli::{Cli, Command};
 use anyhow::Context;
 use clap::{Args, Parser};
@@ -45,15 +45,24 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         return Err(bad("not a fit").into());
     };
     let opts = fa.read_options()?;
-    let file = fa.file.first().ok_or_else(|| bad("no input file"))?;
-    let ds = io::read_dataset(file, &opts)
+    // The report's absolute input path (reports before it had one: the path as typed).
+    let saved = &json["setting"]["input"];
+    let file = match saved["path"].as_str().filter(|p| !p.is_empty()) {
+        Some(p) => PathBuf::from(p),
+        None => fa.file.first().ok_or_else(|| bad("no input file"))?.clone(),
+    };
+    let ds = io::read_dataset(&file, &opts)
         .with_context(|| format!("re-reading the data of {}", args.report.display()))?;
-    let input = fit_input(
-        &ds,
-        fa.quantity.into(),
-        fa.wavelength,
-        model.starts_with("kbs"),
-    )?;
+    if let Some(want) = saved["sha256"].as_str() {
+        let now = super::fit::input_info(&file)?.sha256;
+        if now != want {
+            eprintln!(
+                "goniofit: warning: {} changed since the fit (sha256 {now}, the report has {want}); the pictures show the file as it is now",
+                file.display()
+            );
+        }
+    }
+    let input = input_of(&fa, &ds, model.starts_with("kbs"))?;
     let config = fit_config(&fa, &model, ds.sigma_l.is_some())?;
     let m = goniofit::model::by_name(&model, &config.model_opts)?;
     let layout = ParamLayout::new(m.as_ref(), &input.channel_names);

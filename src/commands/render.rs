@@ -64,6 +64,15 @@ fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
         marks: a.marks,
     };
     write_picture(&pic, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    eprintln!(
+        "goniofit: wrote {} ({}×{} px, a sphere lit from θ = {}°, model {} at {})",
+        a.out.display(),
+        a.size,
+        a.size,
+        a.light_deg,
+        model.name(),
+        a.params
+    );
     goniofit::io::print_stdout(&format!("{}\n", a.out.display()))?;
     Ok(0)
 }

@@ -58,9 +58,13 @@ pub struct SynthArgs {
     /// Add a sigma_L column: the standard deviation of each value's noise.
     #[arg(long)]
     pub write_sigma: bool,
-    /// Add a wavelength column.
+    /// Add a wavelength column (always written for the KBS models, whose σ and T are in
+    /// its unit, so that `goniofit fit` reads λ from the file; `--no-wavelength` omits it).
     #[arg(long)]
     pub write_wavelength: bool,
+    /// Omit the wavelength column even for a KBS model.
+    #[arg(long, conflicts_with = "write_wavelength")]
+    pub no_wavelength: bool,
     /// Write φr = 180° rows as signed θr < 0 at φr = 0.
     #[arg(long)]
     pub signed_theta_r: bool,
@@ -216,7 +220,8 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     )?;
     let csv_opts = CsvOptions {
         sigma: a.write_sigma,
-        wavelength: a.write_wavelength,
+        wavelength: a.write_wavelength
+            || (!a.no_wavelength && a.model.to_ascii_lowercase().starts_with("kbs")),
         signed_theta_r: a.signed_theta_r,
     };
     let mut csv_bytes = Vec::new();

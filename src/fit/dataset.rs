@@ -6,10 +6,13 @@
 //! [`crate::report::outcome`] turn an outcome into the text report and the JSON object.
 
 use super::driver::{self, FitConfig, FitInput, FitResult};
+use super::problem::ResidualKind;
+use super::weights::residual_weights;
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Quantity};
 use crate::io::Dataset;
 use crate::model::{self, ModelOptions};
+use crate::report;
 
 /// Candidate models for `model = "auto"`, compared by BIC.
 pub const AUTO_CANDIDATES: [&str; 4] = ["lambert", "lambert-specular", "kbs", "kbs+lambert"];
@@ -26,6 +29,9 @@ pub struct DatasetFit {
     /// The fit's settings; `model` and `weights_are_uncertainties` are set per candidate
     /// and dataset.
     pub config: FitConfig,
+    /// Standard errors from the stated uncertainties as they are (scipy's
+    /// `absolute_sigma=True`), not rescaled by the residual scatter.
+    pub absolute_sigma: bool,
 }
 
 impl DatasetFit {
@@ -35,7 +41,12 @@ impl DatasetFit {
         if self.model.eq_ignore_ascii_case("auto") {
             Ok(AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect())
         } else {
-            model::by_name(&self.model, &ModelOptions::default())?;
+            model::by_name(&self.model, &ModelOptions::default()).map_err(|e| match e {
+                Error::UnknownModel(name) => Error::Usage(format!(
+                    "unknown model '{name}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto to fit the last four and keep the lowest BIC)"
+                )),
+                e => e,
+            })?;
             Ok(vec![self.model.to_ascii_lowercase()])
         }
     }
@@ -48,6 +59,18 @@ impl DatasetFit {
             weights_are_uncertainties: uncertainties,
             ..self.config.clone()
         }
+    }
+
+    /// The fit input of a dataset with this fit's quantity, wavelength, residual and floor.
+    pub fn input(&self, ds: &Dataset, needs_wavelength: bool) -> Result<FitInput> {
+        fit_input(
+            ds,
+            self.quantity,
+            self.wavelength,
+            needs_wavelength,
+            self.config.residual,
+            self.config.floor,
+        )
     }
 }
 
@@ -65,13 +88,16 @@ pub struct Outcome {
 }
 
 /// The fit's data from a dataset: geometry (λ from `wavelength`, else the dataset's own,
-/// else 1 unless `needs_wavelength`), values, weights (1 without a weight column), and the
-/// channel index of every sample with the channel names in first-appearance order.
+/// else 1 unless `needs_wavelength`), values, the weights transformed for the residual kind
+/// ([`super::weights`]), and the channel index of every sample with the channel names in
+/// first-appearance order.
 pub fn fit_input(
     ds: &Dataset,
     quantity: Quantity,
     wavelength: Option<f64>,
     needs_wavelength: bool,
+    residual: ResidualKind,
+    floor: Option<f64>,
 ) -> Result<FitInput> {
     let n = ds.samples.len();
     let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
@@ -90,7 +116,14 @@ pub fn fit_input(
         path: ds.path.clone(),
         message: "no measured value column (L)".into(),
     })?;
-    let weight = ds.weight.clone().unwrap_or_else(|| vec![1.0; n]);
+    let floor = floor_for(floor, &y);
+    let (weight, _) = residual_weights(
+        ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
+        ds.sigma_l.as_deref(),
+        &y,
+        residual,
+        floor,
+    );
     let (channel, channel_names) = match &ds.channel {
         Some(labels) => {
             let mut names: Vec<String> = Vec::new();
@@ -117,12 +150,23 @@ pub fn fit_input(
     })
 }
 
+/// The residual floor: `floor`, or 1e-6 × max |y| (as the fit computes it).
+pub fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
+    driver::residual_floor(
+        &FitConfig {
+            floor,
+            ..FitConfig::default()
+        },
+        y,
+    )
+}
+
 /// Fit one dataset with every candidate model and keep the lowest BIC. Errors: the
 /// dataset's own (no wavelength for a KBS model, bad values) and the fit's.
 pub fn fit_dataset(spec: &DatasetFit, label: String, ds: Dataset) -> Result<Outcome> {
     let candidates = spec.candidates()?;
     let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
-    let input = fit_input(&ds, spec.quantity, spec.wavelength, needs_wavelength)?;
+    let input = spec.input(&ds, needs_wavelength)?;
     let uncertainties = ds.sigma_l.is_some();
     let results = candidates
         .iter()
@@ -134,6 +178,16 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, ds: Dataset) -> Result<Outc
         .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
         .map_or(0, |(i, _)| i);
     let mut result = results[best].clone();
+    if spec.absolute_sigma {
+        report::use_absolute_sigma(&mut result);
+    }
+    report::add_reflectance_factors(
+        &mut result,
+        &report::Units {
+            quantity: spec.quantity,
+            ..Default::default()
+        },
+    );
     if input.channel_names.len() > 1 {
         if let Some(note) = joint_narrowing(spec, &ds, &result)? {
             result.notes.push(note);
@@ -148,7 +202,8 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, ds: Dataset) -> Result<Outc
     })
 }
 
-/// For a joint fit: how much narrower σ and T are than from the middle channel alone.
+/// For a joint fit: how much narrower σ, T and T/σ are than from the middle channel alone,
+/// or that the data determines them neither way.
 fn joint_narrowing(spec: &DatasetFit, ds: &Dataset, joint: &FitResult) -> Result<Option<String>> {
     let Some(labels) = &ds.channel else {
         return Ok(None);
@@ -158,25 +213,34 @@ fn joint_narrowing(spec: &DatasetFit, ds: &Dataset, joint: &FitResult) -> Result
     let idx: Vec<usize> = (0..labels.len()).filter(|&i| &labels[i] == mid).collect();
     let mut single = ds.subset(&idx);
     single.channel = None;
-    let input = fit_input(&single, spec.quantity, spec.wavelength, true)?;
+    let input = spec.input(&single, true)?;
     let mut config = spec.config_for(&joint.model, ds.sigma_l.is_some());
     config.lm.progress = false;
     let alone = driver::fit(&input, &config)?;
     let mut parts = Vec::new();
-    for name in ["sigma", "T"] {
-        let se = |r: &FitResult| {
-            r.params
-                .iter()
-                .find(|p| p.name == name)
-                .and_then(|p| p.stderr)
+    for name in ["sigma", "T", "T/sigma"] {
+        let se = |r: &FitResult| -> Option<Option<f64>> {
+            let p = r.params.iter().find(|p| p.name == name);
+            let d = r.derived.iter().find(|d| d.name == name);
+            match (p, d) {
+                (Some(p), _) => Some(p.stderr),
+                (None, Some(d)) => Some(d.stderr),
+                _ => None,
+            }
         };
         match (se(joint), se(&alone)) {
-            (Some(j), Some(a)) => parts.push(format!(
+            (Some(Some(j)), Some(Some(a))) => parts.push(format!(
                 "{name}: ±{j:.3e} joint vs ±{a:.3e} from {mid} alone ({:.1}× narrower)",
                 a / j
             )),
-            (Some(j), None) => parts.push(format!(
+            (Some(Some(j)), Some(None)) => parts.push(format!(
                 "{name}: ±{j:.3e} joint, not determined from {mid} alone"
+            )),
+            (Some(None), Some(Some(a))) => parts.push(format!(
+                "{name}: not determined jointly, ±{a:.3e} from {mid} alone"
+            )),
+            (Some(None), Some(None)) => parts.push(format!(
+                "{name}: not determined by the data, jointly or from {mid} alone"
             )),
             _ => {}
         }

@@ -88,7 +88,9 @@ pub fn dataset(name: &str, cols: &Columns, radians: bool, signed_theta_r: bool) 
         weight,
         sigma_l: cols.sigma_l.map(<[f64]>::to_vec),
         wavelength,
+        wavelength_unit: None,
         channel: cols.channel.map(<[String]>::to_vec),
+        quantity: None,
     })
 }
 

@@ -254,7 +254,9 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         weight: None,
         sigma_l: None,
         wavelength: have_wl.then(|| Vec::with_capacity(n)),
+        wavelength_unit: have_wl.then(|| "nm".to_string()),
         channel: Some(Vec::with_capacity(n)),
+        quantity: stated_quantity(header.get("MEAS_NAME")),
     };
     for (line_no, line) in data {
         let fields = split_row(line);
@@ -330,6 +332,19 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         }
     }
     Ok(ds)
+}
+
+/// The quantity a `MEAS_NAME` states: `BRDF` (any case) is a BRDF, a name with `radiance`
+/// a radiance; anything else states nothing.
+fn stated_quantity(meas_name: Option<&str>) -> Option<crate::geometry::Quantity> {
+    let m = meas_name?.trim().to_ascii_lowercase();
+    if m == "brdf" || m.starts_with("brdf ") {
+        Some(crate::geometry::Quantity::Brdf)
+    } else if m.contains("radiance") {
+        Some(crate::geometry::Quantity::Radiance)
+    } else {
+        None
+    }
 }
 
 /// At most 60 characters of a line, for messages.

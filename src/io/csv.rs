@@ -310,7 +310,14 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
             .map(|_| Vec::with_capacity(n)),
         sigma_l: cols.get(Role::SigmaL).map(|_| Vec::with_capacity(n)),
         wavelength: cols.get(Role::Wavelength).map(|_| Vec::with_capacity(n)),
+        // Germer's files give lambda in µm and f_r11, a BRDF.
+        wavelength_unit: (nist.is_some()
+            && !mapped[Role::Wavelength as usize]
+            && cols.get(Role::Wavelength).is_some())
+        .then(|| "µm".to_string()),
         channel: cols.get(Role::Group).map(|_| Vec::with_capacity(n)),
+        quantity: (nist.is_some() && !mapped[Role::Value as usize])
+            .then_some(crate::geometry::Quantity::Brdf),
     };
     for (line, fields) in records {
         if fields.len() != headers.len() {

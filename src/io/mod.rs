@@ -1,7 +1,7 @@
 //! Reading measurements and writing tables.
 //!
 //! [`read_dataset`] reads either a CSV table ([`csv`]) or an ASTM E1392 file ([`astm`]) into
-//! a [`Dataset`]: validated angles in our convention (MODEL.md: radians, θi ∈ [0, π/2),
+//! a [`Dataset`]: validated angles in our convention (docs/conventions.md: radians, θi ∈ [0, π/2),
 //! θr ∈ [0, π/2], φr from the plane of incidence, φr = 0 the forward/specular side), the
 //! measured values, and the raw rows for pass-through output.
 //!
@@ -36,7 +36,7 @@ pub mod output;
 pub use output::{check_distinct, print_stdout, write_atomic, write_bytes};
 
 use crate::error::{Error, Result};
-use crate::geometry::Sample;
+use crate::geometry::{Quantity, Sample};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -52,8 +52,10 @@ pub struct ReadOptions {
     pub columns: Vec<(String, String)>,
     /// Whether column L (the measured value) must exist (fit: yes; eval: no).
     pub require_value: bool,
-    /// ASTM: one channel name such as `550nm`, or `all`. Ignored for CSV (a `group`
-    /// column labels its samples instead).
+    /// One channel, or `all`. ASTM: a channel name such as `550nm`. CSV: a `group` label
+    /// when the file has a `group` column, otherwise a wavelength (`0.532`, in the file's
+    /// unit, or `532nm`) selecting the rows of that `wavelength`; `all` on a CSV without a
+    /// `group` column makes each wavelength a channel (see [`select_csv_channel`]).
     pub channel: Option<String>,
 }
 
@@ -67,7 +69,7 @@ pub struct Dataset {
     pub rows: Vec<Vec<String>>,
     /// 1-based source line of each sample.
     pub lines: Vec<usize>,
-    /// Sample angles in radians, in the convention of MODEL.md.
+    /// Sample angles in radians, in the convention of docs/conventions.md.
     pub samples: Vec<Sample>,
     /// Measured L (or BRDF).
     pub value: Option<Vec<f64>>,
@@ -78,8 +80,13 @@ pub struct Dataset {
     /// Per-sample wavelength (a `wavelength` column in the file's unit, or from an ASTM
     /// channel name: `550nm` → 550, in nm).
     pub wavelength: Option<Vec<f64>>,
+    /// Unit of `wavelength` when the file states it: `nm` for ASTM channel names, `µm` for
+    /// the NIST PTFE layout; None for a plain `wavelength` column (unit unknown).
+    pub wavelength_unit: Option<String>,
     /// Per-sample channel/group label (ASTM channel, or a `group` column).
     pub channel: Option<Vec<String>>,
+    /// The measured quantity the file states (ASTM `MEAS_NAME BRDF`, NIST `f_r11`), if any.
+    pub quantity: Option<Quantity>,
 }
 
 impl Dataset {
@@ -122,7 +129,9 @@ impl Dataset {
             weight: self.weight.as_deref().map(|v| pick(v, idx)),
             sigma_l: self.sigma_l.as_deref().map(|v| pick(v, idx)),
             wavelength: self.wavelength.as_deref().map(|v| pick(v, idx)),
+            wavelength_unit: self.wavelength_unit.clone(),
             channel: self.channel.as_deref().map(|v| pick(v, idx)),
+            quantity: self.quantity,
         }
     }
 
@@ -151,7 +160,132 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Datas
     if is_astm(path, text) {
         astm::parse(path, text, opts)
     } else {
-        csv::parse(path, text, opts)
+        select_csv_channel(csv::parse(path, text, opts)?, opts.channel.as_deref())
+    }
+}
+
+/// `--channel` on a CSV dataset. With a `group` column: `all` keeps every group, a label
+/// keeps that group. Without one: `all` labels each sample by its wavelength (one channel per
+/// wavelength, e.g. `0.532µm`), and a wavelength (`0.532` in the file's unit, or with a unit
+/// such as `532nm` when the file's unit is known) keeps the rows whose `wavelength` equals it
+/// to 1e-9 relative. A channel that selects nothing is an error listing what there is.
+pub fn select_csv_channel(ds: Dataset, channel: Option<&str>) -> Result<Dataset> {
+    let Some(want) = channel.map(str::trim) else {
+        return Ok(ds);
+    };
+    let all = want.eq_ignore_ascii_case("all");
+    if ds.channel.is_some() {
+        if all {
+            return Ok(ds);
+        }
+        let names = ds.channel_names();
+        let idx = ds.channel_indices(want);
+        if idx.is_empty() {
+            return Err(Error::Usage(format!(
+                "{}: no group '{want}' (groups: {}; or 'all')",
+                ds.path.display(),
+                names.join(", ")
+            )));
+        }
+        return Ok(ds.subset(&idx));
+    }
+    let Some(wl) = ds.wavelength.clone() else {
+        return Err(Error::Usage(format!(
+            "{}: --channel '{want}' needs a group column or a wavelength column to select by (the file has neither)",
+            ds.path.display()
+        )));
+    };
+    let unit = ds.wavelength_unit.clone().unwrap_or_default();
+    let distinct = distinct_values(&wl);
+    let label = |v: f64| format!("{v}{unit}");
+    if all {
+        let mut ds = ds;
+        ds.channel = Some(wl.iter().map(|&v| label(v)).collect());
+        return Ok(ds);
+    }
+    let listing = || {
+        distinct
+            .iter()
+            .map(|&v| label(v))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let (value, given_unit) = parse_length(want).map_err(|_| {
+        Error::Usage(format!(
+            "{}: --channel '{want}' is neither 'all' nor a wavelength (wavelengths: {})",
+            ds.path.display(),
+            listing()
+        ))
+    })?;
+    let target = match (given_unit, ds.wavelength_unit.as_deref()) {
+        (None, _) => value,
+        (Some(u), Some(file_unit)) => value * nm_per(u) / nm_per(file_unit),
+        (Some(u), None) => {
+            return Err(Error::Usage(format!(
+                "{}: --channel '{want}' has a unit ({u}) but the file's wavelength column states none: give the number in the column's unit (wavelengths: {})",
+                ds.path.display(),
+                listing()
+            )))
+        }
+    };
+    let idx: Vec<usize> = (0..wl.len())
+        .filter(|&i| (wl[i] - target).abs() <= 1e-9 * target.abs())
+        .collect();
+    if idx.is_empty() {
+        return Err(Error::Usage(format!(
+            "{}: no rows at wavelength {want} (wavelengths: {})",
+            ds.path.display(),
+            listing()
+        )));
+    }
+    let mut sub = ds.subset(&idx);
+    sub.channel = Some(vec![label(target); idx.len()]);
+    Ok(sub)
+}
+
+/// The distinct values of `v` in first-appearance order.
+fn distinct_values(v: &[f64]) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::new();
+    for &x in v {
+        if !out.contains(&x) {
+            out.push(x);
+        }
+    }
+    out
+}
+
+/// Length units goniofit understands, as written in reports: nanometres and micrometres.
+pub const LENGTH_UNITS: [(&str, f64); 2] = [("nm", 1.0), ("µm", 1000.0)];
+
+/// Nanometres per `unit` (`nm`, `µm`; 1 for anything else).
+pub fn nm_per(unit: &str) -> f64 {
+    LENGTH_UNITS
+        .iter()
+        .find(|(u, _)| *u == unit)
+        .map_or(1.0, |(_, f)| *f)
+}
+
+/// A positive length such as `633nm`, `633 nm`, `0.633um`, `0.633µm` or a bare `0.633`:
+/// the number and its unit (`nm`, `µm`; None for a bare number). The error says what is
+/// accepted.
+pub fn parse_length(text: &str) -> Result<(f64, Option<&'static str>)> {
+    let t = text.trim();
+    let lower = t.to_lowercase();
+    let (num, unit) = if let Some(n) = lower.strip_suffix("nm") {
+        (n.to_string(), Some("nm"))
+    } else if let Some(n) = ["um", "µm", "μm", "micron"]
+        .iter()
+        .find_map(|s| lower.strip_suffix(s))
+    {
+        (n.to_string(), Some("µm"))
+    } else {
+        (lower.clone(), None)
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok((v, unit)),
+        _ => Err(Error::Usage(format!(
+            "'{t}' is not a positive length: give a number with nm or um (633nm, 0.633um) or a bare number in the unit of the data's wavelength"
+        ))),
     }
 }
 
@@ -322,17 +456,6 @@ pub(crate) fn check_angles(
 /// A wavelength from a channel name such as `550nm`, `550 nm`, `0.55um`, `0.55µm` or a bare
 /// number (taken as nm); the result is in nm. `None` when the name is not a wavelength.
 pub fn wavelength_nm_of_channel(name: &str) -> Option<f64> {
-    let t = name.trim().to_ascii_lowercase();
-    let (num, scale) = if let Some(n) = t.strip_suffix("nm") {
-        (n, 1.0)
-    } else if let Some(n) = t.strip_suffix("um") {
-        (n, 1000.0)
-    } else if let Some(n) = t.strip_suffix("µm") {
-        (n, 1000.0)
-    } else {
-        (t.as_str(), 1.0)
-    };
-    let v: f64 = num.trim().parse().ok()?;
-    let v = v * scale;
-    (v.is_finite() && v > 0.0).then_some(v)
+    let (v, unit) = parse_length(name).ok()?;
+    Some(v * unit.map_or(1.0, nm_per))
 }

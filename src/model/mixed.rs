@@ -1,5 +1,5 @@
 //! KBS + Lambertian: surface (KBS) plus body (Lambertian) reflection,
-//! L = s cos²θi ⟨|ρ|²⟩ + s_d cos θi (MODEL.md, "Lambertian and specular").
+//! L = s cos²θi ⟨|ρ|²⟩ + s_d cos θi (docs/conventions.md, "Models").
 //!
 //! | parameter | unit | domain |
 //! |---|---|---|

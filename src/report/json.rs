@@ -15,6 +15,8 @@ fn num(v: f64) -> Value {
 
 /// The report as a JSON value.
 pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
+    let units = &info.setting.units;
+    let smooth = r.verdict == crate::fit::driver::Verdict::Smooth;
     let mut params = Map::new();
     for p in &r.params {
         params.insert(
@@ -24,7 +26,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
                 "stderr": p.stderr.map(num),
                 "determined": p.determined,
                 "fixed": p.fixed,
-                "unit": p.unit,
+                "unit": units.of_param(&p.name),
             }),
         );
     }
@@ -32,7 +34,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
     for d in &r.derived {
         derived.insert(
             d.name.clone(),
-            json!({"value": num(d.value), "stderr": d.stderr.map(num), "determined": d.determined, "doc": d.doc}),
+            json!({"value": num(d.value), "stderr": d.stderr.map(num), "determined": d.determined, "doc": d.doc, "unit": units.of_derived(&d.name, smooth)}),
         );
     }
     let k = r.corr_names.len();
@@ -53,7 +55,14 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "derived": derived,
         "verdict": r.verdict,
         "notes": r.notes,
-        "correlation": {"names": r.corr_names, "matrix": correlation},
+        "correlation": {
+            "names": r.corr_names,
+            "matrix": correlation,
+            "largest": super::text::top_pairs(r, super::text::TOP_PAIRS)
+                .into_iter()
+                .map(|(a, b, rho)| json!({"a": a, "b": b, "rho": num(rho)}))
+                .collect::<Vec<_>>(),
+        },
         "singular_values": r.singular_values.iter().map(|v| num(*v)).collect::<Vec<_>>(),
         "condition": num(r.condition),
         "cost": num(r.cost),
@@ -77,6 +86,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "modes": r.modes,
         "g_range": r.g_range.map(|(a, b)| vec![num(a), num(b)]),
         "input": info.input,
+        "setting": info.setting,
         "command": info.command,
         "version": info.version,
     })

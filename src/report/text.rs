@@ -1,8 +1,15 @@
-//! The plain-text fit report (lmfit-style).
+//! The plain-text fit report (lmfit-style), with the setting and units written out.
 
+use super::setting::{Setting, Units};
 use super::RunInfo;
 use crate::fit::driver::{FitResult, Verdict};
 use std::fmt::Write;
+
+/// Correlation matrices with more rows than this are summarised by their largest pairs.
+pub const FULL_MATRIX_MAX: usize = 8;
+
+/// How many of the largest |ρ| pairs a summarised correlation matrix lists.
+pub const TOP_PAIRS: usize = 10;
 
 /// Format a value with its standard error and relative error.
 fn value_se(v: f64, se: Option<f64>) -> String {
@@ -18,6 +25,226 @@ fn value_se(v: f64, se: Option<f64>) -> String {
     }
 }
 
+/// A number printed with `digits` decimals, without a negative zero (R² of a fit no better
+/// than the mean prints as 0.0000000, not −0.0000000). Non-finite values print as `n/a`.
+pub fn fixed(v: f64, digits: usize) -> String {
+    if !v.is_finite() {
+        return "n/a".into();
+    }
+    let s = format!("{v:.digits$}");
+    if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
+/// One line of text for what the verdict means.
+pub fn verdict_text(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Full => "every free parameter is determined",
+        Verdict::Rough => "rough regime: only T/sigma and the amplitude are determined",
+        Verdict::Smooth => "smooth regime: only T and the amplitude s*sigma^2 are determined",
+        Verdict::Partial => "some parameter combinations are not determined",
+    }
+}
+
+/// The `[[Setting]]` lines: wavelength, quantity, residual and floor, weights, input.
+fn setting_lines(s: &mut String, st: &Setting) {
+    let _ = writeln!(s, "[[Setting]]");
+    let wl = &st.wavelength;
+    if !wl.values.is_empty() {
+        let vals: Vec<String> = wl.values.iter().map(|v| format!("{v}")).collect();
+        let vals = if vals.len() > 4 {
+            let lo = wl.values.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = wl.values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            format!("{lo} .. {hi} ({} values)", vals.len())
+        } else {
+            vals.join(", ")
+        };
+        let _ = writeln!(
+            s,
+            "    wavelength      = {} {} (from {}{}; σ, T in {})",
+            vals,
+            st.units.length_name(),
+            if wl.source.starts_with("--") {
+                ""
+            } else {
+                "the "
+            },
+            wl.source,
+            st.units.length_name()
+        );
+    }
+    if let Some(c) = &st.channel {
+        let _ = writeln!(s, "    channel         = {c}");
+    }
+    let _ = writeln!(
+        s,
+        "    quantity        = {} ({}; values in {})",
+        match st.quantity {
+            crate::geometry::Quantity::Brdf => "brdf",
+            crate::geometry::Quantity::Radiance => "radiance",
+        },
+        st.quantity_source,
+        st.units.value_name()
+    );
+    let residual = format!("{:?}", st.residual).to_lowercase();
+    if st.floor.used {
+        let _ = writeln!(
+            s,
+            "    residual        = {residual} (floor {:.3e} {}: raised {} of the measured values)",
+            st.floor.value,
+            st.units.value_name(),
+            st.floor.raised
+        );
+    } else {
+        let _ = writeln!(s, "    residual        = {residual} (fitted − measured)");
+    }
+    let _ = writeln!(
+        s,
+        "    weights         = {}: {}",
+        st.weights.source, st.weights.transform
+    );
+    if st.loss != "linear" {
+        let _ = writeln!(s, "    loss            = {}", st.loss);
+    }
+    if st.absolute_sigma {
+        let _ = writeln!(
+            s,
+            "    uncertainties   = from sigma_L as stated (--absolute-sigma), not rescaled by the residual scatter"
+        );
+    }
+    if !st.input.path.is_empty() {
+        let _ = writeln!(
+            s,
+            "    input sha256    = {} ({} bytes; the absolute path is in --json)",
+            st.input.sha256, st.input.bytes
+        );
+    }
+}
+
+/// A unit for the text report: a pure number shows no unit.
+fn text_unit(unit: String) -> String {
+    if unit == "1" {
+        String::new()
+    } else {
+        unit
+    }
+}
+
+/// The `[[Variables]]` and `[[Derived]]` blocks with units.
+fn variable_lines(s: &mut String, r: &FitResult, units: &Units) {
+    let _ = writeln!(s, "[[Variables]]");
+    let width = r
+        .params
+        .iter()
+        .map(|p| p.name.chars().count())
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    for p in &r.params {
+        let tag = if p.fixed {
+            "(fixed)"
+        } else if p.determined {
+            ""
+        } else {
+            "(not determined by the data)"
+        };
+        let line = format!(
+            "    {:<width$} = {:<40} {:<9} {}",
+            p.name,
+            value_se(p.value, p.stderr),
+            text_unit(units.of_param(&p.name)),
+            tag
+        );
+        let _ = writeln!(s, "{}", line.trim_end());
+    }
+    if !r.derived.is_empty() {
+        let _ = writeln!(s, "[[Derived]]");
+        let width = r
+            .derived
+            .iter()
+            .map(|d| d.name.chars().count())
+            .max()
+            .unwrap_or(5);
+        for d in &r.derived {
+            let tag = if d.determined {
+                ""
+            } else {
+                "(not determined by the data) "
+            };
+            let _ = writeln!(
+                s,
+                "    {:<width$} = {:<40} {:<9} {}# {}",
+                d.name,
+                value_se(d.value, d.stderr),
+                text_unit(units.of_derived(&d.name, r.verdict == Verdict::Smooth)),
+                tag,
+                d.doc
+            );
+        }
+    }
+}
+
+/// The `[[Correlations]]` block: the matrix when small, its largest |ρ| pairs otherwise.
+fn correlation_lines(s: &mut String, r: &FitResult) {
+    let k = r.corr_names.len();
+    if k <= 1 {
+        return;
+    }
+    if k > FULL_MATRIX_MAX {
+        let _ = writeln!(
+            s,
+            "[[Correlations]] ({k} free parameters: the {TOP_PAIRS} largest |ρ|; the full matrix is in --json)"
+        );
+        for (a, b, rho) in top_pairs(r, TOP_PAIRS) {
+            let _ = writeln!(s, "    {:>8}  {} ~ {}", fixed(rho, 4), a, b);
+        }
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "[[Correlations]] (free parameters; sigma, T, w as their logarithms)"
+    );
+    let w = r
+        .corr_names
+        .iter()
+        .map(|n| n.chars().count())
+        .max()
+        .unwrap_or(5)
+        .max(8);
+    let _ = write!(s, "    {:<w$}", "");
+    for name in &r.corr_names {
+        let _ = write!(s, " {:>w$}", name);
+    }
+    let _ = writeln!(s);
+    for i in 0..k {
+        let _ = write!(s, "    {:<w$}", r.corr_names[i]);
+        for j in 0..k {
+            let _ = write!(s, " {:>w$}", fixed(r.correlation[(i, j)], 4));
+        }
+        let _ = writeln!(s);
+    }
+}
+
+/// The `n` off-diagonal correlations of largest magnitude (names, ρ), largest first.
+pub fn top_pairs(r: &FitResult, n: usize) -> Vec<(String, String, f64)> {
+    let k = r.corr_names.len();
+    let mut pairs: Vec<(String, String, f64)> = Vec::new();
+    for i in 0..k {
+        for j in i + 1..k {
+            let rho = r.correlation[(i, j)];
+            if rho.is_finite() {
+                pairs.push((r.corr_names[i].clone(), r.corr_names[j].clone(), rho));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
+    pairs.truncate(n);
+    pairs
+}
+
 /// The report as text.
 pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let mut s = String::new();
@@ -25,6 +252,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let _ = writeln!(s, "    input           = {}", info.input);
     let _ = writeln!(s, "    command         = {}", info.command);
     let _ = writeln!(s, "    model           = {}", r.model);
+    setting_lines(&mut s, &info.setting);
     let _ = writeln!(s, "[[Fit statistics]]");
     let _ = writeln!(
         s,
@@ -53,103 +281,49 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let _ = writeln!(s, "    reduced chi-sq  = {:.7e}", r.reduced_chi2);
     let _ = writeln!(s, "    rms residual    = {:.7e}", r.rms);
     let _ = writeln!(s, "    max |residual|  = {:.7e}", r.max_abs_residual);
-    let _ = writeln!(s, "    R-squared       = {:.7}", r.r2);
-    let _ = writeln!(s, "    AIC             = {:.4}", r.aic);
-    let _ = writeln!(s, "    BIC             = {:.4}", r.bic);
+    let _ = writeln!(s, "    R-squared       = {}", fixed(r.r2, 7));
+    let _ = writeln!(s, "    AIC             = {}", fixed(r.aic, 4));
+    let _ = writeln!(s, "    BIC             = {}", fixed(r.bic, 4));
     if let Some((lo, hi)) = r.g_range {
         let _ = writeln!(s, "    g range         = {lo:.3e} .. {hi:.3e}");
     }
     let modes: Vec<String> = r.modes.iter().map(|(k, v)| format!("{k}: {v}")).collect();
     let _ = writeln!(s, "    evaluation modes= {}", modes.join(", "));
-    let _ = writeln!(s, "[[Variables]]");
-    let width = r
-        .params
-        .iter()
-        .map(|p| p.name.len())
-        .max()
-        .unwrap_or(5)
-        .max(5);
-    for p in &r.params {
-        let tag = if p.fixed {
-            "(fixed)".to_string()
-        } else if p.determined {
-            String::new()
-        } else {
-            "(not determined by the data)".to_string()
-        };
-        let _ = writeln!(
-            s,
-            "    {:<width$} = {} {}",
-            p.name,
-            value_se(p.value, p.stderr),
-            tag
-        );
-    }
-    if !r.derived.is_empty() {
-        let _ = writeln!(s, "[[Derived]]");
-        let width = r.derived.iter().map(|d| d.name.len()).max().unwrap_or(5);
-        for d in &r.derived {
-            let tag = if d.determined {
-                ""
-            } else {
-                "(not determined by the data)"
-            };
-            let _ = writeln!(
-                s,
-                "    {:<width$} = {} {} # {}",
-                d.name,
-                value_se(d.value, d.stderr),
-                tag,
-                d.doc
-            );
-        }
-    }
+    variable_lines(&mut s, r, &info.setting.units);
     let _ = writeln!(s, "[[Identifiability]]");
-    let _ = writeln!(
-        s,
-        "    verdict         = {}",
-        match r.verdict {
-            Verdict::Full => "every free parameter is determined",
-            Verdict::Rough => "rough regime: only T/sigma and the amplitude are determined",
-            Verdict::Smooth => "smooth regime: only T and the amplitude s*sigma^2 are determined",
-            Verdict::Partial => "some parameter combinations are not determined",
-        }
-    );
+    let _ = writeln!(s, "    verdict         = {}", verdict_text(r.verdict));
     let sv: Vec<String> = r
         .singular_values
         .iter()
         .map(|v| format!("{v:.3e}"))
         .collect();
-    let _ = writeln!(s, "    singular values = {}", sv.join(", "));
+    let sv = if sv.len() > FULL_MATRIX_MAX {
+        format!(
+            "{} … {} ({} values; all in --json)",
+            sv[..3].join(", "),
+            sv[sv.len() - 3..].join(", "),
+            sv.len()
+        )
+    } else {
+        sv.join(", ")
+    };
+    let _ = writeln!(s, "    singular values = {sv}");
     let _ = writeln!(s, "    condition       = {:.3e}", r.condition);
     for note in &r.notes {
         let _ = writeln!(s, "    note: {note}");
     }
-    let k = r.corr_names.len();
-    if k > 1 {
-        let _ = writeln!(
-            s,
-            "[[Correlations]] (free parameters; sigma, T, w as their logarithms)"
-        );
-        let w = r
-            .corr_names
-            .iter()
-            .map(|n| n.len())
-            .max()
-            .unwrap_or(5)
-            .max(8);
-        let _ = write!(s, "    {:<w$}", "");
-        for name in &r.corr_names {
-            let _ = write!(s, " {:>w$}", name);
-        }
-        let _ = writeln!(s);
-        for i in 0..k {
-            let _ = write!(s, "    {:<w$}", r.corr_names[i]);
-            for j in 0..k {
-                let _ = write!(s, " {:>w$.4}", r.correlation[(i, j)]);
-            }
-            let _ = writeln!(s);
-        }
-    }
+    correlation_lines(&mut s, r);
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixed;
+
+    #[test]
+    fn no_negative_zero() {
+        assert_eq!(fixed(-1e-12, 7), "0.0000000");
+        assert_eq!(fixed(-0.5, 2), "-0.50");
+        assert_eq!(fixed(f64::NAN, 2), "n/a");
+    }
 }

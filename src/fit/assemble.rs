@@ -1,0 +1,324 @@
+//! Assemble: the report value of a finished fit — goodness of fit, parameters with their
+//! standard errors and whether each is determined, derived quantities, evaluation modes.
+//! The conventions (cost, χ², covariance, AIC/BIC) are in [`super::driver`]'s module doc.
+
+use super::driver::{standardized_residuals, DETERMINED_MAX_LOG_SE};
+use super::driver::{Derived, FitConfig, FitResult, ParamResult, Verdict};
+use super::identify::log_covariance;
+use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind, Transform};
+use super::reduce::Solved;
+use super::start::Start;
+use super::stats;
+use super::validate;
+use crate::model::{Model, ParamSpec};
+use nalgebra::DMatrix;
+use std::collections::BTreeMap;
+
+/// Residuals and the goodness-of-fit figures at the reported point.
+struct Goodness {
+    fitted: Vec<f64>,
+    residuals: Vec<f64>,
+    std_residuals: Vec<f64>,
+    chi2: f64,
+    rms: f64,
+    max_abs_residual: f64,
+    r2: f64,
+    aic: f64,
+    bic: f64,
+}
+
+/// The report of a finished fit (`seconds`: its wall time).
+pub(super) fn assemble(
+    model: &dyn Model,
+    input: &FitInput,
+    config: &FitConfig,
+    solved: Solved,
+    seconds: f64,
+    start: Start,
+) -> FitResult {
+    let Solved {
+        problem,
+        run,
+        unc,
+        verdict,
+        mut notes,
+    } = solved;
+    let layout = &problem.layout;
+    let specs = model.params();
+    let n = problem.len();
+    let free = layout.free();
+    let p = &run.values;
+    let n_free = free.len();
+    let dof = (n - n_free).max(1) as f64;
+    let gof = goodness(&problem, input, p, n_free, config.weights_are_uncertainties);
+    let params = param_results(layout, specs, p, &unc, verdict, &mut notes);
+    let derived = derived_quantities(layout, specs, p, &unc, verdict);
+    let sample_modes = problem.modes(p);
+    let mut modes = BTreeMap::new();
+    for m in &sample_modes {
+        *modes.entry(m.name().to_string()).or_insert(0) += 1;
+    }
+    notes.extend(validate::termination_note(run.lm.termination));
+    FitResult {
+        model: model.name().to_string(),
+        params,
+        derived,
+        corr_names: free
+            .iter()
+            .map(|&k| layout.params[k].name.clone())
+            .collect(),
+        correlation: unc.correlation.clone(),
+        singular_values: unc.singular_values.iter().copied().collect(),
+        condition: unc.condition,
+        verdict,
+        notes,
+        cost: 0.5 * gof.chi2,
+        chi2: gof.chi2,
+        reduced_chi2: gof.chi2 / dof,
+        rms: gof.rms,
+        max_abs_residual: gof.max_abs_residual,
+        r2: gof.r2,
+        aic: gof.aic,
+        bic: gof.bic,
+        n,
+        n_free,
+        iterations: run.lm.iterations,
+        evaluations: run.lm.evaluations,
+        jacobian_evaluations: run.lm.jacobian_evaluations,
+        termination: run.lm.termination,
+        seconds,
+        init_seconds: start.init_seconds,
+        start_seconds: start.start_seconds,
+        modes,
+        g_range: g_range(layout, input, p),
+        fitted: gof.fitted,
+        residuals: gof.residuals,
+        std_residuals: gof.std_residuals,
+        sample_modes,
+        layout: layout.clone(),
+        values: p.clone(),
+        start: start.grid_start,
+    }
+}
+
+/// Residuals, χ², rms, R², AIC and BIC at `p`.
+fn goodness(
+    problem: &FitProblem,
+    input: &FitInput,
+    p: &[f64],
+    n_free: usize,
+    weights_are_uncertainties: bool,
+) -> Goodness {
+    let n = problem.len();
+    let (fitted, _) = problem.model_values(p, false);
+    let residuals = problem.raw_residuals(&fitted);
+    let sw = problem.sqrt_weight();
+    let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
+    let std_residuals = standardized_residuals(&residuals, sw, n_free, weights_are_uncertainties);
+    let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
+    let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    let r2 = r_squared(problem, input, &fitted);
+    let nf = n as f64;
+    let chi2_safe = chi2.max(f64::MIN_POSITIVE);
+    let aic = nf * (chi2_safe / nf).ln() + 2.0 * n_free as f64;
+    let bic = nf * (chi2_safe / nf).ln() + n_free as f64 * nf.ln();
+    Goodness {
+        fitted,
+        residuals,
+        std_residuals,
+        chi2,
+        rms,
+        max_abs_residual,
+        r2,
+        aic,
+        bic,
+    }
+}
+
+/// Weighted R² in the space the residuals live in: the data itself, or ln y for log
+/// residuals. NaN when the data has no spread.
+fn r_squared(problem: &FitProblem, input: &FitInput, fitted: &[f64]) -> f64 {
+    let sw = problem.sqrt_weight();
+    let space = |v: f64| match problem.kind() {
+        ResidualKind::Log => v.max(problem.floor).ln(),
+        _ => v,
+    };
+    let t: Vec<f64> = input.y.iter().map(|&v| space(v)).collect();
+    let wsum: f64 = sw.iter().map(|s| s * s).sum();
+    let tbar = t.iter().zip(sw).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
+    let ss_tot: f64 = t
+        .iter()
+        .zip(sw)
+        .map(|(v, s)| (s * (v - tbar)).powi(2))
+        .sum();
+    let ss_res: f64 = fitted
+        .iter()
+        .zip(&t)
+        .zip(sw)
+        .map(|((f, v), s)| (s * (space(*f) - v)).powi(2))
+        .sum();
+    if ss_tot > 0.0 {
+        1.0 - ss_res / ss_tot
+    } else {
+        f64::NAN
+    }
+}
+
+/// Every layout parameter with its standard error (delta method through the transform)
+/// and whether the data determines it: free, not reduced away by the verdict, outside the
+/// Jacobian's null space, a log standard error at most [`DETERMINED_MAX_LOG_SE`], not at a
+/// lower bound. A note is added for each parameter at its lower bound.
+fn param_results(
+    layout: &ParamLayout,
+    specs: &[ParamSpec],
+    p: &[f64],
+    unc: &stats::Uncertainty,
+    verdict: Verdict,
+    notes: &mut Vec<String>,
+) -> Vec<ParamResult> {
+    let free = layout.free();
+    let log_se = |k: usize| -> Option<f64> {
+        let i = free.iter().position(|&f| f == k)?;
+        let v = unc.covariance[(i, i)];
+        (v.is_finite() && v >= 0.0).then(|| v.sqrt())
+    };
+    let in_null = |k: usize| -> bool {
+        free.iter()
+            .position(|&f| f == k)
+            .is_some_and(|i| unc.undetermined.iter().any(|v| v[i].abs() > 0.1 * v.norm()))
+    };
+    let sigma_held = verdict != Verdict::Full && verdict != Verdict::Partial;
+    let mut params = Vec::new();
+    for (k, fp) in layout.params.iter().enumerate() {
+        let spec = &specs[fp.spec];
+        let reduced_away = sigma_held
+            && (spec.name == "sigma"
+                || spec.name == "scale"
+                || (verdict == Verdict::Rough && spec.name == "T"));
+        let se = log_se(k).map(|s| s * fp.transform.dp_dx(fp.transform.to_x(p[k])).abs());
+        let loose =
+            log_se(k).is_some_and(|s| fp.transform == Transform::Log && s > DETERMINED_MAX_LOG_SE);
+        let at_bound = validate::at_lower_bound(fp, p[k], se);
+        if at_bound {
+            notes.push(validate::lower_bound_note(fp));
+        }
+        let determined = fp.fixed.is_none()
+            && !reduced_away
+            && !in_null(k)
+            && !loose
+            && !at_bound
+            && se.is_some();
+        params.push(ParamResult {
+            name: fp.name.clone(),
+            value: p[k],
+            stderr: if determined { se } else { None },
+            determined,
+            fixed: fp.fixed.is_some() && !(sigma_held && spec.name == "sigma"),
+            unit: spec.unit.to_string(),
+        });
+    }
+    params
+}
+
+/// Value and standard error of Π p_k^{c_k} over (layout index k, exponent c_k), from the
+/// log-space covariance of the free parameters: var ln value = cᵀ Σ c (fixed parameters
+/// contribute no variance). The error is None when that variance is not finite.
+fn log_combination(
+    free: &[usize],
+    log_cov: &DMatrix<f64>,
+    p: &[f64],
+    coef: &[(usize, f64)],
+) -> (f64, Option<f64>) {
+    let value = coef.iter().map(|&(k, c)| p[k].powf(c)).product::<f64>();
+    let mut var = 0.0;
+    for &(k1, c1) in coef {
+        for &(k2, c2) in coef {
+            let (Some(i1), Some(i2)) = (
+                free.iter().position(|&f| f == k1),
+                free.iter().position(|&f| f == k2),
+            ) else {
+                continue;
+            };
+            var += c1 * c2 * log_cov[(i1, i2)];
+        }
+    }
+    let se = (var.is_finite() && var >= 0.0).then(|| var.sqrt() * value);
+    (value, se)
+}
+
+/// The derived quantities of KBS fits: T/σ and the rms slope 2σ/T (determined unless the
+/// verdict is smooth or partial), and per channel the amplitude the regime determines.
+fn derived_quantities(
+    layout: &ParamLayout,
+    specs: &[ParamSpec],
+    p: &[f64],
+    unc: &stats::Uncertainty,
+    verdict: Verdict,
+) -> Vec<Derived> {
+    let free = layout.free();
+    let log_cov = log_covariance(layout, unc, p);
+    let combo = |coef: &[(usize, f64)]| log_combination(&free, &log_cov, p, coef);
+    let first = |name: &str| layout.find(name).first().copied();
+    let mut derived = Vec::new();
+    let (Some(ks), Some(kt)) = (first("sigma"), first("T")) else {
+        return derived;
+    };
+    let (ratio, ratio_se) = combo(&[(kt, 1.0), (ks, -1.0)]);
+    let ratio_ok = verdict != Verdict::Smooth && verdict != Verdict::Partial;
+    derived.push(Derived {
+        name: "T/sigma".into(),
+        value: ratio,
+        stderr: ratio_ok.then_some(ratio_se).flatten(),
+        determined: ratio_ok,
+        doc: "correlation length over rms height".into(),
+    });
+    let (slope, slope_se) = combo(&[(ks, 1.0), (kt, -1.0)]);
+    derived.push(Derived {
+        name: "rms_slope".into(),
+        value: 2.0 * slope,
+        stderr: ratio_ok.then_some(slope_se.map(|s| 2.0 * s)).flatten(),
+        determined: ratio_ok,
+        doc: "rms slope 2σ/T".into(),
+    });
+    let scale_spec = specs.iter().position(|s| s.name == "scale").unwrap_or(0);
+    for (c, ch) in layout.index.iter().enumerate() {
+        let ka = ch[scale_spec];
+        let suffix = if layout.channel_names.len() > 1 {
+            format!("[{}]", layout.channel_names[c])
+        } else {
+            String::new()
+        };
+        let (coef, doc) = match verdict {
+            Verdict::Rough => (
+                [(ka, 1.0), (kt, 2.0), (ks, -2.0)].to_vec(),
+                "s·(T/σ)², the rough-regime lobe amplitude",
+            ),
+            Verdict::Smooth => (
+                [(ka, 1.0), (ks, 2.0)].to_vec(),
+                "s·σ², the smooth-regime lobe amplitude (σ in the unit of λ)",
+            ),
+            _ => continue,
+        };
+        let (value, stderr) = combo(&coef);
+        derived.push(Derived {
+            name: format!("amplitude{suffix}"),
+            value,
+            stderr,
+            determined: true,
+            doc: doc.into(),
+        });
+    }
+    derived
+}
+
+/// Range of g over the samples at the fitted σ (KBS models).
+fn g_range(layout: &ParamLayout, input: &FitInput, p: &[f64]) -> Option<(f64, f64)> {
+    let ks = layout.find("sigma").first().copied()?;
+    Some(
+        (0..input.geo.len())
+            .map(|i| input.geo.g(i, p[ks]))
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), g| {
+                (lo.min(g), hi.max(g))
+            }),
+    )
+}

@@ -1,0 +1,187 @@
+//! The pivoted QR factorisation of the Jacobian and the regularised least-squares solve
+//! (MINPACK `qrfac` and `qrsolv`).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::norm::{dot, enorm};
+use super::EPSMCH;
+
+/// The pivoted QR of the Jacobian at the current point, and what `lmpar` needs.
+#[derive(Debug, Clone)]
+pub(super) struct QrState {
+    /// `n × n`: `R` in the upper triangle; the strict lower triangle is workspace for `qrsolv`.
+    pub(super) r: DMatrix<f64>,
+    /// Column `j` of `R` is column `ipvt[j]` of `J`.
+    pub(super) ipvt: Vec<usize>,
+    /// First `n` components of `Qᵀ r`.
+    pub(super) qtf: DVector<f64>,
+}
+
+/// ‖J p‖ for a step p, from the pivoted QR of J (‖Q R Pᵀ p‖ = ‖R Pᵀ p‖).
+pub(super) fn jp_norm(qr: &QrState, step: &DVector<f64>) -> f64 {
+    let n = step.len();
+    let mut jp = DVector::zeros(n);
+    for j in 0..n {
+        let t = step[qr.ipvt[j]];
+        for i in 0..=j {
+            jp[i] += qr.r[(i, j)] * t;
+        }
+    }
+    enorm(jp.as_slice())
+}
+
+/// Householder QR with column pivoting (MINPACK `qrfac` with `pivot = true`), applied to a
+/// copy of `a` (`m × n`, `m ≥ n`). Returns `R` (`n × n`, upper), the pivots, the column norms
+/// of `a`, and `Qᵀ f` (first `n` components). The norms of the remaining partial columns
+/// that drive the pivoting are down-dated as in MINPACK and recomputed whenever the
+/// down-dating has lost more than half the digits.
+pub(super) fn qrfac(a: &DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<f64>) {
+    let (m, n) = a.shape();
+    // Column-major working copy: column k is cols[k*m .. (k+1)*m].
+    let mut cols: Vec<f64> = a.as_slice().to_vec();
+    let mut qtf: Vec<f64> = f.as_slice().to_vec();
+    let acnorm = DVector::from_iterator(n, (0..n).map(|j| enorm(&cols[j * m..(j + 1) * m])));
+    let mut rdiag: Vec<f64> = acnorm.iter().copied().collect();
+    let mut wa = rdiag.clone();
+    let mut ipvt: Vec<usize> = (0..n).collect();
+    for j in 0..n.min(m) {
+        // Pivot: the remaining column of largest partial norm goes to position j.
+        let mut kmax = j;
+        for k in j..n {
+            if rdiag[k] > rdiag[kmax] {
+                kmax = k;
+            }
+        }
+        if kmax != j {
+            for i in 0..m {
+                cols.swap(j * m + i, kmax * m + i);
+            }
+            rdiag[kmax] = rdiag[j];
+            wa[kmax] = wa[j];
+            ipvt.swap(j, kmax);
+        }
+        let (head, tail) = cols.split_at_mut((j + 1) * m);
+        let cj = &mut head[j * m + j..(j + 1) * m];
+        let mut ajnorm = enorm(&*cj);
+        if ajnorm != 0.0 {
+            if cj[0] < 0.0 {
+                ajnorm = -ajnorm;
+            }
+            for v in cj.iter_mut() {
+                *v /= ajnorm;
+            }
+            cj[0] += 1.0;
+            let ajj = cj[0];
+            // Apply the reflector to the remaining columns and to f.
+            for k in j + 1..n {
+                let ck = &mut tail[(k - j - 1) * m + j..(k - j) * m];
+                let sum = dot(cj, ck);
+                let t = sum / ajj;
+                for (c, &a) in ck.iter_mut().zip(cj.iter()) {
+                    *c -= t * a;
+                }
+                if rdiag[k] != 0.0 {
+                    let t = ck[0] / rdiag[k];
+                    rdiag[k] *= (1.0 - t * t).max(0.0).sqrt();
+                    if 0.05 * (rdiag[k] / wa[k]).powi(2) <= EPSMCH {
+                        rdiag[k] = enorm(&ck[1..]);
+                        wa[k] = rdiag[k];
+                    }
+                }
+            }
+            let fj = &mut qtf[j..m];
+            let sum = dot(cj, fj);
+            let t = sum / ajj;
+            for (v, &a) in fj.iter_mut().zip(cj.iter()) {
+                *v -= t * a;
+            }
+        }
+        rdiag[j] = -ajnorm;
+    }
+    let mut r = DMatrix::zeros(n, n);
+    for j in 0..n {
+        for i in 0..j {
+            r[(i, j)] = cols[j * m + i];
+        }
+        r[(j, j)] = rdiag[j];
+    }
+    let qtf = DVector::from_column_slice(&qtf[..n]);
+    (QrState { r, ipvt, qtf }, acnorm)
+}
+
+/// MINPACK `qrsolv`: given the pivoted QR `J P = Q R` and a diagonal `d`, solve
+/// `min ‖[J; D] x − [b; 0]‖` where `qtb = (Qᵀ b)[..n]`. On return the strict lower triangle of
+/// `r` holds the strict upper triangle of `S` (transposed), with `Pᵀ(JᵀJ + DD)P = SᵀS`, and
+/// `sdiag` the diagonal of `S`. The upper triangle of `r` is unchanged.
+pub(super) fn qrsolv(
+    r: &mut DMatrix<f64>,
+    ipvt: &[usize],
+    d: &DVector<f64>,
+    qtb: &DVector<f64>,
+    x: &mut DVector<f64>,
+    sdiag: &mut DVector<f64>,
+) {
+    let n = r.ncols();
+    let mut wa = qtb.clone();
+    for j in 0..n {
+        for i in j..n {
+            r[(i, j)] = r[(j, i)];
+        }
+        x[j] = r[(j, j)];
+    }
+    for j in 0..n {
+        let l = ipvt[j];
+        if d[l] != 0.0 {
+            for k in j..n {
+                sdiag[k] = 0.0;
+            }
+            sdiag[j] = d[l];
+            let mut qtbpj = 0.0;
+            for k in j..n {
+                if sdiag[k] == 0.0 {
+                    continue;
+                }
+                let (sin, cos) = if r[(k, k)].abs() < sdiag[k].abs() {
+                    let cotan = r[(k, k)] / sdiag[k];
+                    let sin = 0.5 / (0.25 + 0.25 * cotan * cotan).sqrt();
+                    (sin, sin * cotan)
+                } else {
+                    let tan = sdiag[k] / r[(k, k)];
+                    let cos = 0.5 / (0.25 + 0.25 * tan * tan).sqrt();
+                    (cos * tan, cos)
+                };
+                r[(k, k)] = cos * r[(k, k)] + sin * sdiag[k];
+                let temp = cos * wa[k] + sin * qtbpj;
+                qtbpj = -sin * wa[k] + cos * qtbpj;
+                wa[k] = temp;
+                for i in k + 1..n {
+                    let temp = cos * r[(i, k)] + sin * sdiag[i];
+                    sdiag[i] = -sin * r[(i, k)] + cos * sdiag[i];
+                    r[(i, k)] = temp;
+                }
+            }
+        }
+        sdiag[j] = r[(j, j)];
+        r[(j, j)] = x[j];
+    }
+    // Solve S z = wa; a singular S gives the least-squares solution with trailing zeros.
+    let mut nsing = n;
+    for j in 0..n {
+        if sdiag[j] == 0.0 && nsing == n {
+            nsing = j;
+        }
+        if nsing < n {
+            wa[j] = 0.0;
+        }
+    }
+    for j in (0..nsing).rev() {
+        let mut sum = 0.0;
+        for i in j + 1..nsing {
+            sum += r[(i, j)] * wa[i];
+        }
+        wa[j] = (wa[j] - sum) / sdiag[j];
+    }
+    for j in 0..n {
+        x[ipvt[j]] = wa[j];
+    }
+}

@@ -1,0 +1,245 @@
+//! The fit layer's view of a problem, and the driver: [`minimize`] runs the solver through
+//! argmin's Executor and returns an [`LmReport`].
+
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use argmin::core::observers::ObserverMode;
+use argmin::core::{
+    Error as ArgminError, Executor, Jacobian, Operator, OptimizationResult, State,
+    TerminationReason,
+};
+use nalgebra::{DMatrix, DVector};
+
+use super::interrupt::{self, ActiveRun};
+use super::norm::enorm;
+use super::progress::ProgressObserver;
+use super::{LevenbergMarquardt, LmState, Termination};
+
+/// A least-squares problem in the form the fit layer supplies. Residuals are already
+/// weighted (`r̃ᵢ = √wᵢ rᵢ`), so `cost = ½ Σ r̃ᵢ²`.
+pub trait LeastSquaresProblem {
+    /// Weighted residuals at `x`. May contain NaN or ±∞ (e.g. outside the model's domain):
+    /// such a trial point is rejected and the trust region shrinks.
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64>;
+    /// Jacobian `∂r̃ᵢ/∂xⱼ` (`m × n`), analytic; see [`finite_difference_jacobian`] otherwise.
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64>;
+}
+
+impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        (**self).residuals(x)
+    }
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        (**self).jacobian(x)
+    }
+}
+
+/// Adapts a [`LeastSquaresProblem`] to argmin's [`Operator`] (residuals) and [`Jacobian`].
+#[derive(Debug, Clone, Copy)]
+pub struct ArgminAdapter<'a, P: ?Sized>(pub &'a P);
+
+impl<P: LeastSquaresProblem + ?Sized> Operator for ArgminAdapter<'_, P> {
+    type Param = DVector<f64>;
+    type Output = DVector<f64>;
+    fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
+        Ok(self.0.residuals(x))
+    }
+}
+
+impl<P: LeastSquaresProblem + ?Sized> Jacobian for ArgminAdapter<'_, P> {
+    type Param = DVector<f64>;
+    type Jacobian = DMatrix<f64>;
+    fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
+        Ok(self.0.jacobian(x))
+    }
+}
+
+/// Options for a run through argmin's Executor. Construct with `..Default::default()` so
+/// that fields added later do not break callers.
+#[derive(Debug, Clone)]
+pub struct LmConfig {
+    /// See [`LevenbergMarquardt::with_ftol`]. Default `1e-10`.
+    pub ftol: f64,
+    /// See [`LevenbergMarquardt::with_xtol`]. Default `1e-10`.
+    pub xtol: f64,
+    /// See [`LevenbergMarquardt::with_gtol`]. Default `1e-12`.
+    pub gtol: f64,
+    /// Trial steps (argmin iterations). Default 1000.
+    pub max_iters: u64,
+    /// Residual evaluations, including the one at the start. Default 2000.
+    pub max_evals: u64,
+    /// Wall-clock limit. Default none.
+    pub timeout: Option<Duration>,
+    /// Show a progress line on the terminal (stderr, via indicatif). Default false.
+    pub progress: bool,
+    /// Stop when this flag becomes true (in addition to Ctrl-C). Default none.
+    pub interrupt: Option<Arc<AtomicBool>>,
+    /// Install goniofit's process-wide Ctrl-C/SIGTERM/SIGHUP handler (see "Ctrl-C" in the
+    /// module docs). Default true. False for a host that owns its signals, such as the
+    /// Python interpreter: its own handler stays in place and the host sets `interrupt`.
+    pub install_signal_handler: bool,
+    /// Gauss–Newton polishing after convergence, see [`LevenbergMarquardt::with_polish`].
+    /// Default false: with measurement noise, parameters converged to `ftol = 1e-10` are
+    /// already far more precise than their standard errors; turn it on when the last digits
+    /// matter (the NIST suite runs with it).
+    pub polish: bool,
+    /// See [`LevenbergMarquardt::with_predicted_stop`]. Default false (MINPACK's rules);
+    /// ignored with `polish`.
+    pub predicted_stop: bool,
+}
+
+impl Default for LmConfig {
+    fn default() -> Self {
+        LmConfig {
+            ftol: 1e-10,
+            xtol: 1e-10,
+            gtol: 1e-12,
+            max_iters: 1000,
+            max_evals: 2000,
+            timeout: None,
+            progress: false,
+            interrupt: None,
+            install_signal_handler: true,
+            polish: false,
+            predicted_stop: false,
+        }
+    }
+}
+
+/// The result of a run: never an error for non-convergence.
+#[derive(Debug, Clone)]
+pub struct LmReport {
+    /// Final (best) parameters.
+    pub x: DVector<f64>,
+    /// Weighted residuals at `x`.
+    pub residuals: DVector<f64>,
+    /// Jacobian at `x` (evaluated once more at the end if the last step was accepted).
+    pub jacobian: DMatrix<f64>,
+    /// `½ ‖residuals‖²`.
+    pub cost: f64,
+    pub termination: Termination,
+    /// argmin iterations = trial steps.
+    pub iterations: u64,
+    /// Residual evaluations (including the start).
+    pub evaluations: u64,
+    pub jacobian_evaluations: u64,
+    pub seconds: f64,
+}
+
+/// Run LM via argmin's Executor on any [`LeastSquaresProblem`], with Ctrl-C handling (see the
+/// module docs). Never fails: a run that does not converge returns a report saying why.
+/// Invalid tolerances in `config` are clamped to 0 (the builders validate instead).
+pub fn minimize<P: LeastSquaresProblem + ?Sized>(
+    problem: &P,
+    x0: DVector<f64>,
+    config: &LmConfig,
+) -> LmReport {
+    let start = Instant::now();
+    if config.install_signal_handler {
+        interrupt::install_handler();
+    }
+    let _active = ActiveRun::start();
+    let mut exec = Executor::new(ArgminAdapter(problem), solver_for(config))
+        .configure(|s| s.param(x0.clone()).max_iters(config.max_iters))
+        .ctrlc(false);
+    if let Some(t) = config.timeout {
+        exec = exec.timeout(t);
+    }
+    if config.progress {
+        exec = exec.add_observer(ProgressObserver::new(), ObserverMode::Always);
+    }
+    match exec.run() {
+        Ok(result) => report_of(problem, &x0, &result, start),
+        // Unreachable with this adapter (it never fails) and the Executor's handler off.
+        Err(_) => report_at_start(problem, &x0, Termination::NoProgress, start),
+    }
+}
+
+/// The solver `config` describes (tolerances clamped to 0 when invalid).
+fn solver_for(config: &LmConfig) -> LevenbergMarquardt {
+    let tol = |v: f64| if v.is_finite() && v >= 0.0 { v } else { 0.0 };
+    let solver = LevenbergMarquardt {
+        ftol: tol(config.ftol),
+        xtol: tol(config.xtol),
+        gtol: tol(config.gtol),
+        max_evals: config.max_evals.max(1),
+        polish: config.polish,
+        predicted_stop: config.predicted_stop,
+        ..LevenbergMarquardt::new()
+    };
+    match &config.interrupt {
+        Some(flag) => solver.with_interrupt(flag.clone()),
+        None => solver,
+    }
+}
+
+/// The report of a finished Executor run: the solver's own termination, or argmin's
+/// (iterations, time, interrupt); the Jacobian is evaluated once more when the last step
+/// was accepted.
+fn report_of<P, O>(
+    problem: &P,
+    x0: &DVector<f64>,
+    result: &OptimizationResult<O, LevenbergMarquardt, LmState>,
+    start: Instant,
+) -> LmReport
+where
+    P: LeastSquaresProblem + ?Sized,
+{
+    let state = &result.state;
+    let solver = &result.solver;
+    let termination = solver
+        .termination
+        .unwrap_or(match state.get_termination_reason() {
+            Some(TerminationReason::MaxItersReached) => Termination::MaxIterations,
+            Some(TerminationReason::Timeout) => Termination::Timeout,
+            Some(TerminationReason::Interrupt) => Termination::Interrupted,
+            _ => Termination::NoProgress,
+        });
+    let Some((x, residuals)) = solver.current() else {
+        return report_at_start(problem, x0, termination, start);
+    };
+    let x = x.clone();
+    let mut jacobian_evaluations = solver.jacobian_evaluations();
+    let jacobian = match solver.current_jacobian() {
+        Some(j) => j,
+        None => {
+            jacobian_evaluations += 1;
+            problem.jacobian(&x)
+        }
+    };
+    LmReport {
+        cost: 0.5 * enorm(residuals.as_slice()).powi(2),
+        x,
+        residuals,
+        jacobian,
+        termination,
+        iterations: state.get_iter(),
+        evaluations: solver.evaluations(),
+        jacobian_evaluations,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// A report at the starting point (when the solver holds no iterate).
+fn report_at_start<P: LeastSquaresProblem + ?Sized>(
+    problem: &P,
+    x0: &DVector<f64>,
+    termination: Termination,
+    start: Instant,
+) -> LmReport {
+    let residuals = problem.residuals(x0);
+    let jacobian = problem.jacobian(x0);
+    LmReport {
+        cost: 0.5 * residuals.norm_squared(),
+        x: x0.clone(),
+        residuals,
+        jacobian,
+        termination,
+        iterations: 0,
+        evaluations: 1,
+        jacobian_evaluations: 1,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}

@@ -1,0 +1,519 @@
+//! Unit tests of the solver: stopping rules, robustness, argmin integration, transforms.
+
+use super::*;
+use approx::assert_relative_eq;
+use argmin::core::{Executor, State};
+use std::cell::Cell;
+use std::sync::atomic::AtomicU64;
+use std::time::Duration;
+
+/// A problem from closures: residuals and Jacobian.
+struct Closure<R, J> {
+    r: R,
+    j: J,
+}
+impl<R, J> LeastSquaresProblem for Closure<R, J>
+where
+    R: Fn(&DVector<f64>) -> DVector<f64>,
+    J: Fn(&DVector<f64>) -> DMatrix<f64>,
+{
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        (self.r)(x)
+    }
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        (self.j)(x)
+    }
+}
+
+fn v(xs: &[f64]) -> DVector<f64> {
+    DVector::from_column_slice(xs)
+}
+
+fn rosen_r(x: &DVector<f64>) -> DVector<f64> {
+    v(&[10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]])
+}
+
+fn rosen_j(x: &DVector<f64>) -> DMatrix<f64> {
+    DMatrix::from_row_slice(2, 2, &[-20.0 * x[0], 10.0, -1.0, 0.0])
+}
+
+/// Rosenbrock as least squares: r = (10(x₂ − x₁²), 1 − x₁), minimum 0 at (1, 1).
+fn rosenbrock() -> impl LeastSquaresProblem {
+    Closure {
+        r: rosen_r,
+        j: rosen_j,
+    }
+}
+
+fn decay_data() -> (Vec<f64>, Vec<f64>) {
+    let t: Vec<f64> = (0..20).map(|i| i as f64 * 0.25).collect();
+    let y = t
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| 3.0 * (-0.7 * t).exp() + 0.01 * ((i * 7 % 5) as f64 - 2.0))
+        .collect();
+    (t, y)
+}
+
+/// y = a·exp(−b t) + deterministic pseudo-noise: a non-zero-residual problem.
+fn decay() -> impl LeastSquaresProblem {
+    let (t, y) = decay_data();
+    let t2 = t.clone();
+    Closure {
+        r: move |x: &DVector<f64>| {
+            DVector::from_iterator(
+                t.len(),
+                t.iter()
+                    .zip(&y)
+                    .map(|(&t, &y)| x[0] * (-x[1] * t).exp() - y),
+            )
+        },
+        j: move |x: &DVector<f64>| {
+            let mut j = DMatrix::zeros(t2.len(), 2);
+            for (i, &t) in t2.iter().enumerate() {
+                let e = (-x[1] * t).exp();
+                j[(i, 0)] = e;
+                j[(i, 1)] = -x[0] * t * e;
+            }
+            j
+        },
+    }
+}
+
+fn cfg(ftol: f64, xtol: f64, gtol: f64) -> LmConfig {
+    LmConfig {
+        ftol,
+        xtol,
+        gtol,
+        max_iters: 10_000,
+        max_evals: 10_000,
+        ..LmConfig::default()
+    }
+}
+
+#[test]
+fn solves_rosenbrock_with_default_config() {
+    let rep = minimize(&rosenbrock(), v(&[-1.2, 1.0]), &LmConfig::default());
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    assert_relative_eq!(rep.x[0], 1.0, epsilon = 1e-10);
+    assert_relative_eq!(rep.x[1], 1.0, epsilon = 1e-10);
+    assert!(rep.cost < 1e-20);
+    assert_eq!(rep.jacobian.shape(), (2, 2));
+    assert!(rep.evaluations >= rep.jacobian_evaluations);
+}
+
+#[test]
+fn polishing_reaches_the_noise_floor_and_keeps_the_reason() {
+    let reference = minimize(
+        &decay(),
+        v(&[1.0, 0.1]),
+        &LmConfig {
+            polish: true,
+            ..cfg(1e-15, 1e-15, 0.0)
+        },
+    );
+    let plain = minimize(&decay(), v(&[1.0, 0.1]), &cfg(1e-4, 0.0, 0.0));
+    let polished = minimize(
+        &decay(),
+        v(&[1.0, 0.1]),
+        &LmConfig {
+            polish: true,
+            ..cfg(1e-4, 0.0, 0.0)
+        },
+    );
+    assert_eq!(plain.termination, Termination::Ftol);
+    assert_eq!(polished.termination, Termination::Ftol);
+    let err = |x: &DVector<f64>| ((x - &reference.x).amax()) / reference.x.amax();
+    assert!(err(&plain.x) > 1e-9, "{:e}", err(&plain.x));
+    assert!(err(&polished.x) < 1e-13, "{:e}", err(&polished.x));
+    assert!(polished.evaluations > plain.evaluations);
+    // Polishing cannot raise the cost beyond rounding.
+    assert!(polished.cost <= plain.cost * (1.0 + 1e-10));
+}
+
+#[test]
+fn progress_observer_runs() {
+    // Not a terminal under `cargo test`: indicatif draws nothing, but the observer path
+    // (init, every iteration, final) is exercised.
+    let config = LmConfig {
+        progress: true,
+        ..LmConfig::default()
+    };
+    let rep = minimize(&rosenbrock(), v(&[-1.2, 1.0]), &config);
+    assert!(rep.termination.converged());
+}
+
+#[test]
+fn terminates_on_ftol() {
+    let rep = minimize(&decay(), v(&[1.0, 0.1]), &cfg(1e-8, 0.0, 0.0));
+    assert_eq!(rep.termination, Termination::Ftol);
+    assert!(rep.cost > 0.0);
+    assert_relative_eq!(rep.x[1], 0.7, epsilon = 0.01);
+}
+
+#[test]
+fn predicted_stop_saves_the_confirming_evaluation() {
+    // Same run with MINPACK's rules and with the predicted-reduction stop: the latter
+    // ends one or more evaluations earlier, at a point whose cost is within ftol
+    // (relative) of the fully converged one.
+    let ftol = 1e-10;
+    let plain = minimize(&decay(), v(&[1.0, 0.1]), &cfg(ftol, 0.0, 0.0));
+    let early = minimize(
+        &decay(),
+        v(&[1.0, 0.1]),
+        &LmConfig {
+            predicted_stop: true,
+            ..cfg(ftol, 0.0, 0.0)
+        },
+    );
+    assert_eq!(plain.termination, Termination::Ftol);
+    assert_eq!(early.termination, Termination::Predicted);
+    assert!(early.termination.converged());
+    assert!(early.evaluations < plain.evaluations);
+    assert!(early.cost >= plain.cost * (1.0 - 1e-15));
+    assert!(
+        early.cost <= plain.cost * (1.0 + ftol),
+        "{} vs {}",
+        early.cost,
+        plain.cost
+    );
+    // Ignored while polishing.
+    let polished = minimize(
+        &decay(),
+        v(&[1.0, 0.1]),
+        &LmConfig {
+            predicted_stop: true,
+            polish: true,
+            ..cfg(ftol, 0.0, 0.0)
+        },
+    );
+    assert_ne!(polished.termination, Termination::Predicted);
+}
+
+#[test]
+fn terminates_on_xtol() {
+    let rep = minimize(&decay(), v(&[1.0, 0.1]), &cfg(0.0, 1e-3, 0.0));
+    assert_eq!(rep.termination, Termination::Xtol);
+    assert_relative_eq!(rep.x[1], 0.7, epsilon = 0.01);
+}
+
+#[test]
+fn terminates_on_ftol_and_xtol() {
+    let rep = minimize(&decay(), v(&[1.0, 0.1]), &cfg(1e-3, 1e-3, 0.0));
+    assert_eq!(rep.termination, Termination::FtolXtol);
+    assert!(rep.termination.converged());
+}
+
+#[test]
+fn terminates_on_gtol() {
+    let rep = minimize(&decay(), v(&[1.0, 0.1]), &cfg(0.0, 0.0, 1e-4));
+    assert_eq!(rep.termination, Termination::Gtol);
+    // A zero residual at the start is a zero gradient.
+    let rep = minimize(&rosenbrock(), v(&[1.0, 1.0]), &LmConfig::default());
+    assert_eq!(rep.termination, Termination::Gtol);
+    assert_eq!(rep.evaluations, 1);
+}
+
+#[test]
+fn terminates_on_max_iterations() {
+    let config = LmConfig {
+        max_iters: 3,
+        ..cfg(0.0, 0.0, 0.0)
+    };
+    let rep = minimize(&rosenbrock(), v(&[-1.2, 1.0]), &config);
+    assert_eq!(rep.termination, Termination::MaxIterations);
+    assert_eq!(rep.iterations, 3);
+    assert!(!rep.termination.converged());
+}
+
+#[test]
+fn terminates_on_max_evaluations() {
+    let config = LmConfig {
+        max_evals: 4,
+        ..cfg(0.0, 0.0, 0.0)
+    };
+    let rep = minimize(&rosenbrock(), v(&[-1.2, 1.0]), &config);
+    assert_eq!(rep.termination, Termination::MaxEvaluations);
+    assert_eq!(rep.evaluations, 4);
+}
+
+#[test]
+fn terminates_on_timeout() {
+    let slow = Closure {
+        r: |x: &DVector<f64>| {
+            std::thread::sleep(Duration::from_millis(5));
+            v(&[10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0], 1.0])
+        },
+        j: |x: &DVector<f64>| {
+            DMatrix::from_row_slice(3, 2, &[-20.0 * x[0], 10.0, -1.0, 0.0, 0.0, 0.0])
+        },
+    };
+    let config = LmConfig {
+        timeout: Some(Duration::from_millis(30)),
+        ..cfg(0.0, 0.0, 0.0)
+    };
+    let rep = minimize(&slow, v(&[-1.2, 1.0]), &config);
+    assert_eq!(rep.termination, Termination::Timeout);
+    assert!(rep.seconds < 5.0);
+}
+
+#[test]
+fn terminates_on_interrupt_flag() {
+    let flag = Arc::new(AtomicBool::new(false));
+    let count = AtomicU64::new(0);
+    let f2 = flag.clone();
+    let p = Closure {
+        r: move |x: &DVector<f64>| {
+            if count.fetch_add(1, Ordering::SeqCst) == 5 {
+                f2.store(true, Ordering::SeqCst);
+            }
+            rosen_r(x)
+        },
+        j: rosen_j,
+    };
+    let config = LmConfig {
+        interrupt: Some(flag),
+        ..cfg(0.0, 0.0, 0.0)
+    };
+    let rep = minimize(&p, v(&[-1.2, 1.0]), &config);
+    assert_eq!(rep.termination, Termination::Interrupted);
+    assert_eq!(rep.evaluations, 6);
+}
+
+#[test]
+fn reports_non_finite_start() {
+    let p = Closure {
+        r: |x: &DVector<f64>| v(&[x[0].sqrt() - 1.0, 0.0]),
+        j: |x: &DVector<f64>| DMatrix::from_row_slice(2, 1, &[0.5 / x[0].sqrt(), 0.0]),
+    };
+    let rep = minimize(&p, v(&[-1.0]), &LmConfig::default());
+    assert_eq!(rep.termination, Termination::NonFiniteStart);
+    assert_eq!(rep.x[0], -1.0);
+    assert!(!rep.termination.converged());
+}
+
+#[test]
+fn reports_non_finite_jacobian() {
+    let p = Closure {
+        r: |x: &DVector<f64>| v(&[x[0] - 1.0, 0.0]),
+        j: |_: &DVector<f64>| DMatrix::from_row_slice(2, 1, &[f64::NAN, 0.0]),
+    };
+    let rep = minimize(&p, v(&[3.0]), &LmConfig::default());
+    assert_eq!(rep.termination, Termination::NonFiniteJacobian);
+}
+
+#[test]
+fn reports_no_progress_when_every_trial_is_non_finite() {
+    // Finite only at the start: the trust region collapses onto NaN trial points.
+    let p = Closure {
+        r: |x: &DVector<f64>| {
+            if x[0] == 3.0 {
+                v(&[2.0, 1.0])
+            } else {
+                v(&[f64::NAN, 1.0])
+            }
+        },
+        j: |_: &DVector<f64>| DMatrix::from_row_slice(2, 1, &[1.0, 0.0]),
+    };
+    let rep = minimize(&p, v(&[3.0]), &LmConfig::default());
+    assert_eq!(rep.termination, Termination::NoProgress);
+    assert_eq!(rep.x[0], 3.0);
+}
+
+#[test]
+fn nan_residuals_reject_the_step_and_the_fit_recovers() {
+    // r = √a·t − 2t is NaN for a < 0; from a = 25 the first (Gauss–Newton sized) step,
+    // Δa = −2(√a − 2)√a = −75, lands at a < 0.
+    let t: Vec<f64> = (1..=10).map(|i| i as f64).collect();
+    let nan_seen = Cell::new(false);
+    let p = Closure {
+        r: |x: &DVector<f64>| {
+            let r = DVector::from_iterator(t.len(), t.iter().map(|&t| x[0].sqrt() * t - 2.0 * t));
+            if r.iter().any(|v| v.is_nan()) {
+                nan_seen.set(true);
+            }
+            r
+        },
+        j: |x: &DVector<f64>| {
+            DMatrix::from_iterator(t.len(), 1, t.iter().map(|&t| 0.5 * t / x[0].sqrt()))
+        },
+    };
+    let rep = minimize(&p, v(&[25.0]), &LmConfig::default());
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    assert_relative_eq!(rep.x[0], 4.0, epsilon = 1e-9);
+    assert!(nan_seen.get(), "the test should exercise a NaN trial point");
+}
+
+#[test]
+fn rank_deficient_jacobian() {
+    // r = (a + b)·t − 2t + noise: only a + b is determined.
+    let t: Vec<f64> = (1..=5).map(|i| i as f64).collect();
+    let noise = [0.01, -0.02, 0.0, 0.015, -0.005];
+    let p = Closure {
+        r: |x: &DVector<f64>| {
+            DVector::from_iterator(
+                5,
+                (0..5).map(|i| (x[0] + x[1]) * t[i] - 2.0 * t[i] + noise[i]),
+            )
+        },
+        j: |_: &DVector<f64>| DMatrix::from_fn(5, 2, |i, _| t[i]),
+    };
+    let rep = minimize(&p, v(&[5.0, -7.0]), &LmConfig::default());
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    let sum_ls = 2.0 - (0..5).map(|i| noise[i] * t[i]).sum::<f64>() / 55.0;
+    assert_relative_eq!(rep.x[0] + rep.x[1], sum_ls, epsilon = 1e-12);
+    assert!(rep.x.iter().all(|v| v.is_finite()));
+    let u = crate::fit::stats::uncertainty(&rep.jacobian, rep.cost, 5, 1e-10);
+    assert_eq!(u.rank, 1);
+    assert!(u.condition.is_infinite() || u.condition > 1e14);
+    assert_eq!(u.undetermined.len(), 1);
+    let d = &u.undetermined[0];
+    assert_relative_eq!(d[0].abs(), std::f64::consts::FRAC_1_SQRT_2, epsilon = 1e-12);
+    assert_relative_eq!(d[0], -d[1], epsilon = 1e-12);
+    // Pseudo-inverse: the determined combination a + b has variance s²/Σt², the
+    // undetermined one a − b gets none.
+    let s2 = 2.0 * rep.cost / 3.0;
+    let var_sum = u.covariance.sum();
+    assert_relative_eq!(var_sum, s2 / 55.0, max_relative = 1e-10);
+}
+
+#[test]
+fn fewer_residuals_than_parameters() {
+    // One residual, two parameters: padded internally, converges onto the solution set.
+    let p = Closure {
+        r: |x: &DVector<f64>| v(&[x[0] * x[1] - 6.0]),
+        j: |x: &DVector<f64>| DMatrix::from_row_slice(1, 2, &[x[1], x[0]]),
+    };
+    let rep = minimize(&p, v(&[1.0, 1.0]), &LmConfig::default());
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    assert!(rep.cost < 1e-20);
+    assert_eq!(rep.residuals.len(), 1);
+    assert_eq!(rep.jacobian.shape(), (1, 2));
+}
+
+#[test]
+fn runs_as_an_argmin_solver_through_the_executor() {
+    let p = rosenbrock();
+    let solver = LevenbergMarquardt::new().with_ftol(1e-12).unwrap();
+    let res = Executor::new(ArgminAdapter(&p), solver)
+        .configure(|s| s.param(v(&[-1.2, 1.0])).max_iters(200))
+        .ctrlc(false)
+        .run()
+        .unwrap();
+    let x = res.state.get_best_param().unwrap();
+    assert_relative_eq!(x[0], 1.0, epsilon = 1e-10);
+    assert!(res.solver.termination().unwrap().converged());
+    assert_eq!(
+        res.state.get_termination_reason(),
+        Some(&TerminationReason::SolverConverged)
+    );
+    // The gradient slot holds Jᵀr (at the last Jacobian evaluation).
+    assert!(res.state.get_gradient().unwrap().norm() < 1e-6);
+    assert_eq!(res.state.get_jacobian().unwrap().shape(), (2, 2));
+}
+
+#[test]
+fn builders_validate() {
+    assert!(LevenbergMarquardt::new().with_ftol(-1.0).is_err());
+    assert!(LevenbergMarquardt::new().with_xtol(f64::NAN).is_err());
+    assert!(LevenbergMarquardt::new().with_gtol(f64::INFINITY).is_err());
+    assert!(LevenbergMarquardt::new().with_stepbound(0.0).is_err());
+    assert!(LevenbergMarquardt::new().with_max_evals(0).is_err());
+    assert!(LevenbergMarquardt::new().with_ftol(0.0).is_ok());
+    let e = LevenbergMarquardt::new()
+        .with_ftol(-1.0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("ftol") && e.contains("-1"), "{e}");
+}
+
+#[test]
+fn termination_descriptions() {
+    use Termination::*;
+    for t in [
+        Ftol,
+        Xtol,
+        FtolXtol,
+        Gtol,
+        Predicted,
+        MaxIterations,
+        MaxEvaluations,
+        Timeout,
+        Interrupted,
+        NonFiniteStart,
+        NonFiniteJacobian,
+        NoProgress,
+    ] {
+        assert!(!t.describe().is_empty());
+        assert_eq!(t.converged(), t.describe().starts_with("converged"));
+    }
+}
+
+#[test]
+fn finite_differences_match_analytic() {
+    let p = decay();
+    let x = v(&[2.0, 0.5]);
+    let ja = p.jacobian(&x);
+    let r0 = p.residuals(&x);
+    let jf = finite_difference_jacobian(|x| p.residuals(x), &x, Some(&r0));
+    let jc = finite_difference_jacobian(|x| p.residuals(x), &x, None);
+    assert!((&jf - &ja).amax() < 1e-6 * ja.amax());
+    assert!((&jc - &ja).amax() < 1e-9 * ja.amax());
+}
+
+#[test]
+fn transformed_log_and_fixed_parameters() {
+    // Inner parameters (a, b, c) of y = a·exp(−b t) + c, with c fixed at 0 and b on a
+    // log scale: the fit must match the direct two-parameter fit.
+    let (t, y) = decay_data();
+    let inner = Closure {
+        r: |x: &DVector<f64>| {
+            DVector::from_iterator(
+                t.len(),
+                t.iter()
+                    .zip(&y)
+                    .map(|(&t, &y)| x[0] * (-x[1] * t).exp() + x[2] - y),
+            )
+        },
+        j: |x: &DVector<f64>| {
+            let mut j = DMatrix::zeros(t.len(), 3);
+            for (i, &t) in t.iter().enumerate() {
+                let e = (-x[1] * t).exp();
+                j[(i, 0)] = e;
+                j[(i, 1)] = -x[0] * t * e;
+                j[(i, 2)] = 1.0;
+            }
+            j
+        },
+    };
+    let tr =
+        Transformed::new(inner, vec![false, true, false], vec![None, None, Some(0.0)]).unwrap();
+    assert_eq!(tr.n_free(), 2);
+    assert_eq!(tr.free_indices(), &[0, 1]);
+    let z0 = tr.to_free(&v(&[1.0, 0.1, 123.0])).unwrap();
+    assert_relative_eq!(z0[1], 0.1f64.ln());
+    // Chain rule against finite differences.
+    let jz = tr.jacobian(&z0);
+    let jn = finite_difference_jacobian(|z| tr.residuals(z), &z0, None);
+    assert!((&jz - &jn).amax() < 1e-8 * jz.amax());
+    let rep_z = minimize(&tr, z0, &LmConfig::default());
+    let rep_x = minimize(&decay(), v(&[1.0, 0.1]), &LmConfig::default());
+    let x = tr.to_full(&rep_z.x);
+    assert_relative_eq!(x[0], rep_x.x[0], epsilon = 1e-8);
+    assert_relative_eq!(x[1], rep_x.x[1], epsilon = 1e-8);
+    assert_eq!(x[2], 0.0);
+    // Delta method: the covariance of (a, b) equals the direct fit's.
+    let uz = crate::fit::stats::uncertainty(&rep_z.jacobian, rep_z.cost, 20, 1e-12);
+    let ux = crate::fit::stats::uncertainty(&rep_x.jacobian, rep_x.cost, 20, 1e-12);
+    let cx = tr.covariance_to_full(&rep_z.x, &uz.covariance);
+    assert_eq!(cx.shape(), (3, 3));
+    for i in 0..2 {
+        for j in 0..2 {
+            assert_relative_eq!(cx[(i, j)], ux.covariance[(i, j)], max_relative = 1e-6);
+        }
+    }
+    assert_eq!(cx[(2, 2)], 0.0);
+    assert!(tr.to_free(&v(&[1.0, -0.1, 0.0])).is_err());
+    assert!(Transformed::new((), vec![true], vec![Some(-1.0)]).is_err());
+    assert!(Transformed::new((), vec![true, false], vec![None]).is_err());
+}

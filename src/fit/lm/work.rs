@@ -1,0 +1,209 @@
+//! What the iteration carries between trial steps, and the Jacobian stage of an iteration
+//! (evaluate `J`, factor it, update the scaling, test the gradient).
+
+use argmin::core::{Error as ArgminError, Jacobian, Problem};
+use nalgebra::{DMatrix, DVector};
+
+use super::norm::{enorm, pad_mat};
+use super::qr::{qrfac, QrState};
+use super::{LmState, Termination, EPSMCH};
+
+/// Everything the iteration carries between trial steps.
+#[derive(Debug, Clone)]
+pub(super) struct Work {
+    /// Number of residuals as supplied (before padding to `max(m, n)` rows).
+    pub(super) m: usize,
+    pub(super) x: DVector<f64>,
+    /// Residuals at `x`, padded with zeros to `max(m, n)`.
+    pub(super) r: DVector<f64>,
+    pub(super) fnorm: f64,
+    /// Jacobian at `x` (padded), valid when `!need_jac`.
+    pub(super) jac: DMatrix<f64>,
+    pub(super) qr: Option<QrState>,
+    pub(super) diag: DVector<f64>,
+    pub(super) delta: f64,
+    pub(super) par: f64,
+    pub(super) xnorm: f64,
+    pub(super) need_jac: bool,
+    /// Set once the LM iteration has converged: the Gauss–Newton polishing phase.
+    pub(super) polish: Option<Polish>,
+    /// Largest |actual relative reduction| seen on trial steps whose predicted reduction was
+    /// below `1e-12`: an estimate of the rounding noise in the relative cost.
+    pub(super) cost_noise: f64,
+    /// No step accepted yet (MINPACK's `iter == 1`).
+    pub(super) first: bool,
+    /// Ratio of actual to predicted reduction of the last accepted step.
+    pub(super) last_ratio: f64,
+    pub(super) nfev: u64,
+    pub(super) njev: u64,
+}
+
+impl Work {
+    /// The state at the start: `x` with its residuals `r` (padded to `max(m, n)` rows), one
+    /// evaluation spent, the Jacobian still to be evaluated.
+    pub(super) fn start(m: usize, x: DVector<f64>, r: DVector<f64>) -> Work {
+        let n = x.len();
+        let rows = r.len();
+        Work {
+            m,
+            fnorm: enorm(r.as_slice()),
+            x,
+            r,
+            jac: DMatrix::zeros(rows, n),
+            qr: None,
+            diag: DVector::from_element(n, 1.0),
+            delta: 0.0,
+            par: 0.0,
+            xnorm: 0.0,
+            need_jac: true,
+            polish: None,
+            cost_noise: 0.0,
+            first: true,
+            last_ratio: 0.0,
+            nfev: 1,
+            njev: 0,
+        }
+    }
+
+    /// `½‖r‖²` at the current point.
+    pub(super) fn cost(&self) -> f64 {
+        0.5 * self.fnorm * self.fnorm
+    }
+
+    /// Recompute `‖D x‖` after `x` or `D` changed.
+    pub(super) fn update_xnorm(&mut self) {
+        self.xnorm = enorm(self.diag.component_mul(&self.x).as_slice());
+    }
+
+    /// Move to an accepted point with residuals `r` (norm `fnorm`); its Jacobian is due.
+    pub(super) fn move_to(&mut self, x: DVector<f64>, r: DVector<f64>, fnorm: f64) {
+        self.x = x;
+        self.r = r;
+        self.fnorm = fnorm;
+        self.update_xnorm();
+        self.need_jac = true;
+    }
+
+    /// Evaluate and factor the Jacobian at the current point, update the scaling `D` (and on
+    /// the first call the trust radius `Δ₀ = stepbound·‖D x₀‖`), and put `Jᵀr` and `J` into
+    /// the argmin state. Returns the state and a termination when `J` is not finite (or not
+    /// `m × n`), or when the gradient test (`gtol`, or machine epsilon) holds outside
+    /// polishing.
+    pub(super) fn refresh_jacobian<O>(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: LmState,
+        stepbound: f64,
+        gtol: f64,
+    ) -> Result<(LmState, Option<Termination>), ArgminError>
+    where
+        O: Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+    {
+        let n = self.x.len();
+        let jac = problem.jacobian(&self.x)?;
+        self.njev += 1;
+        if jac.shape() != (self.m, n) || jac.iter().any(|v| !v.is_finite()) {
+            return Ok((state, Some(Termination::NonFiniteJacobian)));
+        }
+        self.jac = pad_mat(jac, self.r.len());
+        let (qr, acnorm) = qrfac(&self.jac, &self.r);
+        if self.first {
+            self.initial_scaling(&acnorm, stepbound);
+        }
+        let gnorm = scaled_gradient_norm(&qr, &acnorm, self.fnorm);
+        for j in 0..n {
+            self.diag[j] = self.diag[j].max(acnorm[j]);
+        }
+        self.qr = Some(qr);
+        self.need_jac = false;
+        let state = self.publish_jacobian(state);
+        // (While polishing, the polishing rules decide; they also end at a zero step.)
+        if self.polish.is_none() && (gnorm <= gtol || gnorm <= EPSMCH) {
+            return Ok((state, Some(Termination::Gtol)));
+        }
+        Ok((state, None))
+    }
+
+    /// MINPACK `mode = 1`: `D` from the column norms of the first Jacobian (1 for a zero
+    /// column), and the initial trust radius.
+    fn initial_scaling(&mut self, acnorm: &DVector<f64>, stepbound: f64) {
+        for j in 0..self.x.len() {
+            self.diag[j] = if acnorm[j] == 0.0 { 1.0 } else { acnorm[j] };
+        }
+        self.update_xnorm();
+        self.delta = stepbound * self.xnorm;
+        if self.delta == 0.0 {
+            self.delta = stepbound;
+        }
+    }
+
+    /// Put `Jᵀr` and the (unpadded) `J` into the argmin state.
+    fn publish_jacobian(&self, state: LmState) -> LmState {
+        let n = self.x.len();
+        let grad = self.jac.tr_mul(&self.r);
+        // The state's Jacobian: the previous one's storage is reused (a fresh matrix of
+        // this size is fresh memory from the system on every iteration).
+        let mut state = state;
+        let mut state_jac = state
+            .take_jacobian()
+            .filter(|j| j.shape() == (self.m, n))
+            .unwrap_or_else(|| DMatrix::zeros(self.m, n));
+        state_jac.copy_from(&self.jac.rows(0, self.m));
+        state.gradient(grad).jacobian(state_jac)
+    }
+}
+
+/// The largest cosine between `r` and a column of `J` (MINPACK's `gnorm`), from the pivoted
+/// QR; 0 for a zero residual.
+fn scaled_gradient_norm(qr: &QrState, acnorm: &DVector<f64>, fnorm: f64) -> f64 {
+    let mut gnorm: f64 = 0.0;
+    if fnorm != 0.0 {
+        for j in 0..acnorm.len() {
+            let l = qr.ipvt[j];
+            if acnorm[l] != 0.0 {
+                let mut sum = 0.0;
+                for i in 0..=j {
+                    sum += qr.r[(i, j)] * (qr.qtf[i] / fnorm);
+                }
+                gnorm = gnorm.max((sum / acnorm[l]).abs());
+            }
+        }
+    }
+    gnorm
+}
+
+/// State of the Gauss–Newton polishing phase (its steps are in `polish.rs`).
+#[derive(Debug, Clone)]
+pub(super) struct Polish {
+    /// The convergence test that started it; reported as the run's termination.
+    pub(super) reason: Termination,
+    /// Accepted polishing steps.
+    pub(super) steps: u32,
+    /// `‖r‖` when polishing started.
+    pub(super) fnorm0: f64,
+    /// The iterate with the smallest Gauss–Newton step so far.
+    pub(super) best: Option<PolishPoint>,
+    /// Iterates since `best` last improved.
+    pub(super) stale: u32,
+}
+
+#[derive(Debug, Clone)]
+pub(super) struct PolishPoint {
+    pub(super) x: DVector<f64>,
+    pub(super) r: DVector<f64>,
+    pub(super) fnorm: f64,
+    pub(super) pnorm: f64,
+}
+
+impl Polish {
+    /// Polishing that starts at a point with residual norm `fnorm0`, after `reason` held.
+    pub(super) fn start(reason: Termination, fnorm0: f64) -> Polish {
+        Polish {
+            reason,
+            steps: 0,
+            fnorm0,
+            best: None,
+            stale: 0,
+        }
+    }
+}

@@ -1,0 +1,200 @@
+//! Start search: where the full fit begins.
+//!
+//! The grid of [`init::initial_values`] ranks starting candidates on a subsample; each
+//! candidate is then refined with a quick Levenberg–Marquardt run on the same subsample,
+//! and the lowest refined cost inside the models' domain (on the full data) wins. All of
+//! it runs on subsamples, beside the setup of the full problem.
+
+use super::driver::{FitConfig, GRID_TOL, REFINE_TOL};
+use super::init;
+use super::lm::LmConfig;
+use super::problem::{FitInput, FitProblem, ParamLayout};
+use super::solve::run_lm;
+use crate::error::Result;
+use crate::model::{self, EvalMode, Model, ModelOptions};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Where the full fit starts, and when the search for it ended.
+pub(super) struct Start {
+    /// The refined starting point (layout order).
+    pub p0: Vec<f64>,
+    /// The grid point whose refinement won.
+    pub grid_start: Vec<f64>,
+    /// Seconds from the fit's start to the grid's candidates.
+    pub start_seconds: f64,
+    /// Seconds from the fit's start to the end of the refinement.
+    pub init_seconds: f64,
+}
+
+/// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
+/// for KBS models its rough approximation (exact in the rough band, and it avoids the
+/// O(√g) series far from the specular peak).
+struct Refiners<'m> {
+    exact: FitProblem<'m>,
+    rough: Option<FitProblem<'m>>,
+    /// Layout index of σ (KBS models).
+    sigma_k: Option<usize>,
+    /// The subsample both problems are built on.
+    sub: FitInput,
+}
+
+/// The quick refinement's solver settings: loose tolerances, at most 100 iterations.
+fn coarse_config(config: &FitConfig) -> LmConfig {
+    LmConfig {
+        ftol: 1e-6,
+        xtol: 1e-6,
+        max_iters: 100,
+        progress: false,
+        predicted_stop: true,
+        ..config.lm.clone()
+    }
+}
+
+/// The fit's model at a looser tolerance (and optionally in a forced evaluation mode).
+fn loose_model(
+    model: &dyn Model,
+    config: &FitConfig,
+    tol: f64,
+    mode: Option<EvalMode>,
+) -> Result<Box<dyn Model>> {
+    model::by_name(
+        model.name(),
+        &ModelOptions {
+            tol: tol.max(config.model_opts.tol),
+            mode: mode.unwrap_or(config.model_opts.mode),
+            ..config.model_opts
+        },
+    )
+}
+
+/// The starting point: the grid's candidates, each refined on a subsample, the lowest
+/// refined cost inside the domain winning (see the module doc). `given[k]` holds a user's
+/// `--init` or `--fix` value.
+pub(super) fn starting_point(
+    model: &dyn Model,
+    layout: &ParamLayout,
+    input: &FitInput,
+    config: &FitConfig,
+    floor: f64,
+    given: &[Option<f64>],
+    t0: Instant,
+) -> Result<Start> {
+    let grid_model = loose_model(model, config, GRID_TOL, None)?;
+    let refine_model = loose_model(model, config, REFINE_TOL, None)?;
+    let sigma_k = layout.find("sigma").first().copied();
+    let rough_model = match sigma_k {
+        Some(_) => Some(loose_model(
+            model,
+            config,
+            REFINE_TOL,
+            Some(EvalMode::Rough),
+        )?),
+        None => None,
+    };
+    let sub = input.subset(&init::subsample(input.geo.len(), init::REFINE_SAMPLES));
+    let exact = FitProblem::new(
+        refine_model.as_ref(),
+        layout.clone(),
+        &sub,
+        config.residual,
+        floor,
+    )?;
+    let rough = match &rough_model {
+        Some(m) => Some(FitProblem::new(
+            m.as_ref(),
+            layout.clone(),
+            &sub,
+            config.residual,
+            floor,
+        )?),
+        None => None,
+    };
+    let refiners = Refiners {
+        exact,
+        rough,
+        sigma_k,
+        sub,
+    };
+    // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
+    let candidates =
+        init::initial_values(&refiners.exact, grid_model.as_ref(), &refiners.sub, given);
+    let start_seconds = t0.elapsed().as_secs_f64();
+    // A start must lie inside the models' domain on every sample, not only on the
+    // subsample: a rough-valley candidate can drift to a σ where a sample outside the
+    // subsample has g beyond the fit's limit. Without any refined start inside, the first
+    // grid candidate inside is taken.
+    let inside = |p: &[f64]| input.in_domain(model, layout, p);
+    let first_grid = candidates.iter().position(|(_, c)| inside(c)).unwrap_or(0);
+    let mut grid_start = candidates[first_grid].1.clone();
+    let mut p0 = grid_start.clone();
+    let coarse = coarse_config(config);
+    if refiners.sub.y.len() > layout.free().len() {
+        let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
+        if let Some((values, start)) = lowest_refined(refined, &candidates, coarse.ftol) {
+            p0 = values;
+            grid_start = start;
+        }
+    }
+    Ok(Start {
+        p0,
+        grid_start,
+        start_seconds,
+        init_seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Refine each candidate with a quick LM on the subsample (in parallel): the grid's best
+/// point can be a factor of a few off, or sit in the valley of the rough asymptote
+/// (σ → ∞ at fixed T/σ) while the truth is elsewhere. A candidate in the rough band
+/// (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation and its
+/// refined cost then taken with the exact model. Returns (cost, values) per candidate;
+/// the cost is infinite for a refined point that is not finite or not inside the domain.
+fn refine_candidates(
+    refiners: &Refiners,
+    candidates: &[(f64, Vec<f64>)],
+    coarse: &LmConfig,
+    inside: &(dyn Fn(&[f64]) -> bool + Sync),
+) -> Vec<(f64, Vec<f64>)> {
+    candidates
+        .par_iter()
+        .map(|(_, start)| {
+            let rough_band = refiners.sigma_k.is_some_and(|k| {
+                super::identify::median_g(&refiners.sub, start[k]) > init::ROUGH_BAND_G
+            });
+            let (cost, values) = match (&refiners.rough, rough_band) {
+                (Some(rough), true) => {
+                    let run = run_lm(rough, start, coarse);
+                    let cost = 0.5
+                        * refiners
+                            .exact
+                            .weighted_residuals(&run.values)
+                            .norm_squared();
+                    (cost, run.values)
+                }
+                _ => {
+                    let run = run_lm(&refiners.exact, start, coarse);
+                    (run.lm.cost, run.values)
+                }
+            };
+            // A refined start outside the domain (on the full data) does not count.
+            let usable = cost.is_finite() && inside(&values);
+            (if usable { cost } else { f64::INFINITY }, values)
+        })
+        .collect()
+}
+
+/// The refined point with the lowest cost, and the grid point it came from. Costs within
+/// the refinement's `ftol` count as a tie, won by the better-ranked grid point.
+fn lowest_refined(
+    refined: Vec<(f64, Vec<f64>)>,
+    candidates: &[(f64, Vec<f64>)],
+    ftol: f64,
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let lowest = refined.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+    refined
+        .into_iter()
+        .zip(candidates)
+        .find(|(r, _)| r.0.is_finite() && r.0 <= lowest * (1.0 + ftol))
+        .map(|((_, values), (_, start))| (values, start.clone()))
+}

@@ -1,0 +1,357 @@
+//! What a fit report states (issue 13): units, the whole setting in JSON, `plot` from any
+//! directory, `--channel` on CSV input, the ASTM file's own quantity, weights transformed
+//! with relative/log residuals, the floor's count, `--by-group` on ASTM files, and the
+//! smaller help/usage texts.
+
+mod common;
+
+use common::{fit_json, goniofit};
+use predicates::str::contains;
+use std::path::{Path, PathBuf};
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Run goniofit, expect exit 2 (bad usage or input) and `message` on stderr.
+fn usage_error(args: &[&str], message: &str) {
+    goniofit()
+        .args(args)
+        .assert()
+        .code(2)
+        .stderr(contains(message));
+}
+
+fn f(v: &serde_json::Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+const HEMI: &str = "data/synthetic/kbs_hemisphere.csv";
+const GARNET: &str = "data/cornell/garnet_red.astm";
+
+#[test]
+fn wavelength_units_scale_sigma_and_t_and_are_stated() {
+    let bare = fit_json(&["fit", "--wavelength", "1", "--json", HEMI]);
+    let nm = fit_json(&["fit", "--wavelength", "633nm", "--json", HEMI]);
+    let um = fit_json(&["fit", "--wavelength", "0.633um", "--json", HEMI]);
+    // KBS depends on σ/λ and T/λ only: σ in nm is 633 × σ at λ = 1, and 1000 × σ in µm.
+    for name in ["sigma", "T"] {
+        let s1 = f(&bare["params"][name]["value"]);
+        let snm = f(&nm["params"][name]["value"]);
+        let sum = f(&um["params"][name]["value"]);
+        assert!(
+            (snm / (633.0 * s1) - 1.0).abs() < 1e-6,
+            "{name}: {snm} vs {s1}"
+        );
+        assert!(
+            (snm / (1000.0 * sum) - 1.0).abs() < 1e-6,
+            "{name}: {snm} vs {sum}"
+        );
+        assert_eq!(nm["params"][name]["unit"], "nm");
+        assert_eq!(um["params"][name]["unit"], "µm");
+        assert_eq!(bare["params"][name]["unit"], "unit of λ");
+    }
+    assert_eq!(nm["setting"]["wavelength"]["unit"], "nm");
+    assert_eq!(f(&nm["setting"]["wavelength"]["values"][0]), 633.0);
+    assert_eq!(nm["setting"]["wavelength"]["source"], "--wavelength");
+    // A radiance file states no unit for L: the scale is in the unit of L.
+    assert_eq!(nm["params"]["scale"]["unit"], "unit of L");
+    // The text report says it too.
+    goniofit()
+        .args(["fit", "--wavelength", "633nm", HEMI])
+        .assert()
+        .code(0)
+        .stdout(contains(
+            "wavelength      = 633 nm (from --wavelength; σ, T in nm)",
+        ))
+        .stdout(predicates::str::is_match(r"\n    sigma = 1\.58\d+e2 +\+/- [^\n]*nm").unwrap());
+    usage_error(&["fit", "--wavelength", "633pm", HEMI], "633nm, 0.633um");
+}
+
+#[test]
+fn json_carries_the_whole_setting() {
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "kbs+lambert",
+        "--channel",
+        "550nm",
+        "--residual",
+        "log",
+        "--json",
+        GARNET,
+    ]);
+    let st = &v["setting"];
+    let path = st["input"]["path"].as_str().unwrap();
+    assert!(Path::new(path).is_absolute(), "{path}");
+    let bytes = std::fs::read(repo(GARNET)).unwrap();
+    assert_eq!(
+        st["input"]["sha256"].as_str().unwrap(),
+        goniofit::report::checksum::sha256_hex(&bytes)
+    );
+    assert_eq!(st["input"]["bytes"].as_u64(), Some(bytes.len() as u64));
+    assert_eq!(st["wavelength"]["unit"], "nm");
+    assert_eq!(st["wavelength"]["source"], "channel name");
+    assert_eq!(st["channel"], "550nm");
+    assert_eq!(st["quantity"], "brdf");
+    assert_eq!(st["quantity_source"], "stated by the file");
+    assert_eq!(st["residual"], "log");
+    assert_eq!(st["weights"]["source"], "none");
+    assert_eq!(st["loss"], "linear");
+    assert_eq!(st["absolute_sigma"], false);
+    // The floor (1e-6 × max L) and how many values lie below it, counted from the file.
+    let ds = goniofit::io::read_dataset(
+        &repo(GARNET),
+        &goniofit::io::ReadOptions {
+            channel: Some("550nm".into()),
+            require_value: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let y = ds.value.unwrap();
+    let floor = 1e-6 * y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!((f(&st["floor"]["value"]) / floor - 1.0).abs() < 1e-12);
+    let below = y.iter().filter(|&&v| v < floor).count();
+    assert!(below >= 4, "garnet has exact zeros");
+    assert_eq!(st["floor"]["raised"].as_u64(), Some(below as u64));
+    // Units: σ, T in nm; scales in sr⁻¹ for a BRDF; π·s_d as a reflectance factor.
+    assert_eq!(v["params"]["sigma"]["unit"], "nm");
+    assert_eq!(v["params"]["scale_d"]["unit"], "sr⁻¹");
+    let rf = &v["derived"]["reflectance_factor"];
+    let sd = f(&v["params"]["scale_d"]["value"]);
+    assert!((f(&rf["value"]) / (std::f64::consts::PI * sd) - 1.0).abs() < 1e-12);
+    assert_eq!(rf["unit"], "1");
+}
+
+#[test]
+fn astm_files_default_to_the_quantity_their_header_states() {
+    let args = [
+        "fit",
+        "--model",
+        "kbs+lambert",
+        "--channel",
+        "550nm",
+        "--residual",
+        "log",
+    ];
+    let default = fit_json(&[&args[..], &["--json", GARNET]].concat());
+    let brdf = fit_json(&[&args[..], &["--quantity", "brdf", "--json", GARNET]].concat());
+    let radiance = fit_json(&[&args[..], &["--quantity", "radiance", "--json", GARNET]].concat());
+    assert_eq!(default["setting"]["quantity"], "brdf");
+    assert_eq!(radiance["setting"]["quantity_source"], "--quantity");
+    assert_eq!(f(&default["cost"]), f(&brdf["cost"]));
+    assert_ne!(f(&default["cost"]), f(&radiance["cost"]));
+}
+
+#[test]
+fn relative_residuals_with_sigma_l_transform_the_weights() {
+    // σ_L is 1 % of L (the synth noise): the relative residual's uncertainty is 0.01, so
+    // with the transformed weights reduced χ² is near 1 (it was 4.2e10 with 1/σ_L²).
+    // Log residuals use a floor far below the data here: at the default floor (1e-6 × max L)
+    // 358 values of this hemisphere are raised, and their residuals vanish.
+    for (residual, floor) in [("relative", "1e-300"), ("log", "1e-300")] {
+        let v = fit_json(&[
+            "fit",
+            "--wavelength",
+            "1",
+            "--residual",
+            residual,
+            "--floor",
+            floor,
+            "--json",
+            HEMI,
+        ]);
+        let chi = f(&v["reduced_chi2"]);
+        assert!(
+            (0.95..1.08).contains(&chi),
+            "{residual}: reduced χ² = {chi}"
+        );
+        assert_eq!(v["setting"]["floor"]["raised"].as_u64(), Some(0));
+        assert_eq!(v["setting"]["weights"]["source"], "sigma_L column");
+        assert!(v["setting"]["weights"]["transform"]
+            .as_str()
+            .unwrap()
+            .starts_with("max("));
+        // σ, T recovered within 4 standard errors of the truth (0.25, 2.5).
+        for (name, truth) in [("sigma", 0.25), ("T", 2.5)] {
+            let p = &v["params"][name];
+            let (x, se) = (f(&p["value"]), f(&p["stderr"]));
+            assert!(
+                (x - truth).abs() < 4.0 * se,
+                "{residual} {name} = {x} ± {se}"
+            );
+        }
+    }
+    goniofit()
+        .args(["fit", "--wavelength", "1", "--residual", "relative", HEMI])
+        .assert()
+        .code(0)
+        .stdout(contains(
+            "weights         = sigma_L column: max(|L|, floor)²/sigma_L²",
+        ));
+}
+
+#[test]
+fn plot_works_from_any_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("fit.json");
+    let out = goniofit()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "fit",
+            "--model",
+            "kbs",
+            "--wavelength",
+            "633nm",
+            "--json",
+            HEMI,
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    std::fs::write(&report, &out.stdout).unwrap();
+    // From the report's own directory, where the relative input path does not exist.
+    goniofit()
+        .current_dir(dir.path())
+        .args(["plot", "fit.json", "--out", "pics"])
+        .assert()
+        .code(0)
+        .stderr(contains("wrote"));
+    assert!(dir.path().join("pics/polar.png").exists());
+}
+
+#[test]
+fn channel_selects_a_wavelength_of_a_csv() {
+    let ptfe = "data/nist-ptfe/PTFE.data.csv";
+    for channel in ["0.532", "532nm", "0.532um"] {
+        let v = fit_json(&[
+            "fit",
+            "--model",
+            "lambert",
+            "--channel",
+            channel,
+            "--json",
+            ptfe,
+        ]);
+        assert_eq!(v["n"].as_u64(), Some(1824), "{channel}");
+        assert_eq!(v["setting"]["wavelength"]["unit"], "µm");
+        assert_eq!(f(&v["setting"]["wavelength"]["values"][0]), 0.532);
+        // Germer's f_r11 is a BRDF.
+        assert_eq!(v["setting"]["quantity"], "brdf");
+    }
+    usage_error(
+        &["fit", "--model", "lambert", "--channel", "0.5", ptfe],
+        "wavelengths: 0.351µm, 0.532µm, 0.633µm, 1.064µm",
+    );
+    // --by-group on a CSV without a group column fits each wavelength on its own.
+    let v = fit_json(&["fit", "--model", "lambert", "--by-group", "--json", ptfe]);
+    assert_eq!(v["datasets"].as_u64(), Some(4));
+    // A CSV with neither a group nor a wavelength column cannot select a channel.
+    usage_error(
+        &["fit", "--wavelength", "1", "--channel", "550nm", HEMI],
+        "needs a group column or a wavelength column",
+    );
+}
+
+#[test]
+fn by_group_on_an_astm_file_fits_every_channel() {
+    let v = fit_json(&["fit", "--model", "lambert", "--by-group", "--json", GARNET]);
+    assert_eq!(v["datasets"].as_u64(), Some(31));
+}
+
+#[test]
+fn help_and_usage_texts() {
+    goniofit()
+        .args(["fit", "--help"])
+        .assert()
+        .code(0)
+        .stdout(contains("[default: 1e-10]"))
+        .stdout(contains("Examples:"));
+    goniofit()
+        .args(["bench", "work-precision", "--help"])
+        .assert()
+        .code(0)
+        .stdout(contains(r#"`{"rows": [...]}`"#));
+    usage_error(
+        &["fit", "--model", "kbz", "--wavelength", "1", HEMI],
+        "or auto",
+    );
+}
+
+#[test]
+fn by_group_prints_one_line_per_fit_and_writes_the_summary_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("fits.csv");
+    let out = goniofit()
+        .args(["fit", "--model", "lambert", "--by-group", "--summary"])
+        .arg(&csv)
+        .arg(GARNET)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let table = text.split("[[Summary]]").nth(1).expect("a summary table");
+    // Header + 31 channel lines.
+    assert_eq!(table.trim_end().lines().count(), 1 + 1 + 31, "{table}");
+    assert!(table.contains("data/cornell/garnet_red.astm [550nm]"));
+    let written = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = written.lines();
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("group,n,converged,cost,r2,sigma"));
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 31);
+    // The 550nm row has the cost of the 550nm fit run on its own.
+    let one = fit_json(&[
+        "fit",
+        "--model",
+        "lambert",
+        "--channel",
+        "550nm",
+        "--json",
+        GARNET,
+    ]);
+    let row: Vec<&str> = rows
+        .iter()
+        .find(|r| r.contains("[550nm]"))
+        .unwrap()
+        .split(',')
+        .collect();
+    assert_eq!(row[1], "1439");
+    let cost: f64 = row[3].parse().unwrap();
+    assert!((cost / f(&one["cost"]) - 1.0).abs() < 1e-9, "{cost}");
+}
+
+#[test]
+fn long_correlation_matrices_are_summarised() {
+    // A joint lambert fit over 31 channels has 31 free scales: the text lists the largest
+    // pairs, the JSON keeps the whole matrix.
+    let out = goniofit()
+        .args(["fit", "--model", "kbs", "--channel", "all", GARNET])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("the 10 largest |ρ|; the full matrix is in --json"),
+        "{text}"
+    );
+    assert!(text
+        .lines()
+        .filter(|l| !l.contains("note:"))
+        .all(|l| l.chars().count() < 200));
+    assert!(text.contains("joint fit over 31 channels"), "{text}");
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "kbs",
+        "--channel",
+        "all",
+        "--json",
+        GARNET,
+    ]);
+    let k = v["correlation"]["names"].as_array().unwrap().len();
+    assert_eq!(v["correlation"]["matrix"].as_array().unwrap().len(), k);
+    assert_eq!(v["correlation"]["largest"].as_array().unwrap().len(), 10);
+}
