@@ -26,22 +26,29 @@ fn notes(v: &serde_json::Value) -> Vec<String> {
         .collect()
 }
 
+/// A BRDF fit with log residuals of one channel of a bundled Cornell paint: exit code and
+/// JSON report.
+fn cornell_log_fit(model: &str, channel: &str, paint: &str) -> (Option<i32>, serde_json::Value) {
+    let file = format!("data/cornell/{paint}.astm");
+    run_json(&[
+        "fit",
+        "--model",
+        model,
+        "--quantity",
+        "brdf",
+        "--channel",
+        channel,
+        "--residual",
+        "log",
+        &file,
+    ])
+}
+
 /// garnet red, 550 nm: the Gaussian lobe's width runs to ~1e-102 rad (issue 12); the fit
 /// must say the lobe is narrower than the sampling, not "converged".
 #[test]
 fn lambert_specular_lobe_narrower_than_sampling_is_degenerate() {
-    let (code, v) = run_json(&[
-        "fit",
-        "--model",
-        "lambert-specular",
-        "--quantity",
-        "brdf",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-        "data/cornell/garnet_red.astm",
-    ]);
+    let (code, v) = cornell_log_fit("lambert-specular", "550nm", "garnet_red");
     assert_eq!(code, Some(3));
     assert_eq!(v["termination"], "degenerate");
     assert_eq!(v["converged"], false);
@@ -60,18 +67,7 @@ fn lambert_specular_lobe_narrower_than_sampling_is_degenerate() {
 /// reason naming the lobe's correlation length or T/σ.
 #[test]
 fn kbs_lobe_flattened_to_the_diffuse_term_is_degenerate() {
-    let (code, v) = run_json(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--quantity",
-        "brdf",
-        "--channel",
-        "640nm",
-        "--residual",
-        "log",
-        "data/cornell/krylon_blue.astm",
-    ]);
+    let (code, v) = cornell_log_fit("kbs+lambert", "640nm", "krylon_blue");
     let t = v["params"]["T"]["value"].as_f64().unwrap();
     let sigma = v["params"]["sigma"]["value"].as_f64().unwrap();
     if 2.0 * std::f64::consts::PI * t / 640.0 < 0.1 || t / sigma < 0.1 {
@@ -94,18 +90,7 @@ fn kbs_lobe_flattened_to_the_diffuse_term_is_degenerate() {
 /// degenerate lambert-specular one.
 #[test]
 fn auto_never_picks_a_degenerate_fit() {
-    let (code, v) = run_json(&[
-        "fit",
-        "--model",
-        "auto",
-        "--quantity",
-        "brdf",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-        "data/cornell/garnet_red.astm",
-    ]);
+    let (code, v) = cornell_log_fit("auto", "550nm", "garnet_red");
     assert_eq!(code, Some(0));
     assert_eq!(v["converged"], true);
     assert_eq!(v["model"], "kbs+lambert");
