@@ -4,6 +4,7 @@
 //! file: start search (`start`), solve (`solve`), identify (`identify`), reduce
 //! (`reduce`), validate (`validate`) and assemble (`assemble`).
 
+pub mod amplitudes;
 pub mod driver;
 pub mod grid_cache;
 pub mod init;

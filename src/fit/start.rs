@@ -18,6 +18,12 @@ use std::time::Instant;
 /// Accuracy of the model on the starting-value grid (it only ranks candidates).
 pub const GRID_TOL: f64 = 1e-4;
 
+/// Relative cost by which an optimum at an edge of the physical domain (T/σ → 0, kT → 0)
+/// must lie below the best one inside it to count as the fit's result (and the fit then
+/// ends `degenerate`): below that margin, the inside optimum explains the data as well,
+/// with a lobe the surface can have. The same margin compares the full solves.
+pub const EDGE_MARGIN: f64 = 1e-3;
+
 /// Model accuracy of the quick refinement on a subsample (it only has to land near the
 /// optimum; the full fit then works at the requested accuracy).
 pub const REFINE_TOL: f64 = 1e-6;
@@ -135,20 +141,50 @@ pub(super) fn starting_point(
     // subsample has g beyond the fit's limit. Without any refined start inside, the first
     // grid candidate inside is taken.
     let inside = |p: &[f64]| input.in_domain(model, layout, p);
-    // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
-    // worth starting from: another candidate's valley wins.
-    let usable = |p: &[f64]| inside(p) && !super::validate::at_kbs_edge(layout, input, p);
     let first_grid = candidates.iter().position(|(_, c)| inside(c)).unwrap_or(0);
     let mut grid_start = candidates[first_grid].1.clone();
     let mut p0 = grid_start.clone();
     let coarse = coarse_config(config);
     let mut alternatives = Vec::new();
     if refiners.sub.y.len() > layout.free().len() {
-        let refined = refine_candidates(&refiners, &candidates, &coarse, &usable);
-        alternatives = other_usable(&refined, &candidates, coarse.ftol);
-        if let Some((values, start)) = lowest_refined(refined, &candidates, coarse.ftol) {
-            p0 = values;
-            grid_start = start;
+        let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
+        // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
+        // worth starting from while another candidate's valley is about as low; when the
+        // edge is lower by more than EDGE_MARGIN, the data's best fit is the edge, and the
+        // full fit starts there (to end `degenerate`, saying why), the others as
+        // alternatives.
+        let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
+        let (edge, usable): (Vec<_>, Vec<_>) = refined
+            .iter()
+            .cloned()
+            .zip(&candidates)
+            .partition(|((_, v), _)| at_edge(v));
+        let (usable, usable_grid): (Vec<_>, Vec<_>) =
+            usable.into_iter().map(|(r, c)| (r, c.clone())).unzip();
+        alternatives = other_usable(&usable, &usable_grid, coarse.ftol);
+        let best_usable = usable.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+        let lowest_edge = edge
+            .iter()
+            .filter(|((c, _), _)| c.is_finite())
+            .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
+        match (
+            lowest_refined(usable, &usable_grid, coarse.ftol),
+            lowest_edge,
+        ) {
+            (winner, Some(((cost, values), grid)))
+                if winner.is_none() || *cost < best_usable * (1.0 - EDGE_MARGIN) =>
+            {
+                if let Some((w, _)) = winner {
+                    alternatives.insert(0, w);
+                }
+                p0 = values.clone();
+                grid_start = grid.1.clone();
+            }
+            (Some((values, start)), _) => {
+                p0 = values;
+                grid_start = start;
+            }
+            _ => {}
         }
     }
     Ok(Start {
