@@ -1,11 +1,15 @@
 """Benchmark: goniofit.fit_frame on N small scans against the CLI's `fit --by-group` on
-the same samples (a CSV written exactly), and Dask (LocalCluster, 2 worker processes)
-against fit_frame, in one run, the tools interleaved run by run.
+the same samples, and Dask (LocalCluster, 2 worker processes) against fit_frame, in one
+run, the tools interleaved run by run.
 
     python python/benches/fit_frame_vs_cli.py [N=2000] [repeats=7]
 
-Needs the package installed (tests/all.sh's virtual environment has everything) and the
-CLI built (`cargo build --release`; GONIOFIT_BIN overrides the path). Prints medians:
+The scans are issue 15's texel batch (`benches/texels.py gen`: N in-plane KBS scans of 66
+samples from `goniofit synth`, 1 % noise); the CSV is read into pandas exactly
+(`float_precision="round_trip"`), so both tools fit the same numbers (checked: every
+group's cost agrees). Needs the package installed (tests/all.sh's virtual environment has
+everything) and the CLI built (`cargo build --release`; GONIOFIT_BIN overrides the path).
+Prints medians:
 - CLI: the whole process (read CSV, fit, write JSON) and its own `seconds` (the fits);
 - fit_frame: the call, from an in-memory DataFrame to the result table;
 - Dask: fit_groups(...).compute() on a persisted Dask DataFrame with P partitions, and the
@@ -26,32 +30,43 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 
 import goniofit  # noqa: E402
 import goniofit.dask  # noqa: E402
-from texels import texel_frame, write_csv  # noqa: E402
 
 REPO = HERE.parents[1]
+
+
+def texel_batch(exe, n, tmp):
+    """Issue 15's texel CSV of `n` scans (benches/texels.py gen) and it as a DataFrame."""
+    import pandas as pd
+
+    path = tmp / "texels.csv"
+    subprocess.run([sys.executable, str(REPO / "benches" / "texels.py"), "gen", "--goniofit",
+                    exe, "--texels", str(n), "--out", str(path)], check=True)
+    return path, pd.read_csv(path, float_precision="round_trip")
 
 
 def main():
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
     repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 7
     exe = os.environ.get("GONIOFIT_BIN", str(REPO / "target" / "release" / "goniofit"))
-    df = texel_frame(n)
     tmp = pathlib.Path(tempfile.mkdtemp())
-    path = tmp / "texels.csv"
-    write_csv(df, path)
+    path, df = texel_batch(exe, n, tmp)
     print(f"{n} scans of {len(df) // n} samples (KBS, λ = 1), {repeats} runs each, {os.cpu_count()} cores")
 
     cli_wall, cli_fit, frame = [], [], []
     for _ in range(repeats):
         t = time.perf_counter()
-        out = subprocess.run([exe, "fit", "--wavelength", "1", "--by-group", "--json", str(path)],
-                             capture_output=True, text=True, check=False)
+        out = subprocess.run([exe, "fit", "--wavelength", "1", "--by-group", "--json", "--quiet",
+                              str(path)], capture_output=True, text=True, check=False)
         cli_wall.append(time.perf_counter() - t)
-        cli_fit.append(json.loads(out.stdout)["seconds"])
+        report = json.loads(out.stdout)
+        cli_fit.append(report["seconds"])
         t = time.perf_counter()
         table = goniofit.fit_frame(df, by="group", wavelength=1.0)
         frame.append(time.perf_counter() - t)
     assert len(table) == n
+    cli_cost = {f["input"].rsplit("[", 1)[-1].rstrip("]"): f["cost"] for f in report["fits"]}
+    same = sum(cli_cost[str(g)] == c for g, c in table["cost"].items())
+    print(f"same cost as the CLI          : {same} of {n} groups")
     med = statistics.median
     print(f"CLI --by-group, whole process : {med(cli_wall):.3f} s")
     print(f"CLI --by-group, fits (seconds): {med(cli_fit):.3f} s")

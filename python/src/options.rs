@@ -515,6 +515,9 @@ impl SampleArrays {
             wavelength: self.wavelength.as_deref(),
             channel: self.channel.as_deref(),
         };
-        arrays::dataset("arrays", &cols, o.radians, o.signed_theta_r)
+        let ds = arrays::dataset("arrays", &cols, o.radians, o.signed_theta_r)?;
+        // As the CLI after reading: values and weights the fit cannot square are refused.
+        goniofit::fit::dataset::check_magnitudes(&ds)?;
+        Ok(ds)
     }
 }

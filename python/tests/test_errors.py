@@ -43,6 +43,23 @@ def test_shapes_models_and_options():
         goniofit.evaluate("kbs", {"sigma": 1.0, "scale": 1.0}, TI, TR, PR)
 
 
+def test_values_the_fit_cannot_square_name_array_and_index():
+    # The CLI's check_magnitudes: |L| beyond 1e100 would overflow the cost ½Σw r².
+    with pytest.raises(ValueError, match=r"^L\[2\]: value 1e150 is beyond ±1e100"):
+        goniofit.fit(TI, TR, PR, [1.0, 2.0, 1e150, 4.0], model="lambert")
+    with pytest.raises(ValueError, match=r"^weights\[0\]: weight 1e-120 .* outside what the fit"):
+        goniofit.fit(TI, TR, PR, L, model="lambert", weights=[1e-120, 1.0, 1.0, 1.0])
+
+
+def test_loss_is_linear_until_the_library_has_robust_losses():
+    r = goniofit.fit(TI, TR, PR, L, model="lambert", loss="linear", f_scale=2.0)
+    assert r.to_dict()["setting"]["loss"] == "linear"
+    with pytest.raises(ValueError, match="loss 'huber': only 'linear'"):
+        goniofit.fit(TI, TR, PR, L, model="lambert", loss="huber")
+    with pytest.raises(ValueError, match="f_scale -1"):
+        goniofit.fit(TI, TR, PR, L, model="lambert", f_scale=-1.0)
+
+
 def test_read_errors_carry_file_line_column(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("theta_i,theta_r,phi_r,L\n10,5,0,1\n20,5,abc,2\n")
