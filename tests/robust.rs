@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{fit_json, goniofit, success_stdout};
+use common::{goniofit, success_stdout};
 use rand::{Rng, SeedableRng};
 
 const SIGMA: f64 = 0.25;
@@ -63,22 +63,24 @@ fn outlier_scan(dir: &std::path::Path) -> (std::path::PathBuf, usize) {
     (path, k)
 }
 
+/// `fit --model kbs --residual relative --loss LOSS --f-scale 0.03` of `path`, as text or
+/// JSON, without intervals.
+fn fit_args(path: &std::path::Path, loss: &str, json: bool) -> Vec<String> {
+    let mut a: Vec<String> =
+        "fit --model kbs --residual relative --f-scale 0.03 --no-intervals --loss"
+            .split(' ')
+            .map(String::from)
+            .collect();
+    a.push(loss.into());
+    if json {
+        a.push("--json".into());
+    }
+    a.push(path.to_str().unwrap().into());
+    a
+}
+
 fn fit(path: &std::path::Path, loss: &str) -> serde_json::Value {
-    let p = path.to_str().unwrap();
-    fit_json(&[
-        "fit",
-        "--model",
-        "kbs",
-        "--residual",
-        "relative",
-        "--loss",
-        loss,
-        "--f-scale",
-        "0.03",
-        "--no-intervals",
-        "--json",
-        p,
-    ])
+    serde_json::from_str(&success_stdout(&fit_args(path, loss, true))).unwrap()
 }
 
 fn rel_err(j: &serde_json::Value, name: &str, truth: f64) -> f64 {
@@ -148,20 +150,7 @@ fn every_robust_loss_recovers_the_scan_and_the_text_report_names_it() {
             "{loss}: σ off {es:.4}, T off {et:.4}"
         );
     }
-    let p = path.to_str().unwrap();
-    let text = success_stdout(&[
-        "fit",
-        "--model",
-        "kbs",
-        "--residual",
-        "relative",
-        "--loss",
-        "soft_l1",
-        "--f-scale",
-        "0.03",
-        "--no-intervals",
-        p,
-    ]);
+    let text = success_stdout(&fit_args(&path, "soft_l1", false));
     assert!(
         text.contains("    loss            = soft_l1 (f_scale C = 3.0000e-2"),
         "{text}"
@@ -175,15 +164,7 @@ fn a_bad_loss_scale_is_refused_as_usage() {
     let p = common::data("synthetic/kbs_inplane.csv");
     for bad in ["0", "-1", "nan", "inf"] {
         let out = goniofit()
-            .args([
-                "fit",
-                "--model",
-                "kbs",
-                "--wavelength",
-                "1",
-                "--loss",
-                "cauchy",
-            ])
+            .args("fit --model kbs --wavelength 1 --loss cauchy".split(' '))
             .arg(format!("--f-scale={bad}"))
             .arg(&p)
             .output()
