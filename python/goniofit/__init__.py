@@ -147,12 +147,13 @@ def fit(
         f − y, (f − y)/|y|, or ln f − ln y (values below ``floor`` raised to it).
     weights, sigma_L : array-like, optional
         Weights w > 0, or standard uncertainties of L (weights 1/σ²); not both.
-    loss : str
-        The loss applied to the weighted residuals: ``"linear"`` (plain least squares, the
-        CLI's default). Other losses raise ``ValueError`` in this version.
+    loss : {"linear", "soft_l1", "huber", "cauchy", "arctan"}
+        The robust loss on the weighted residuals f = √w r, as scipy's ``least_squares``
+        and the CLI's ``--loss``: the fit minimises ½ Σ C² ρ(f²/C²) with C = ``f_scale``.
+        ``"linear"`` (default) is plain least squares; the others weaken gross outliers.
     f_scale : float
-        The residual scale at which a robust loss turns (in units of the weighted residual);
-        positive; unused with ``"linear"``.
+        The loss scale C > 0, in the unit of the weighted residual (with
+        ``residual="relative"`` and no weights, 0.03 = 3 %); unused with ``"linear"``.
     init, fix : dict name → value, or "name=value,..." text, optional
         Starting values; parameters held fixed (``scale[550nm]`` names one channel).
     channel : sequence of labels, optional

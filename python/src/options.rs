@@ -7,6 +7,7 @@ use crate::convert::to_py_err;
 use goniofit::fit::dataset::DatasetFit;
 use goniofit::fit::driver::FitConfig;
 use goniofit::fit::lm::LmConfig;
+use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::arrays;
@@ -83,9 +84,9 @@ pub struct FitOptions {
     /// Profile-likelihood intervals: None = for a single fit, not for fits of many groups
     /// (as the CLI: one dataset gets them, `--by-group` does not).
     pub intervals: Option<bool>,
-    /// The robust loss (only `linear`, plain least squares, until the library has others).
-    pub loss: String,
-    /// The residual scale at which a robust loss turns (unused with `linear`).
+    /// The robust loss on the weighted residuals (scipy's names; `linear`: least squares).
+    pub loss: LossKind,
+    /// The loss scale C, in the unit of the weighted residual (unused with `linear`).
     pub f_scale: f64,
 }
 
@@ -117,7 +118,7 @@ impl Default for FitOptions {
             absolute_sigma: false,
             quantity_given: false,
             intervals: None,
-            loss: "linear".into(),
+            loss: LossKind::Linear,
             f_scale: 1.0,
         }
     }
@@ -147,15 +148,14 @@ pub fn eval_mode(name: &str) -> PyResult<EvalMode> {
     }
 }
 
-/// The robust loss: `linear` (plain least squares). Other losses are refused until the
-/// library's fit has them.
-fn loss(name: &str) -> PyResult<String> {
-    match name.to_ascii_lowercase().as_str() {
-        "linear" => Ok("linear".into()),
-        _ => Err(PyValueError::new_err(format!(
-            "loss '{name}': only 'linear' (plain least squares) is available in this version"
-        ))),
-    }
+/// A robust loss by scipy's name: `linear`, `soft_l1`, `huber`, `cauchy`, `arctan`.
+fn loss(name: &str) -> PyResult<LossKind> {
+    LossKind::from_name(name).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "loss '{name}': expected one of {}",
+            LossKind::ALL.map(LossKind::name).join(", ")
+        ))
+    })
 }
 
 /// `absolute`, `relative` or `log`.
@@ -355,6 +355,10 @@ impl FitOptions {
                 model: self.model.clone(),
                 model_opts: self.model_opts,
                 residual: self.residual,
+                loss: Loss {
+                    kind: self.loss,
+                    f_scale: self.f_scale,
+                },
                 floor: self.floor,
                 init: self.init.clone(),
                 fix: self.fix.clone(),
@@ -386,6 +390,8 @@ impl FitOptions {
             floor: self.floor,
             wavelength_source: wavelength_source.into(),
             wavelength_unit: self.wavelength_unit.clone(),
+            loss: self.loss.name().into(),
+            f_scale: (self.loss != LossKind::Linear).then_some(self.f_scale),
             absolute_sigma: self.absolute_sigma,
             ..SettingSource::default()
         }
@@ -404,6 +410,10 @@ impl FitOptions {
         flag("mode", self.mode_name.to_ascii_lowercase());
         flag("tol", format!("{:e}", self.model_opts.tol));
         flag("max-iter", self.max_iter.to_string());
+        if self.loss != LossKind::Linear {
+            flag("loss", self.loss.name().into());
+            flag("f-scale", self.f_scale.to_string());
+        }
         if let Some(l) = self.wavelength {
             flag("wavelength", l.to_string());
         }

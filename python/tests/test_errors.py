@@ -51,11 +51,9 @@ def test_values_the_fit_cannot_square_name_array_and_index():
         goniofit.fit(TI, TR, PR, L, model="lambert", weights=[1e-120, 1.0, 1.0, 1.0])
 
 
-def test_loss_is_linear_until_the_library_has_robust_losses():
-    r = goniofit.fit(TI, TR, PR, L, model="lambert", loss="linear", f_scale=2.0)
-    assert r.to_dict()["setting"]["loss"] == "linear"
-    with pytest.raises(ValueError, match="loss 'huber': only 'linear'"):
-        goniofit.fit(TI, TR, PR, L, model="lambert", loss="huber")
+def test_loss_and_f_scale_are_checked():
+    with pytest.raises(ValueError, match="loss 'hubber': expected one of linear, soft_l1, huber"):
+        goniofit.fit(TI, TR, PR, L, model="lambert", loss="hubber")
     with pytest.raises(ValueError, match="f_scale -1"):
         goniofit.fit(TI, TR, PR, L, model="lambert", f_scale=-1.0)
 

@@ -77,6 +77,22 @@ def test_csv_with_uncertainties_matches_cli_json(cli_json):
     assert r.verdict == "full" and r.params["sigma"]["determined"]
 
 
+def test_robust_loss_matches_cli_json(cli_json):
+    # A robust fit (scipy's soft_l1 on relative residuals, C = 2 %) as `--loss --f-scale`.
+    path = DATA / "synthetic" / "kbs_inplane.csv"
+    cli = cli_json("--wavelength", "1", "--residual", "relative", "--loss", "soft_l1",
+                   "--f-scale", "0.02", path)
+    d = read_csv(path)
+    r = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], wavelength=1,
+                     residual="relative", loss="soft_l1", f_scale=0.02)
+    assert_same_report(cli, r.to_dict())
+    assert r.to_dict()["setting"]["loss"] == "soft_l1"
+    assert r.to_dict()["setting"]["f_scale"] == 0.02
+    linear = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], wavelength=1,
+                          residual="relative", intervals=False)
+    assert r.cost != linear.cost
+
+
 def test_auto_model_comparison_matches_cli(cli_json):
     path = DATA / "synthetic" / "lambert_specular.csv"
     cli = cli_json("--model", "auto", "--wavelength", "1", path)

@@ -215,7 +215,13 @@ fn setting_table(s: &mut String, info: &RunInfo) {
                 "weights",
                 format!("{}: {}", st.weights.source, st.weights.transform),
             ),
-            ("loss", st.loss.clone()),
+            (
+                "loss",
+                match st.f_scale {
+                    Some(c) => format!("{} (f_scale {c:.4e})", st.loss),
+                    None => st.loss.clone(),
+                },
+            ),
             ("absolute sigma", st.absolute_sigma.to_string()),
         ],
     );

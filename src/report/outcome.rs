@@ -79,6 +79,10 @@ pub struct SettingSource {
     /// column`, `none`).
     pub wavelength_unit: Option<String>,
     pub wavelength_source: String,
+    /// The robust loss (`linear` = plain least squares; scipy's names) and its scale C
+    /// (None for linear).
+    pub loss: String,
+    pub f_scale: Option<f64>,
     pub absolute_sigma: bool,
 }
 
@@ -127,7 +131,8 @@ pub fn setting(
             used: residual != ResidualKind::Absolute,
         },
         weights,
-        loss: "linear".into(),
+        loss: source.loss.clone(),
+        f_scale: source.f_scale,
         absolute_sigma: source.absolute_sigma,
         units: super::Units {
             length: unit,

@@ -34,7 +34,8 @@ pub fn profile_intervals(
         }
     }
     let floor = driver::residual_floor(&config, &input.y);
-    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?;
+    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?
+        .with_loss(config.loss);
     let prof = Profiler::new(&problem, &r.values, spec.absolute_sigma, &config.lm);
     let layout = &problem.layout;
     let mut out = Vec::new();
