@@ -59,7 +59,8 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     ))
 }
 
-/// Solve from the start; when that run ends at an edge of the physical domain
+/// Solve from the start, and from the start search's rival valley when there is one
+/// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain
 /// ([`validate::at_kbs_edge`]), solve again from each other usable refined candidate, and
 /// keep the lowest-cost run inside the domain unless the edge run is lower by more than
 /// [`start::EDGE_MARGIN`] (then the edge run: the fit ends `degenerate` and says why).
@@ -82,7 +83,20 @@ fn solve_checked(
     let first = solve(&start.p0);
     let layout = &problem.layout;
     if !validate::at_kbs_edge(layout, input, &first.values) {
-        return first;
+        return match start.rival.as_deref().filter(|_| !stop_requested(config)) {
+            Some(p0) => {
+                let rival = solve(p0);
+                let inside = !validate::at_kbs_edge(layout, input, &rival.values);
+                let (mut kept, other) = if inside && rival.lm.cost < first.lm.cost {
+                    (rival, first)
+                } else {
+                    (first, rival)
+                };
+                kept.add_counts(&other.lm);
+                kept
+            }
+            None => first,
+        };
     }
     let mut runs = vec![first];
     for p0 in &start.alternatives {

@@ -51,7 +51,7 @@ pub(super) fn identify(
         let sig = problem.layout.find("sigma")[0];
         let g = median_g(input, run.values[sig]);
         g_median = Some(g);
-        if let Some(v) = kbs_verdict(&problem.layout, &unc, &run.values, g) {
+        if let Some(v) = kbs_verdict(&problem.layout, &unc, &run.values, run.lm.x.as_slice(), g) {
             verdict = v;
         }
     }
@@ -75,13 +75,7 @@ pub(super) fn log_covariance(
     p: &[f64],
 ) -> DMatrix<f64> {
     let free = layout.free();
-    let f: Vec<f64> = free
-        .iter()
-        .map(|&k| {
-            let t = layout.params[k].transform;
-            t.dp_dx(t.to_x(p[k])) / p[k]
-        })
-        .collect();
+    let f = log_factors(layout, p);
     DMatrix::from_fn(free.len(), free.len(), |i, j| {
         unc.covariance[(i, j)] * f[i] * f[j]
     })
@@ -108,6 +102,7 @@ fn kbs_verdict(
     layout: &ParamLayout,
     unc: &stats::Uncertainty,
     p: &[f64],
+    x: &[f64],
     g_median: f64,
 ) -> Option<Verdict> {
     let free = layout.free();
@@ -127,7 +122,8 @@ fn kbs_verdict(
         return None;
     }
     let idx: Vec<usize> = [Some(i_s), Some(i_t), i_a].into_iter().flatten().collect();
-    let Some(dir) = weakest_direction(&cov, unc, &idx, rank_deficient) else {
+    let Some(dir) = weakest_direction(&cov, unc, &x_to_log(layout, p, x), &idx, rank_deficient)
+    else {
         return Some(Verdict::Partial);
     };
     let align = |v: &[f64]| -> f64 {
@@ -147,19 +143,47 @@ fn kbs_verdict(
     }
 }
 
+/// d ln p / dx of each free parameter at `p` (the solver's x to log space).
+fn log_factors(layout: &ParamLayout, p: &[f64]) -> Vec<f64> {
+    layout
+        .free()
+        .iter()
+        .map(|&k| {
+            let t = layout.params[k].transform;
+            t.dp_dx(t.to_x(p[k])) / p[k]
+        })
+        .collect()
+}
+
+/// d ln p / dx of each free parameter at the solver's own point `x` (free order), with its
+/// sign: a non-negative amplitude's x = ±√(p(p + 2)) can be negative, and then its
+/// Jacobian column (and a null direction's component) is that of −x.
+fn x_to_log(layout: &ParamLayout, p: &[f64], x: &[f64]) -> Vec<f64> {
+    layout
+        .free()
+        .iter()
+        .zip(x)
+        .map(|(&k, &xi)| layout.params[k].transform.dp_dx(xi) / p[k])
+        .collect()
+}
+
 /// The least determined direction in the (ln σ, ln T, ln s) block `idx` of the log-space
-/// covariance, normalised: the null direction when the Jacobian is rank deficient, else the
+/// covariance, normalised: the null direction when the Jacobian is rank deficient (a
+/// direction in the solver's x, taken to log space with `log_factor` = d ln p/dx at the
+/// solver's x: a scale at x < 0 would otherwise turn the smooth ridge's (1, 0, −2) into
+/// (1, 0, 2), and its magnitude hide it), else the
 /// largest-variance eigenvector of that block; None when that has no finite direction.
 /// `idx` holds the positions among the free parameters of σ, T and (when free) the scale.
 fn weakest_direction(
     cov: &DMatrix<f64>,
     unc: &stats::Uncertainty,
+    log_factor: &[f64],
     idx: &[usize],
     rank_deficient: bool,
 ) -> Option<DVector<f64>> {
     let dir: DVector<f64> = if rank_deficient {
         let v = unc.undetermined.first()?; // the caller checked it exists
-        DVector::from_iterator(idx.len(), idx.iter().map(|&i| v[i]))
+        DVector::from_iterator(idx.len(), idx.iter().map(|&i| v[i] * log_factor[i]))
     } else {
         let block = DMatrix::from_fn(idx.len(), idx.len(), |a, b| cov[(idx[a], idx[b])]);
         let eig = block.symmetric_eigen();

@@ -154,7 +154,7 @@ impl LeastSquaresProblem for Guarded<'_, '_> {
                 .range
                 .is_some_and(|r| !r.contains(&self.problem.layout.from_x(x)))
         {
-            return DVector::from_element(x.len().max(self.problem.len()), f64::NAN);
+            return DVector::from_element(self.problem.len(), f64::NAN);
         }
         let stop = if first { None } else { self.stop };
         self.problem.residuals_until(x, stop)

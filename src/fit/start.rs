@@ -24,6 +24,12 @@ pub const GRID_TOL: f64 = 1e-4;
 /// with a lobe the surface can have. The same margin compares the full solves.
 pub const EDGE_MARGIN: f64 = 1e-3;
 
+/// Relative subsample cost within which the second-best refined candidate is solved on the
+/// full data as well: the subsample (256 samples, coarse tolerances) cannot rank two
+/// valleys closer than this (Cornell acryl_blue 460 nm: the wide lobe won on the
+/// subsample, the narrow one is 6 % lower on the full data).
+pub const RIVAL_MARGIN: f64 = 0.1;
+
 /// Model accuracy of the quick refinement on a subsample (it only has to land near the
 /// optimum; the full fit then works at the requested accuracy).
 pub const REFINE_TOL: f64 = 1e-6;
@@ -41,6 +47,10 @@ pub(super) struct Start {
     /// The other usable refined candidates, lowest cost first: where the full fit starts
     /// again when its first solve runs to an edge of the domain.
     pub alternatives: Vec<Vec<f64>>,
+    /// The best other usable refined candidate when its subsample cost is within
+    /// [`RIVAL_MARGIN`] of the winner's: a second valley the full fit also solves from,
+    /// keeping the lower cost.
+    pub rival: Option<Vec<f64>>,
 }
 
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
@@ -146,6 +156,7 @@ pub(super) fn starting_point(
     let mut p0 = grid_start.clone();
     let coarse = coarse_config(config);
     let mut alternatives = Vec::new();
+    let mut rival = None;
     if refiners.sub.y.len() > layout.free().len() {
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
         // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
@@ -161,7 +172,7 @@ pub(super) fn starting_point(
             .partition(|((_, v), _)| at_edge(v));
         let (usable, usable_grid): (Vec<_>, Vec<_>) =
             usable.into_iter().map(|(r, c)| (r, c.clone())).unzip();
-        alternatives = other_usable(&usable, &usable_grid, coarse.ftol);
+        let others = other_usable(&usable, &usable_grid, coarse.ftol);
         let best_usable = usable.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
         let lowest_edge = edge
             .iter()
@@ -183,9 +194,15 @@ pub(super) fn starting_point(
             (Some((values, start)), _) => {
                 p0 = values;
                 grid_start = start;
+                // A second valley about as low on the subsample is solved too.
+                rival = others
+                    .first()
+                    .filter(|(c, _)| *c <= best_usable * (1.0 + RIVAL_MARGIN))
+                    .map(|(_, v)| v.clone());
             }
             _ => {}
         }
+        alternatives.extend(others.into_iter().map(|(_, v)| v));
     }
     Ok(Start {
         p0,
@@ -193,6 +210,7 @@ pub(super) fn starting_point(
         start_seconds,
         init_seconds: t0.elapsed().as_secs_f64(),
         alternatives,
+        rival,
     })
 }
 
@@ -251,17 +269,18 @@ fn lowest_refined(
         .map(|((_, values), (_, start))| (values, start.clone()))
 }
 
-/// The usable refined points other than the winner of [`lowest_refined`], lowest cost first.
+/// The usable refined points other than the winner of [`lowest_refined`] with their refined
+/// costs, lowest cost first.
 fn other_usable(
     refined: &[(f64, Vec<f64>)],
     candidates: &[(f64, Vec<f64>)],
     ftol: f64,
-) -> Vec<Vec<f64>> {
+) -> Vec<(f64, Vec<f64>)> {
     let winner = lowest_refined(refined.to_vec(), candidates, ftol).map(|w| w.0);
     let mut rest: Vec<&(f64, Vec<f64>)> = refined
         .iter()
         .filter(|r| r.0.is_finite() && Some(&r.1) != winner.as_ref())
         .collect();
     rest.sort_by(|a, b| a.0.total_cmp(&b.0));
-    rest.into_iter().map(|r| r.1.clone()).collect()
+    rest.into_iter().cloned().collect()
 }
