@@ -35,12 +35,12 @@ pub(super) fn run_lm_in(
     Run { lm, values }
 }
 
-/// Median g beyond which the first solve does not follow the rough ridge: there KBS is its
-/// rough limit (eq. 43) to O(1/g), the cost depends on σ only through that correction
-/// (Cornell acryl_blue 440 nm: 1.3·10⁻⁴ of the cost between median g ≈ 90 and σ → ∞), and
-/// the data determines T/σ and the amplitude only (the reduced refit holds σ). Following
-/// the ridge to σ ~ 70 λ took 95 iterations and 6 s, the series costing O(√g) per sample.
-pub const RIDGE_G: f64 = 1e3;
+/// Median g up to which the first solve follows the rough ridge: the fit's own limit
+/// ([`super::problem::G_FIT_MAX`]). A tighter cap (1e3 was tried: Cornell acryl_blue 440 nm
+/// follows the ridge to σ ~ 70 λ in 95 iterations and 6 s, the series costing O(√g) per
+/// sample) stops noiseless synthetic rough data short of its σ, where the O(1/g) correction
+/// still determines it, and the rejected steps end the solve without convergence.
+pub const RIDGE_G: f64 = super::problem::G_FIT_MAX;
 
 /// Median g below which the first solve does not follow the smooth ridge (σ → 0 at fixed
 /// T and s·σ²): there KBS is its smooth limit (eq. 42) but for tails far below the data
