@@ -3,6 +3,20 @@
 
 use goniofit::recover::{self, RecoverConfig, Regime};
 
+/// Every scored quantity of `r` within `max_rel` of its truth.
+fn assert_within(r: &recover::SceneResult, max_rel: f64, run: &str) {
+    for c in &r.checks {
+        assert!(
+            c.rel_error < max_rel,
+            "{run} scene {} {}: {} vs truth {}",
+            r.scene.id,
+            c.name,
+            c.value,
+            c.truth
+        );
+    }
+}
+
 #[test]
 fn seeded_recovery_is_calibrated_and_accurate() {
     let config = RecoverConfig {
@@ -53,16 +67,7 @@ fn seeded_recovery_is_calibrated_and_accurate() {
     // Fits that determine everything are accurate to a few percent.
     for res in &report.results {
         if res.verdict == Some(goniofit::fit::driver::Verdict::Full) {
-            for c in &res.checks {
-                assert!(
-                    c.rel_error < 0.05,
-                    "scene {} {}: {} vs {}",
-                    res.scene.id,
-                    c.name,
-                    c.value,
-                    c.truth
-                );
-            }
+            assert_within(res, 0.05, "seed 11");
         }
     }
     // Same seed, same scenes.
@@ -115,18 +120,14 @@ fn issue_17_wrong_optimum_scenes_converge_at_the_truth() {
         assert_eq!(report.scenes, ids.len());
         assert_eq!(report.wrong_converged, 0, "{}", report.table());
         for r in &report.results {
-            assert!(r.converged, "seed {seed} scene {}\n{}", r.scene.id, report.table());
+            assert!(
+                r.converged,
+                "seed {seed} scene {}\n{}",
+                r.scene.id,
+                report.table()
+            );
             assert!(!r.checks.is_empty());
-            for c in &r.checks {
-                assert!(
-                    c.rel_error < 0.05,
-                    "seed {seed} scene {} {}: {} vs truth {}",
-                    r.scene.id,
-                    c.name,
-                    c.value,
-                    c.truth
-                );
-            }
+            assert_within(r, 0.05, &format!("seed {seed}"));
         }
     }
 }
@@ -140,7 +141,10 @@ fn issue_17_wrong_optimum_scenes_converge_at_the_truth() {
 #[test]
 fn smooth_scenes_error_bars_match_the_scatter_over_noise_draws() {
     let scenes = recover::draw_scenes(150, 4242, 0.01);
-    for (id, names) in [(28, &["sigma", "T", "scale"][..]), (36, &["T", "amplitude"][..])] {
+    for (id, names) in [
+        (28, &["sigma", "T", "scale"][..]),
+        (36, &["T", "amplitude"][..]),
+    ] {
         let mut z: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
         for k in 0..40 {
             let mut scene = scenes[id].clone();

@@ -131,7 +131,11 @@ fn marginal_uncertainty(
         return conditional;
     }
     let d = ridge_direction(layout, verdict);
-    let kept: Vec<usize> = free.iter().copied().filter(|&k| k != free[i_sigma]).collect();
+    let kept: Vec<usize> = free
+        .iter()
+        .copied()
+        .filter(|&k| k != free[i_sigma])
+        .collect();
     let b = DMatrix::from_fn(kept.len(), free.len(), |r, c| {
         let k = kept[r];
         f64::from(u8::from(free[c] == k)) - if c == i_sigma { d[k] } else { 0.0 }
@@ -145,11 +149,15 @@ fn marginal_uncertainty(
             red.values[k] / t.dp_dx(t.to_x(red.values[k]))
         })
         .collect();
-    let cov = DMatrix::from_fn(kept.len(), kept.len(), |i, j| c_log[(i, j)] * to_x[i] * to_x[j]);
+    let cov = DMatrix::from_fn(kept.len(), kept.len(), |i, j| {
+        c_log[(i, j)] * to_x[i] * to_x[j]
+    });
     if !cov.iter().all(|v| v.is_finite()) || cov.nrows() != conditional.covariance.nrows() {
         return conditional;
     }
-    let se: Vec<f64> = (0..cov.nrows()).map(|i| cov[(i, i)].max(0.0).sqrt()).collect();
+    let se: Vec<f64> = (0..cov.nrows())
+        .map(|i| cov[(i, i)].max(0.0).sqrt())
+        .collect();
     conditional.correlation = DMatrix::from_fn(cov.nrows(), cov.ncols(), |i, j| {
         let s = se[i] * se[j];
         if s > 0.0 {

@@ -224,8 +224,7 @@ fn slide_rough_ridge(
 ) -> (f64, Vec<f64>) {
     let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
     let mut cost = exact_cost(&p);
-    let (Some(ks), Some(&kt)) = (refiners.sigma_k, refiners.exact.layout.find("T").first())
-    else {
+    let (Some(ks), Some(&kt)) = (refiners.sigma_k, refiners.exact.layout.find("T").first()) else {
         return (cost, p);
     };
     for _ in 0..RIDGE_STEPS {
@@ -237,7 +236,7 @@ fn slide_rough_ridge(
         }
         let c = exact_cost(&q);
         // NaN (a failed evaluation) ends the slide too.
-        if !(c < cost) {
+        if c.partial_cmp(&cost) != Some(std::cmp::Ordering::Less) {
             break;
         }
         (cost, p) = (c, q);
