@@ -39,7 +39,35 @@ pub(super) fn prepare(
     }
     let mut given = fixed;
     assign(&layout, &config.init, &mut given)?;
+    if rough_by_construction(model, config) {
+        hold_rough_sigma(&mut layout, &mut given, input);
+    }
     Ok((layout, given))
+}
+
+/// Whether the fit is in the rough approximation's own parameters by construction: the
+/// `kbs-rough` model (eq. 43, ⟨|ρ|²⟩ ≈ πT²F²/(A g) · e^{−a/g}) depends on σ and T only
+/// through T/σ (g ∝ σ², a ∝ T²), so σ and T cannot both be fitted; unless the user fixes
+/// σ, the fit holds it (see [`hold_rough_sigma`]) and reports T/σ, the amplitude s(T/σ)²
+/// and s, with σ and T not determined.
+pub(super) fn rough_by_construction(model: &dyn Model, config: &FitConfig) -> bool {
+    model.name() == "kbs-rough"
+        && !config
+            .fix
+            .iter()
+            .any(|(name, _)| name.eq_ignore_ascii_case("sigma"))
+}
+
+/// Hold σ of a `kbs-rough` fit at its `--init` value, or else at the median wavelength
+/// (any value gives the same model values at the same T/σ; σ = λ keeps g ≈ 40–160, well
+/// inside the fit's domain). T then carries T/σ.
+fn hold_rough_sigma(layout: &mut ParamLayout, given: &mut [Option<f64>], input: &FitInput) {
+    let Some(&ks) = layout.find("sigma").first() else {
+        return;
+    };
+    let held = given[ks].unwrap_or_else(|| stats::median(&input.geo.wavelength));
+    layout.params[ks].fixed = Some(held);
+    given[ks] = Some(held);
 }
 
 /// Whether a free non-negative parameter at `value` with standard error `se` sits at its
