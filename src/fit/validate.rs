@@ -319,12 +319,10 @@ mod tests {
     use super::*;
     use crate::geometry::{Quantity, Sample};
 
-    #[test]
-    fn resolved_width_is_the_narrowest_lobe_with_three_flank_samples() {
-        // In-plane offsets θr − θi = 0, 0.1, 0.2, 0.3, 1.2 rad: the first three off the
-        // mirror fit in [w/2, 4w] from w = 0.3/4 on.
-        let theta_i = 0.2f64;
-        let s: Vec<Sample> = [0.0, 0.1, 0.2, 0.3, 1.2]
+    /// In-plane samples at θi = 0.2 rad and θr = θi + each offset (rad).
+    fn in_plane(offsets: &[f64]) -> Geometry {
+        let theta_i = 0.2;
+        let s: Vec<Sample> = offsets
             .iter()
             .map(|d| Sample {
                 theta_i,
@@ -332,22 +330,20 @@ mod tests {
                 phi_r: 0.0,
             })
             .collect();
-        let geo = Geometry::new(&s, &[1.0], Quantity::Radiance).unwrap();
+        Geometry::new(&s, &[1.0], Quantity::Radiance).unwrap()
+    }
+
+    #[test]
+    fn resolved_width_is_the_narrowest_lobe_with_three_flank_samples() {
+        // Offsets 0, 0.1, 0.2, 0.3, 1.2 rad: the first three off the mirror fit in
+        // [w/2, 4w] from w = 0.3/4 on.
+        let geo = in_plane(&[0.0, 0.1, 0.2, 0.3, 1.2]);
         let w = resolved_width(&geo).unwrap();
         assert!((w - 0.075).abs() < 1e-15, "{w}");
         assert_eq!(flank_samples(&geo, w), 3);
         assert_eq!(flank_samples(&geo, w * (1.0 - 1e-12)), 2);
         assert_eq!(width_floor(&geo), Some(0.5 * w));
         // Offsets 0.01, 0.1, 1 rad: no three within a factor 8 of each other, so none.
-        let sparse: Vec<Sample> = [0.01, 0.1, 1.0]
-            .iter()
-            .map(|d| Sample {
-                theta_i,
-                theta_r: theta_i + d,
-                phi_r: 0.0,
-            })
-            .collect();
-        let geo = Geometry::new(&sparse, &[1.0], Quantity::Radiance).unwrap();
-        assert_eq!(resolved_width(&geo), None);
+        assert_eq!(resolved_width(&in_plane(&[0.01, 0.1, 1.0])), None);
     }
 }
