@@ -450,6 +450,8 @@ pub struct Outcome {
     pub result: FitResult,
     /// Profile-likelihood intervals (empty when not computed).
     pub intervals: Vec<goniofit::fit::profile::Interval>,
+    /// Wall-clock seconds the intervals took.
+    pub interval_seconds: f64,
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC.
@@ -524,11 +526,21 @@ fn fit_dataset(
     }
     // Intervals for a single dataset (`progress` is true only then): many fits at once
     // get the summary table instead.
-    let intervals = if args.no_intervals || !progress || result.n_free > MAX_PROFILED {
+    let t_intervals = std::time::Instant::now();
+    let wanted = !args.no_intervals && progress && result.n_free <= MAX_PROFILED;
+    if wanted && !result.converged() {
+        // A profile around a point that is not a usable optimum (degenerate, stopped)
+        // would bound nothing the data says.
+        result
+            .notes
+            .push("no profile intervals: the fit did not converge to a usable optimum".into());
+    }
+    let intervals = if !wanted || !result.converged() {
         Vec::new()
     } else {
         profile_intervals(args, &input, &result, uncertainties)?
     };
+    let interval_seconds = t_intervals.elapsed().as_secs_f64();
     Ok(Outcome {
         label,
         dataset: ds,
@@ -536,6 +548,7 @@ fn fit_dataset(
         candidates: results,
         result,
         intervals,
+        interval_seconds,
     })
 }
 
@@ -787,6 +800,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             version: env!("CARGO_PKG_VERSION").to_string(),
             setting: setting_of(&args, &o.dataset, &o.input, &file),
             intervals: o.intervals.clone(),
+            interval_seconds: o.interval_seconds,
         }
     };
     let infos: Vec<RunInfo> = outcomes.iter().map(info_for).collect();

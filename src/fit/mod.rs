@@ -10,6 +10,7 @@ pub mod init;
 pub mod lm;
 pub mod problem;
 pub mod profile;
+pub mod quantile;
 pub mod stats;
 pub mod weights;
 

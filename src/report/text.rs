@@ -222,7 +222,8 @@ fn interval_lines(s: &mut String, r: &FitResult, info: &RunInfo) {
     let units = &info.setting.units;
     let _ = writeln!(
         s,
-        "[[Intervals]] (profile likelihood, as lmfit's conf_interval; one-sided where χ² stays flat to a factor 1000)"
+        "[[Intervals]] (profile likelihood, as lmfit's conf_interval; one-sided where χ² stays flat to a factor 1000; {:.3} s)",
+        info.interval_seconds
     );
     let width = info
         .intervals
