@@ -41,7 +41,10 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     let floor = residual_floor(config, &input.y);
     // The full problem is built while the starting values are searched for on subsamples.
     let (problem, start) = rayon::join(
-        || FitProblem::new(model, layout.clone(), input, config.residual, floor),
+        || {
+            FitProblem::new(model, layout.clone(), input, config.residual, floor)
+                .map(|p| p.with_loss(config.loss))
+        },
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let (problem, start) = (problem?, start?);
@@ -121,7 +124,7 @@ fn check_series_cost(
 fn with_stop(config: &FitConfig) -> FitConfig {
     let mut config = config.clone();
     if config.lm.stop.is_none() {
-        config.lm.stop = Some(Stop::new(config.lm.timeout, config.lm.interrupt.clone()));
+        config.lm.stop = Some(config.lm.new_stop());
     }
     config
 }

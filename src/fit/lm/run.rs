@@ -25,6 +25,16 @@ pub trait LeastSquaresProblem {
     fn residuals(&self, x: &DVector<f64>) -> DVector<f64>;
     /// Jacobian `∂r̃ᵢ/∂xⱼ` (`m × n`), analytic; see [`finite_difference_jacobian`] otherwise.
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64>;
+    /// The residuals the step's linear model uses at `x`, when they are not
+    /// [`Self::residuals`]. With a robust loss (`crate::fit::loss`), `residuals` are the
+    /// cost residuals (½‖r‖² is the cost, which the ratio test and stopping rules need) and
+    /// `jacobian` is the IRLS-corrected `J̃`, whose step needs the corrected residuals `f̃`
+    /// (`J̃ᵀf̃` is the gradient of the cost, `J̃ᵀJ̃` its Gauss–Newton Hessian). None, the
+    /// default: `jacobian` is the Jacobian of `residuals`. The solver asks right after
+    /// `jacobian(x)`, at the same `x`.
+    fn step_residuals(&self, _x: &DVector<f64>) -> Option<DVector<f64>> {
+        None
+    }
 }
 
 impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
@@ -33,6 +43,22 @@ impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
     }
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
         (**self).jacobian(x)
+    }
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
+        (**self).step_residuals(x)
+    }
+}
+
+/// What the solver asks of its operator beyond argmin's [`Operator`] and [`Jacobian`]: the
+/// step residuals of [`LeastSquaresProblem::step_residuals`].
+pub trait StepResiduals {
+    /// See [`LeastSquaresProblem::step_residuals`].
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>>;
+}
+
+impl<P: LeastSquaresProblem + ?Sized> StepResiduals for ArgminAdapter<'_, P> {
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
+        self.0.step_residuals(x)
     }
 }
 
@@ -81,6 +107,11 @@ pub struct LmConfig {
     /// search, solves and refits share one, so that a signal or the fit's deadline ends them
     /// all). Default none: the run makes its own from `timeout` and the signals.
     pub stop: Option<Stop>,
+    /// Install goniofit's process-wide Ctrl-C/SIGTERM/SIGHUP handler (see [`Stop`]) when
+    /// this configuration makes a stop request. Default true. False for a host that owns its
+    /// signals, such as the Python interpreter: its own handler stays in place and the host
+    /// sets `interrupt`.
+    pub install_signal_handler: bool,
     /// Gauss–Newton polishing after convergence, see [`LevenbergMarquardt::with_polish`].
     /// Default false: with measurement noise, parameters converged to `ftol = 1e-10` are
     /// already far more precise than their standard errors; turn it on when the last digits
@@ -103,8 +134,22 @@ impl Default for LmConfig {
             progress: false,
             interrupt: None,
             stop: None,
+            install_signal_handler: true,
             polish: false,
             predicted_stop: false,
+        }
+    }
+}
+
+impl LmConfig {
+    /// A stop request from this configuration: `timeout` from now, the `interrupt` flag,
+    /// and the process's signals (installing goniofit's handler only with
+    /// `install_signal_handler`; without it the signals are left to the host).
+    pub fn new_stop(&self) -> Stop {
+        if self.install_signal_handler {
+            Stop::new(self.timeout, self.interrupt.clone())
+        } else {
+            Stop::without_handler(self.timeout, self.interrupt.clone())
         }
     }
 }
@@ -165,7 +210,7 @@ fn solver_for(config: &LmConfig) -> LevenbergMarquardt {
     };
     let stop = match &config.stop {
         Some(stop) => stop.clone(),
-        None => Stop::new(config.timeout, None),
+        None => config.new_stop(),
     };
     match &config.interrupt {
         Some(flag) => solver.with_interrupt(flag.clone()),
