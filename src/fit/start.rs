@@ -227,6 +227,11 @@ fn slide_rough_ridge(
     let (Some(ks), Some(&kt)) = (refiners.sigma_k, refiners.exact.layout.find("T").first()) else {
         return (cost, p);
     };
+    // A held σ (--fix) or T is not moved: the ridge is then not free to slide along.
+    let held = |k: usize| refiners.exact.layout.params[k].fixed.is_some();
+    if held(ks) || held(kt) {
+        return (cost, p);
+    }
     for _ in 0..RIDGE_STEPS {
         let mut q = p.clone();
         q[ks] *= RIDGE_STEP;
