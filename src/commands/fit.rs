@@ -518,17 +518,27 @@ fn fit_dataset(
         },
     );
     if input.channel_names.len() > 1 && !stop.is_requested() {
-        if let Some(note) = joint_narrowing(args, &ds, &result)? {
+        if let Some(note) = joint_narrowing(args, &ds, &result, stop)? {
             result.notes.push(note);
         }
     }
     // Intervals for a single dataset (`progress` is true only then): many fits at once
     // get the summary table instead.
-    let intervals = if args.no_intervals || !progress || result.n_free > MAX_PROFILED {
-        Vec::new()
+    let wanted = !args.no_intervals && progress && result.n_free <= MAX_PROFILED;
+    let mut intervals = if wanted {
+        profile_intervals(args, &input, &result, uncertainties, stop)?
     } else {
-        profile_intervals(args, &input, &result, uncertainties)?
+        Vec::new()
     };
+    // A profile walk cut short by a stop request ends at a wrong likelihood: none is shown.
+    if wanted && stop.is_requested() {
+        intervals.clear();
+        result.notes.push(
+            "profile-likelihood intervals not computed: the fit was stopped (only the \
+             standard errors are shown)"
+                .into(),
+        );
+    }
     Ok(Outcome {
         label,
         dataset: ds,
@@ -575,16 +585,22 @@ pub const MAX_PROFILED: usize = 8;
 
 /// Profile-likelihood intervals (`goniofit::fit::profile`) of every free parameter, of
 /// the parameters the reduced fit held, and of T/σ, the rms slope, the amplitudes and
-/// the reflectance factors, on the full problem at the reported optimum.
+/// the reflectance factors, on the full problem at the reported optimum. Every refit shares
+/// the command's `stop`; once it fires the walks end (the caller discards their result).
 pub fn profile_intervals(
     args: &FitArgs,
     input: &FitInput,
     r: &FitResult,
     uncertainties: bool,
+    stop: &Stop,
 ) -> anyhow::Result<Vec<goniofit::fit::profile::Interval>> {
     use goniofit::fit::problem::FitProblem;
     use goniofit::fit::profile::{Profiler, Target};
-    let config = fit_config(args, &r.model, uncertainties)?;
+    if stop.is_requested() {
+        return Ok(Vec::new());
+    }
+    let mut config = fit_config(args, &r.model, uncertainties)?;
+    config.lm.stop = Some(stop.clone());
     let model = goniofit::model::by_name(&r.model, &config.model_opts)?;
     let mut layout = r.layout.clone();
     // Parameters held by the reduction (reported as not fixed) are profiled too.
@@ -599,6 +615,9 @@ pub fn profile_intervals(
     let layout = &problem.layout;
     let mut out = Vec::new();
     for k in layout.free() {
+        if stop.is_requested() {
+            break;
+        }
         if let Some(iv) = prof.interval(&layout.params[k].name, &Target::Param(k)) {
             out.push(iv);
         }
@@ -946,6 +965,7 @@ fn joint_narrowing(
     args: &FitArgs,
     ds: &Dataset,
     joint: &FitResult,
+    stop: &Stop,
 ) -> anyhow::Result<Option<String>> {
     let Some(labels) = &ds.channel else {
         return Ok(None);
@@ -960,7 +980,12 @@ fn joint_narrowing(
     let input = input_of(args, &single, true)?;
     let mut config = fit_config(args, &joint.model, ds.sigma_l.is_some())?;
     config.lm.progress = false;
+    config.lm.stop = Some(stop.clone());
     let alone = driver::fit(&input, &config)?;
+    if stop.is_requested() {
+        // The single-channel fit was cut short: its errors say nothing.
+        return Ok(None);
+    }
     let mut parts = Vec::new();
     for name in ["sigma", "T", "T/sigma"] {
         let se = |r: &FitResult| -> Option<Option<f64>> {
