@@ -2,20 +2,9 @@
 //! physical domain end `degenerate` (exit 3) with a note naming the parameter, and
 //! `--model auto` does not pick them.
 
-use assert_cmd::Command;
+mod common;
 
-/// Run goniofit with `args` and `--json`: (exit code, parsed report).
-fn run_json(args: &[&str]) -> (Option<i32>, serde_json::Value) {
-    let out = Command::cargo_bin("goniofit")
-        .unwrap()
-        .args(args)
-        .arg("--json")
-        .output()
-        .unwrap();
-    let v = serde_json::from_slice(&out.stdout)
-        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
-    (out.status.code(), v)
-}
+use common::run_json;
 
 fn notes(v: &serde_json::Value) -> Vec<String> {
     v["notes"]
