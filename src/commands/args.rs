@@ -1,6 +1,7 @@
 //! Command-line argument types shared by several subcommands.
 
 use clap::ValueEnum;
+use goniofit::fit::loss::LossKind;
 use goniofit::geometry::Quantity;
 use goniofit::model::EvalMode;
 
@@ -44,6 +45,35 @@ impl From<ModeArg> for EvalMode {
             ModeArg::Series => EvalMode::Series,
             ModeArg::Smooth => EvalMode::Smooth,
             ModeArg::Rough => EvalMode::Rough,
+        }
+    }
+}
+
+/// The robust loss, as chosen on the command line (scipy's names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum LossArg {
+    /// ρ(z) = z: plain least squares.
+    #[default]
+    Linear,
+    /// ρ(z) = 2(√(1+z) − 1): a smooth l1, usually the first robust choice.
+    #[value(name = "soft_l1", alias = "soft-l1")]
+    SoftL1,
+    /// ρ(z) = z up to z = 1, 2√z − 1 beyond.
+    Huber,
+    /// ρ(z) = ln(1+z): outliers weakened strongly; more local minima.
+    Cauchy,
+    /// ρ(z) = arctan z: a sample's cost is bounded.
+    Arctan,
+}
+
+impl From<LossArg> for LossKind {
+    fn from(l: LossArg) -> Self {
+        match l {
+            LossArg::Linear => LossKind::Linear,
+            LossArg::SoftL1 => LossKind::SoftL1,
+            LossArg::Huber => LossKind::Huber,
+            LossArg::Cauchy => LossKind::Cauchy,
+            LossArg::Arctan => LossKind::Arctan,
         }
     }
 }

@@ -1,10 +1,11 @@
 //! `goniofit fit`: a measurement file in, a fit report out.
 
-use super::args::{parse_patch, ModeArg, QuantityArg};
+use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
 use goniofit::fit::lm::{LmConfig, Stop};
+use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::fit::weights::{floor_raised, residual_weights};
 use goniofit::geometry::{Geometry, Quantity};
@@ -86,6 +87,15 @@ pub struct FitArgs {
     /// the floor are raised to it).
     #[arg(long, value_enum, default_value = "absolute")]
     pub residual: ResidualArg,
+    /// Robust loss on the weighted residuals f = √w r (scipy's `least_squares` losses):
+    /// the fit minimises ½ Σ C² ρ(f²/C²), C = --f-scale. Use it when a few samples are
+    /// gross outliers (a saturated pixel, a stray reflection); see docs/conventions.md.
+    #[arg(long, value_enum, default_value = "linear")]
+    pub loss: LossArg,
+    /// The loss scale C: residuals |f| well below C count as in least squares, beyond it
+    /// as outliers (with --residual relative and no weights, 0.03 = 3 %). Finite, > 0.
+    #[arg(long, default_value_t = 1.0)]
+    pub f_scale: f64,
     /// Floor for relative/log residuals (default 1e-6 × max |L|).
     #[arg(long)]
     pub floor: Option<f64>,
@@ -380,7 +390,8 @@ pub fn setting_of(
             used: residual != ResidualKind::Absolute,
         },
         weights,
-        loss: "linear".into(),
+        loss: LossKind::from(args.loss).name().into(),
+        f_scale: (args.loss != LossArg::Linear).then_some(args.f_scale),
         absolute_sigma: args.absolute_sigma,
         units: report::Units {
             length: unit,
@@ -424,6 +435,13 @@ pub fn fit_config(
             patch: args.patch.as_deref().map(parse_patch).transpose()?,
         },
         residual: args.residual.into(),
+        loss: Loss::new(args.loss.into(), args.f_scale)
+            .map_err(|_| {
+                Error::Usage(format!(
+                    "--f-scale {}: the loss scale must be a finite number > 0, the size of a weighted residual beyond which a sample counts as an outlier (e.g. 0.03 for 3 % with --residual relative)",
+                    args.f_scale
+                ))
+            })?,
         floor: args.floor,
         init: parse_assignments(args.init.as_deref().unwrap_or(""))?,
         fix: parse_assignments(args.fix.as_deref().unwrap_or(""))?,
@@ -610,7 +628,8 @@ pub fn profile_intervals(
         }
     }
     let floor = driver::residual_floor(&config, &input.y);
-    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?;
+    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?
+        .with_loss(config.loss);
     let prof = Profiler::new(&problem, &r.values, args.absolute_sigma, &config.lm);
     let layout = &problem.layout;
     let mut out = Vec::new();

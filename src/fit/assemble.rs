@@ -19,6 +19,10 @@ struct Goodness {
     fitted: Vec<f64>,
     residuals: Vec<f64>,
     std_residuals: Vec<f64>,
+    /// The fit cost ½ Σ C²ρ(wᵢrᵢ²/C²) (½χ² for the linear loss).
+    cost: f64,
+    /// Samples with |√wᵢ rᵢ| > C under a robust loss.
+    beyond_f_scale: Option<usize>,
     chi2: f64,
     rms: f64,
     max_abs_residual: f64,
@@ -72,7 +76,9 @@ pub(super) fn assemble(
         condition: unc.condition,
         verdict,
         notes,
-        cost: 0.5 * gof.chi2,
+        loss: problem.loss(),
+        beyond_f_scale: gof.beyond_f_scale,
+        cost: gof.cost,
         chi2: gof.chi2,
         reduced_chi2: gof.chi2 / dof,
         rms: gof.rms,
@@ -107,7 +113,10 @@ pub(super) fn assemble(
     result
 }
 
-/// Residuals, χ², rms, R², AIC and BIC at `p`.
+/// Residuals, cost, χ², rms, R², AIC and BIC at `p`. Under a robust loss the
+/// standardized residuals and AIC/BIC use the robust objective 2·cost = Σ C²ρ in place of
+/// χ² (the quantity the fit minimised, and the s² of its covariance), so that a few outliers
+/// neither inflate s nor decide a model comparison.
 fn goodness(
     problem: &FitProblem,
     input: &FitInput,
@@ -120,18 +129,42 @@ fn goodness(
     let residuals = problem.raw_residuals(&fitted);
     let sw = problem.sqrt_weight();
     let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
-    let std_residuals = standardized_residuals(&residuals, sw, n_free, weights_are_uncertainties);
+    let linear = problem.loss().is_linear();
+    let cost = if linear {
+        0.5 * chi2
+    } else {
+        problem.cost_of(&residuals)
+    };
+    // The objective in place of χ²: χ² itself for the linear loss.
+    let objective = if linear { chi2 } else { 2.0 * cost };
+    let c = problem.loss().f_scale;
+    let beyond_f_scale = (!linear).then(|| {
+        residuals
+            .iter()
+            .zip(sw)
+            .filter(|(r, s)| (*r * *s).abs() > c)
+            .count()
+    });
+    let mut std_residuals =
+        standardized_residuals(&residuals, sw, n_free, weights_are_uncertainties);
+    if !linear && !weights_are_uncertainties && objective > 0.0 {
+        // s from the robust objective: s_robust / s_χ² rescales every standardized residual.
+        let ratio = (chi2 / objective).sqrt();
+        std_residuals.iter_mut().for_each(|z| *z *= ratio);
+    }
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     let r2 = r_squared(problem, input, &fitted);
     let nf = n as f64;
-    let chi2_safe = chi2.max(f64::MIN_POSITIVE);
+    let chi2_safe = objective.max(f64::MIN_POSITIVE);
     let aic = nf * (chi2_safe / nf).ln() + 2.0 * n_free as f64;
     let bic = nf * (chi2_safe / nf).ln() + n_free as f64 * nf.ln();
     Goodness {
         fitted,
         residuals,
         std_residuals,
+        cost,
+        beyond_f_scale,
         chi2,
         rms,
         max_abs_residual,

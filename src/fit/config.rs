@@ -2,6 +2,7 @@
 //! and solver settings ([`FitConfig`]), and the residual floor that follows from them.
 
 use super::lm::LmConfig;
+use super::loss::Loss;
 use super::problem::ResidualKind;
 use crate::model::ModelOptions;
 
@@ -11,6 +12,8 @@ pub struct FitConfig {
     pub model: String,
     pub model_opts: ModelOptions,
     pub residual: ResidualKind,
+    /// The robust loss on the weighted residuals (default linear: plain least squares).
+    pub loss: Loss,
     /// Floor for relative/log residuals; None: 1e-6 × max |y|.
     pub floor: Option<f64>,
     /// Starting values given by the user (name, value); names may carry `[channel]`.
@@ -30,6 +33,7 @@ impl Default for FitConfig {
             model: "kbs".into(),
             model_opts: ModelOptions::default(),
             residual: ResidualKind::Absolute,
+            loss: Loss::default(),
             floor: None,
             init: Vec::new(),
             fix: Vec::new(),

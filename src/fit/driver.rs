@@ -41,7 +41,10 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     let floor = residual_floor(config, &input.y);
     // The full problem is built while the starting values are searched for on subsamples.
     let (problem, start) = rayon::join(
-        || FitProblem::new(model, layout.clone(), input, config.residual, floor),
+        || {
+            FitProblem::new(model, layout.clone(), input, config.residual, floor)
+                .map(|p| p.with_loss(config.loss))
+        },
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let (problem, start) = (problem?, start?);

@@ -8,6 +8,7 @@ pub mod driver;
 pub mod grid_cache;
 pub mod init;
 pub mod lm;
+pub mod loss;
 pub mod problem;
 pub mod profile;
 pub mod stats;

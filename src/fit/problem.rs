@@ -9,10 +9,14 @@
 //! ln 0 when the data shows no such component. Residuals are weighted,
 //! r̃ᵢ = √wᵢ rᵢ, so the solver's cost ½‖r̃‖² is the fit cost ½ Σ wᵢ rᵢ².
 //!
+//! With a robust loss ([`super::loss`]) the solver sees the cost residuals, the corrected
+//! Jacobian and the step residuals of [`super::loss::Loss::correct`] instead.
+//!
 //! Joint multi-channel fits share every parameter except the linear scales (`scale`,
 //! `scale_d`), which get one copy per channel (named `scale[550nm]`, ...).
 
 use super::lm::{LeastSquaresProblem, Stop};
+use super::loss::Loss;
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
 use crate::model::{Mode, Model};
@@ -279,10 +283,30 @@ pub struct FitProblem<'a> {
     /// Floor for relative and log residuals (in the unit of y).
     pub floor: f64,
     n: usize,
-    /// The Jacobian computed alongside the last residual evaluation: the models produce
-    /// derivatives at little extra cost, and LM asks for the Jacobian at the point it just
-    /// accepted, so one model pass serves both.
-    cache: std::sync::Mutex<Option<(DVector<f64>, DMatrix<f64>)>>,
+    /// The robust loss on the weighted residuals (linear: plain least squares).
+    loss: Loss,
+    /// The Jacobian (and with a robust loss the step residuals) computed alongside the last
+    /// residual evaluation: the models produce derivatives at little extra cost, and LM asks
+    /// for the Jacobian at the point it just accepted, so one model pass serves both.
+    cache: std::sync::Mutex<Option<Cached>>,
+}
+
+/// What one residual evaluation leaves for the solver's next requests at the same point.
+struct Cached {
+    x: DVector<f64>,
+    jac: Option<DMatrix<f64>>,
+    step: Option<DVector<f64>>,
+}
+
+/// Weighted residuals at a point, as the solver sees them.
+pub struct Evaluated {
+    /// The weighted residuals √wᵢ rᵢ, or under a robust loss the cost residuals (½‖·‖² is
+    /// the cost).
+    pub residuals: DVector<f64>,
+    /// Their Jacobian with respect to the solver variables (robust loss: corrected, J̃).
+    pub jacobian: DMatrix<f64>,
+    /// The step residuals f̃ under a robust loss (None for linear).
+    pub step: Option<DVector<f64>>,
 }
 
 impl<'a> FitProblem<'a> {
@@ -326,8 +350,29 @@ impl<'a> FitProblem<'a> {
             kind,
             floor,
             n,
+            loss: Loss::default(),
             cache: std::sync::Mutex::new(None),
         })
+    }
+
+    /// The same problem under a robust loss on its weighted residuals.
+    pub fn with_loss(mut self, loss: Loss) -> Self {
+        self.loss = loss;
+        self
+    }
+
+    /// The robust loss (linear: plain least squares).
+    pub fn loss(&self) -> Loss {
+        self.loss
+    }
+
+    /// The fit cost ½ Σ C² ρ(wᵢ rᵢ²/C²) of unweighted residuals `r` (½ Σ wᵢ rᵢ² for linear).
+    pub fn cost_of(&self, r: &[f64]) -> f64 {
+        0.5 * r
+            .iter()
+            .zip(&self.sqrt_w)
+            .map(|(r, s)| self.loss.term(r * s))
+            .sum::<f64>()
     }
 
     /// Number of samples.
@@ -534,13 +579,27 @@ impl FitProblem<'_> {
     /// Weighted residuals and their Jacobian with respect to the solver variables x, in one
     /// model pass per block (blocks in parallel): r̃ᵢ = √wᵢ rᵢ and
     /// ∂r̃ᵢ/∂x_j = √wᵢ (∂rᵢ/∂fᵢ) (∂fᵢ/∂p_k) (dp_k/dx_j) for the free parameter k of column j.
+    /// Under a robust loss: the cost residuals and the corrected Jacobian (see
+    /// [`Self::evaluate`] for the step residuals that go with them).
     pub fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
-        self.residuals_and_jacobian_until(x, None)
+        let e = self.evaluate(x, None);
+        (e.residuals, e.jacobian)
     }
 
-    /// [`Self::residuals_and_jacobian`], cut short once `stop` is requested (the rows of
-    /// blocks not evaluated are NaN).
-    fn residuals_and_jacobian_until(
+    /// Residuals, Jacobian and (robust loss) step residuals at x, cut short once `stop` is
+    /// requested (the rows of blocks not evaluated are NaN).
+    pub fn evaluate(&self, x: &DVector<f64>, stop: Option<&Stop>) -> Evaluated {
+        let (mut r, mut j) = self.weighted_and_jacobian(x, stop);
+        let step = self.loss.correct_in_place(&mut r, &mut j);
+        Evaluated {
+            residuals: r,
+            jacobian: j,
+            step,
+        }
+    }
+
+    /// The weighted residuals √wᵢ rᵢ and their Jacobian, cut short once `stop` is requested.
+    fn weighted_and_jacobian(
         &self,
         x: &DVector<f64>,
         stop: Option<&Stop>,
@@ -595,11 +654,15 @@ impl FitProblem<'_> {
     /// next request at `x`), cut short once `stop` is requested: then some rows are NaN and
     /// the solver rejects the point.
     pub fn residuals_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DVector<f64> {
-        let (r, j) = self.residuals_and_jacobian_until(x, stop);
+        let e = self.evaluate(x, stop);
         if let Ok(mut c) = self.cache.lock() {
-            *c = Some((x.clone(), j));
+            *c = Some(Cached {
+                x: x.clone(),
+                jac: Some(e.jacobian),
+                step: e.step,
+            });
         }
-        r
+        e.residuals
     }
 }
 
@@ -611,12 +674,26 @@ impl LeastSquaresProblem for FitProblem<'_> {
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
         // The solver asks once per accepted point: hand the cached matrix over.
         if let Ok(mut c) = self.cache.lock() {
-            if c.as_ref().is_some_and(|(cx, _)| cx == x) {
-                if let Some((_, cj)) = c.take() {
-                    return cj;
+            if let Some(cached) = c.as_mut().filter(|c| &c.x == x) {
+                if let Some(j) = cached.jac.take() {
+                    return j;
                 }
             }
         }
         self.residuals_and_jacobian(x).1
+    }
+
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
+        if self.loss.is_linear() {
+            return None;
+        }
+        if let Ok(mut c) = self.cache.lock() {
+            if let Some(cached) = c.as_mut().filter(|c| &c.x == x) {
+                if let Some(f) = cached.step.take() {
+                    return Some(f);
+                }
+            }
+        }
+        self.evaluate(x, None).step
     }
 }

@@ -236,6 +236,16 @@ impl LeastSquaresProblem for Restricted<'_, '_> {
         }
         self.eval(z).1
     }
+
+    /// Under a robust loss, the base problem's step residuals at the full x (the same at
+    /// every parametrisation; one more model pass per Jacobian, only for robust fits).
+    fn step_residuals(&self, z: &DVector<f64>) -> Option<DVector<f64>> {
+        if self.base.loss().is_linear() {
+            return None;
+        }
+        let (x, _) = self.full_x(z)?;
+        self.base.step_residuals(&x)
+    }
 }
 
 /// A search limit in t, and whether it is the parameter's domain edge.

@@ -51,7 +51,8 @@ pub(super) fn reduce<'m>(
         reduced.params[sig].fixed = Some(solved.run.values[sig]);
         let p_start = solved.run.values.clone();
         let floor = solved.problem.floor;
-        let problem_red = FitProblem::new(model, reduced, input, config.residual, floor)?;
+        let problem_red =
+            FitProblem::new(model, reduced, input, config.residual, floor)?.with_loss(config.loss);
         let mut red = run_lm(&problem_red, &p_start, &config.lm);
         red.add_counts(&solved.run.lm);
         solved.unc = uncertainty_of(&problem_red, &red);

@@ -3,6 +3,7 @@
 //! ([`FitResult`]). The conventions are in [`super::driver`]'s module doc.
 
 use super::lm::Termination;
+use super::loss::Loss;
 use super::problem::ParamLayout;
 use crate::model::Mode;
 use nalgebra::DMatrix;
@@ -57,6 +58,12 @@ pub struct FitResult {
     pub condition: f64,
     pub verdict: Verdict,
     pub notes: Vec<String>,
+    /// The robust loss the fit minimised (linear: plain least squares).
+    pub loss: Loss,
+    /// Under a robust loss, how many samples have a weighted residual beyond `f_scale`
+    /// (|√w r| > C: treated as outliers); None for linear.
+    pub beyond_f_scale: Option<usize>,
+    /// The minimised cost ½ Σ C²ρ(wᵢrᵢ²/C²) (½ Σ wᵢrᵢ² = ½χ² for the linear loss).
     pub cost: f64,
     pub chi2: f64,
     pub reduced_chi2: f64,

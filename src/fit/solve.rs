@@ -66,4 +66,8 @@ impl LeastSquaresProblem for Stoppable<'_, '_> {
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
         self.problem.jacobian(x)
     }
+
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
+        self.problem.step_residuals(x)
+    }
 }

@@ -165,7 +165,13 @@ pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, Stri
                 "weights",
                 format!("{}: {}", st.weights.source, st.weights.transform),
             ),
-            ("loss", st.loss.clone()),
+            (
+                "loss",
+                match st.f_scale {
+                    Some(c) => format!("{} (f_scale {c:.4e})", st.loss),
+                    None => st.loss.clone(),
+                },
+            ),
             ("absolute sigma", st.absolute_sigma.to_string()),
         ],
     );

@@ -86,6 +86,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "singular_values": r.singular_values.iter().map(|v| num(*v)).collect::<Vec<_>>(),
         "condition": num(r.condition),
         "cost": num(r.cost),
+        "loss": {"kind": r.loss.kind, "f_scale": num(r.loss.f_scale), "beyond_f_scale": r.beyond_f_scale},
         "chi2": num(r.chi2),
         "reduced_chi2": num(r.reduced_chi2),
         "rms": num(r.rms),

@@ -60,10 +60,12 @@ pub fn add_reflectance_factors(r: &mut FitResult, units: &Units) {
 }
 
 /// Standard errors from the stated uncertainties as they are (scipy's
-/// `curve_fit(absolute_sigma=True)`): the fit's covariance s²(JᵀJ)⁺ with s² = reduced χ²
-/// becomes (JᵀJ)⁺, so every standard error is divided by s. Correlations do not change.
+/// `curve_fit(absolute_sigma=True)`): the fit's covariance s²(JᵀJ)⁺ with s² = 2·cost/(n − p)
+/// (the reduced χ² for the linear loss) becomes (JᵀJ)⁺, so every standard error is divided
+/// by s. Correlations do not change.
 pub fn use_absolute_sigma(r: &mut FitResult) {
-    let s = r.reduced_chi2.sqrt();
+    let dof = r.n.saturating_sub(r.n_free).max(1) as f64;
+    let s = (2.0 * r.cost / dof).sqrt();
     if !(s.is_finite() && s > 0.0) {
         return;
     }

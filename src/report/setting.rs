@@ -108,8 +108,10 @@ pub struct Setting {
     pub residual: ResidualKind,
     pub floor: FloorInfo,
     pub weights: WeightsInfo,
-    /// The robust loss (`linear` = plain least squares).
+    /// The robust loss (`linear` = plain least squares; scipy's names).
     pub loss: String,
+    /// Its scale C (`--f-scale`), in the unit of the weighted residual; None for linear.
+    pub f_scale: Option<f64>,
     /// Standard errors and intervals from the stated uncertainties as they are (scipy's
     /// `absolute_sigma=True`), not rescaled by the residual scatter.
     pub absolute_sigma: bool,
@@ -131,6 +133,7 @@ impl Default for Setting {
                 transform: "1 for every sample".into(),
             },
             loss: "linear".into(),
+            f_scale: None,
             absolute_sigma: false,
             units: Units::default(),
         }

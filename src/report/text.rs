@@ -110,8 +110,12 @@ fn setting_lines(s: &mut String, st: &Setting) {
         "    weights         = {}: {}",
         st.weights.source, st.weights.transform
     );
-    if st.loss != "linear" {
-        let _ = writeln!(s, "    loss            = {}", st.loss);
+    if let (true, Some(c)) = (st.loss != "linear", st.f_scale) {
+        let _ = writeln!(
+            s,
+            "    loss            = {} (f_scale C = {c:.4e}: minimises ½ΣC²ρ(wr²/C²), residuals |√w r| beyond C count as outliers)",
+            st.loss
+        );
     }
     if st.absolute_sigma {
         let _ = writeln!(
@@ -340,7 +344,23 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         r.start_seconds,
         r.init_seconds - r.start_seconds
     );
-    let _ = writeln!(s, "    cost ½Σwr²      = {:.7e}", r.cost);
+    if r.loss.is_linear() {
+        let _ = writeln!(s, "    cost ½Σwr²      = {:.7e}", r.cost);
+    } else {
+        let _ = writeln!(
+            s,
+            "    cost ½ΣC²ρ      = {:.7e} ({} loss)",
+            r.cost, r.loss.kind
+        );
+        if let Some(k) = r.beyond_f_scale {
+            let _ = writeln!(
+                s,
+                "    beyond f_scale  = {k} of {} samples ({:.1} %: |√w r| > C, down-weighted as outliers)",
+                r.n,
+                100.0 * k as f64 / r.n.max(1) as f64
+            );
+        }
+    }
     let _ = writeln!(s, "    chi-square      = {:.7e}", r.chi2);
     let _ = writeln!(s, "    reduced chi-sq  = {:.7e}", r.reduced_chi2);
     let _ = writeln!(s, "    rms residual    = {:.7e}", r.rms);

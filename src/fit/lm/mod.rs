@@ -22,6 +22,11 @@
 //!   `Δ = 2‖D p‖`; the step is accepted when `ρ ≥ 10⁻⁴`.
 //! * A trial point whose residual vector contains NaN or ±∞ is treated as a failed step of
 //!   infinite cost: it is rejected and `Δ` shrinks by 10.
+//! * Robust losses: when the problem supplies step residuals
+//!   ([`LeastSquaresProblem::step_residuals`]), `r` (whose ½‖r‖² is the cost) serves the
+//!   cost, the ratio and the stopping rules, and the step, the gradient `J̃ᵀf̃` and the
+//!   `gtol` cosine use the step residuals `f̃` with the corrected Jacobian `J̃` (scipy's
+//!   `trf` with a loss does the same: cost from ρ, step from the scaled `f` and `J`).
 //!
 //! # Iterations and the argmin state
 //! One argmin iteration is one trial step (one residual evaluation), accepted or not — as
@@ -113,7 +118,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::Error;
 
 pub use fd::finite_difference_jacobian;
-pub use run::{minimize, ArgminAdapter, LeastSquaresProblem, LmConfig, LmReport};
+pub use run::{minimize, ArgminAdapter, LeastSquaresProblem, LmConfig, LmReport, StepResiduals};
 pub use stop::Stop;
 pub use termination::Termination;
 pub use transform::Transformed;
@@ -316,7 +321,8 @@ impl LevenbergMarquardt {
 impl<O> Solver<O, LmState> for LevenbergMarquardt
 where
     O: Operator<Param = DVector<f64>, Output = DVector<f64>>
-        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>
+        + StepResiduals,
 {
     fn name(&self) -> &str {
         "Levenberg-Marquardt (More trust region)"

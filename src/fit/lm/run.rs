@@ -25,6 +25,16 @@ pub trait LeastSquaresProblem {
     fn residuals(&self, x: &DVector<f64>) -> DVector<f64>;
     /// Jacobian `∂r̃ᵢ/∂xⱼ` (`m × n`), analytic; see [`finite_difference_jacobian`] otherwise.
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64>;
+    /// The residuals the step's linear model uses at `x`, when they are not
+    /// [`Self::residuals`]. With a robust loss (`crate::fit::loss`), `residuals` are the
+    /// cost residuals (½‖r‖² is the cost, which the ratio test and stopping rules need) and
+    /// `jacobian` is the IRLS-corrected `J̃`, whose step needs the corrected residuals `f̃`
+    /// (`J̃ᵀf̃` is the gradient of the cost, `J̃ᵀJ̃` its Gauss–Newton Hessian). None, the
+    /// default: `jacobian` is the Jacobian of `residuals`. The solver asks right after
+    /// `jacobian(x)`, at the same `x`.
+    fn step_residuals(&self, _x: &DVector<f64>) -> Option<DVector<f64>> {
+        None
+    }
 }
 
 impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
@@ -33,6 +43,22 @@ impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
     }
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
         (**self).jacobian(x)
+    }
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
+        (**self).step_residuals(x)
+    }
+}
+
+/// What the solver asks of its operator beyond argmin's [`Operator`] and [`Jacobian`]: the
+/// step residuals of [`LeastSquaresProblem::step_residuals`].
+pub trait StepResiduals {
+    /// See [`LeastSquaresProblem::step_residuals`].
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>>;
+}
+
+impl<P: LeastSquaresProblem + ?Sized> StepResiduals for ArgminAdapter<'_, P> {
+    fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
+        self.0.step_residuals(x)
     }
 }
 

@@ -150,4 +150,8 @@ impl<P: LeastSquaresProblem> LeastSquaresProblem for Transformed<P> {
         let jac = self.inner.jacobian(&self.to_full(z));
         self.jacobian_to_free(z, &jac)
     }
+
+    fn step_residuals(&self, z: &DVector<f64>) -> Option<DVector<f64>> {
+        self.inner.step_residuals(&self.to_full(z))
+    }
 }

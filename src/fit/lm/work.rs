@@ -4,8 +4,9 @@
 use argmin::core::{Error as ArgminError, Jacobian, Problem};
 use nalgebra::{DMatrix, DVector};
 
-use super::norm::{enorm, pad_mat};
+use super::norm::{all_finite, enorm, pad_mat, pad_vec};
 use super::qr::{qrfac, QrState};
+use super::run::StepResiduals;
 use super::{LmState, Termination, EPSMCH};
 
 /// Everything the iteration carries between trial steps.
@@ -19,6 +20,9 @@ pub(super) struct Work {
     pub(super) fnorm: f64,
     /// Jacobian at `x` (padded), valid when `!need_jac`.
     pub(super) jac: DMatrix<f64>,
+    /// Step residuals at `x` (padded) when the problem supplies them (a robust loss; see
+    /// [`super::LeastSquaresProblem::step_residuals`]), valid when `!need_jac`.
+    pub(super) step_r: Option<DVector<f64>>,
     pub(super) qr: Option<QrState>,
     pub(super) diag: DVector<f64>,
     pub(super) delta: f64,
@@ -50,6 +54,7 @@ impl Work {
             x,
             r,
             jac: DMatrix::zeros(rows, n),
+            step_r: None,
             qr: None,
             diag: DVector::from_element(n, 1.0),
             delta: 0.0,
@@ -86,9 +91,10 @@ impl Work {
 
     /// Evaluate and factor the Jacobian at the current point, update the scaling `D` (and on
     /// the first call the trust radius `Δ₀ = stepbound·‖D x₀‖`), and put `Jᵀr` and `J` into
-    /// the argmin state. Returns the state and a termination when `J` is not finite (or not
-    /// `m × n`), or when the gradient test (`gtol`, or machine epsilon) holds outside
-    /// polishing.
+    /// the argmin state. Returns the state and a termination when `J` (or the step
+    /// residuals) is not finite (or not `m × n`), or when the gradient test (`gtol`, or
+    /// machine epsilon) holds outside polishing. With step residuals `f̃` (a robust loss),
+    /// `J` is factored with `f̃` in place of `r`, and `Jᵀf̃` is the gradient.
     pub(super) fn refresh_jacobian<O>(
         &mut self,
         problem: &mut Problem<O>,
@@ -97,7 +103,7 @@ impl Work {
         gtol: f64,
     ) -> Result<(LmState, Option<Termination>), ArgminError>
     where
-        O: Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+        O: Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>> + StepResiduals,
     {
         let n = self.x.len();
         let jac = problem.jacobian(&self.x)?;
@@ -105,12 +111,25 @@ impl Work {
         if jac.shape() != (self.m, n) || jac.iter().any(|v| !v.is_finite()) {
             return Ok((state, Some(Termination::NonFiniteJacobian)));
         }
+        let step_r = problem.problem("step_residuals_count", |o| Ok(o.step_residuals(&self.x)))?;
+        if step_r
+            .as_ref()
+            .is_some_and(|f| f.len() != self.m || !all_finite(f))
+        {
+            return Ok((state, Some(Termination::NonFiniteJacobian)));
+        }
+        self.step_r = step_r.map(|f| pad_vec(f, self.r.len()));
         self.jac = pad_mat(jac, self.r.len());
-        let (qr, acnorm) = qrfac(&self.jac, &self.r);
+        let rs = self.step_r.as_ref().unwrap_or(&self.r);
+        let (qr, acnorm) = qrfac(&self.jac, rs);
         if self.first {
             self.initial_scaling(&acnorm, stepbound);
         }
-        let gnorm = scaled_gradient_norm(&qr, &acnorm, self.fnorm);
+        let rs_norm = match &self.step_r {
+            Some(f) => enorm(f.as_slice()),
+            None => self.fnorm,
+        };
+        let gnorm = scaled_gradient_norm(&qr, &acnorm, rs_norm);
         for j in 0..n {
             self.diag[j] = self.diag[j].max(acnorm[j]);
         }
@@ -137,10 +156,10 @@ impl Work {
         }
     }
 
-    /// Put `Jᵀr` and the (unpadded) `J` into the argmin state.
+    /// Put `Jᵀr` (`Jᵀf̃` with step residuals) and the (unpadded) `J` into the argmin state.
     fn publish_jacobian(&self, state: LmState) -> LmState {
         let n = self.x.len();
-        let grad = self.jac.tr_mul(&self.r);
+        let grad = self.jac.tr_mul(self.step_r.as_ref().unwrap_or(&self.r));
         // The state's Jacobian: the previous one's storage is reused (a fresh matrix of
         // this size is fresh memory from the system on every iteration).
         let mut state = state;
