@@ -283,8 +283,8 @@ mod tests {
         assert_eq!((a.rank, b.rank), (3, 3));
         assert!(b.undetermined.is_empty());
         assert_relative_eq!(a.condition, b.condition, max_relative = 1e-10);
-        for k in 0..3 {
-            assert_relative_eq!(a.stderr[k], b.stderr[k] * c[k], max_relative = 1e-10);
+        for (k, ck) in c.iter().enumerate() {
+            assert_relative_eq!(a.stderr[k], b.stderr[k] * ck, max_relative = 1e-10);
         }
         // Unscaled, the 1e-9 cut would have dropped the 1e-8 column.
         let raw = nalgebra::linalg::SVD::new(scaled.clone(), false, false).singular_values;
