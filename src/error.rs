@@ -20,6 +20,14 @@ pub enum Error {
         column: String,
         message: String,
     },
+    /// An element of an input array could not be used (arrays handed over by a program,
+    /// such as the Python package; `index` is 0-based).
+    #[error("{array}[{index}]: {message}")]
+    Element {
+        array: String,
+        index: usize,
+        message: String,
+    },
     /// A whole input file is unusable (empty, header only, missing column, ...).
     #[error("{}: {}", crate::io::shown(path), crate::io::shown_text(message))]
     File { path: PathBuf, message: String },
@@ -62,6 +70,15 @@ impl Error {
             path: path.to_path_buf(),
             line,
             column: column.to_string(),
+            message,
+        }
+    }
+
+    /// [`Error::Element`]: `message` about element `index` (0-based) of `array`.
+    pub fn element(array: &str, index: usize, message: String) -> Self {
+        Error::Element {
+            array: array.to_string(),
+            index,
             message,
         }
     }

@@ -3,20 +3,18 @@
 use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
+use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
 use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
 use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
-use goniofit::fit::weights::{floor_raised, residual_weights};
-use goniofit::geometry::{Geometry, Quantity};
+use goniofit::geometry::Quantity;
 use goniofit::io::{self, Dataset, ReadOptions};
 use goniofit::model::{parse_assignments, ModelOptions};
+use goniofit::report::outcome::SettingSource;
 use goniofit::report::{self, RunInfo};
 use goniofit::Error;
 use std::path::{Path, PathBuf};
-
-/// Candidate models for `--model auto`, compared by BIC.
-pub const AUTO_CANDIDATES: [&str; 4] = ["lambert", "lambert-specular", "kbs", "kbs+lambert"];
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum ResidualArg {
@@ -208,136 +206,9 @@ impl FitArgs {
     }
 }
 
-/// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
-/// the Jacobian products square these, so beyond them double precision overflows (cost
-/// = inf, R² = NaN). The fit is the same in any unit of L (amplitudes scale with it) and
-/// under any common factor of the weights, so rescaling the file loses nothing.
-pub const MAGNITUDE_LIMIT: f64 = 1e100;
-
-/// Refuse values and weights the fit cannot square in double precision (see
-/// [`MAGNITUDE_LIMIT`]), naming the file, line and column of the first one.
-pub fn check_magnitudes(ds: &Dataset) -> anyhow::Result<()> {
-    let Some(y) = &ds.value else { return Ok(()) };
-    let column = |i: usize, what: &str| match &ds.channel {
-        Some(ch) if ds.headers.iter().any(|h| h == "channel") => ch[i].clone(),
-        _ => what.to_string(),
-    };
-    let lim = MAGNITUDE_LIMIT;
-    for (i, &v) in y.iter().enumerate() {
-        let w = ds.weight.as_ref().map_or(1.0, |w| w[i]);
-        let (col, msg) = if v.abs() > lim {
-            (
-                column(i, "L"),
-                format!(
-                    "value {} is beyond ±{lim:e}: the fit squares values (cost ½Σw r²) and would overflow double precision; express L in another unit (the fit is the same in any unit of L)",
-                    goniofit::model::domain::short_number(v)
-                ),
-            )
-        } else if !(1.0 / lim..=lim).contains(&w) || v.abs() * w.sqrt() > lim {
-            let col = if ds.sigma_l.is_some() {
-                "sigma_L"
-            } else {
-                "weight"
-            };
-            (
-                col.to_string(),
-                format!(
-                    "weight {} (with L = {}) is outside what the fit can square (weights in [{:e}, {lim:e}], |L|·√w ≤ {lim:e}); scale every weight or uncertainty by one factor (the fitted parameters do not change)",
-                    goniofit::model::domain::short_number(w),
-                    goniofit::model::domain::short_number(v),
-                    1.0 / lim
-                ),
-            )
-        } else {
-            continue;
-        };
-        return Err(Error::input(&ds.path, ds.lines[i], &col, msg).into());
-    }
-    Ok(())
-}
-
 /// `--wavelength`: a positive number with an optional unit (nm, um, µm).
 fn parse_wavelength_arg(text: &str) -> Result<(f64, Option<&'static str>), String> {
     io::parse_length(text).map_err(|e| e.to_string())
-}
-
-/// The fit's data from a dataset: geometry, values, channels, and the weights transformed
-/// for the residual kind (`goniofit::fit::weights`).
-pub fn fit_input(
-    ds: &Dataset,
-    quantity: Quantity,
-    wavelength: Option<f64>,
-    needs_wavelength: bool,
-    residual: ResidualKind,
-    floor: Option<f64>,
-) -> anyhow::Result<FitInput> {
-    check_magnitudes(ds)?;
-    let n = ds.samples.len();
-    let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
-        (_, Some(l)) => vec![l],
-        (Some(w), None) => w.clone(),
-        (None, None) if needs_wavelength => {
-            return Err(Error::Usage(format!(
-                "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
-                goniofit::io::shown(&ds.path)
-            ))
-            .into())
-        }
-        (None, None) => vec![1.0],
-    };
-    let geo = Geometry::new(&ds.samples, &lambda, quantity)?;
-    let y = ds.value.clone().ok_or_else(|| Error::File {
-        path: ds.path.clone(),
-        message: "no measured value column (L)".into(),
-    })?;
-    let floor = floor_for(floor, &y);
-    let (weight, _) = residual_weights(
-        ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
-        ds.sigma_l.as_deref(),
-        &y,
-        residual,
-        floor,
-    );
-    let (channel, channel_names) = match &ds.channel {
-        Some(labels) => {
-            let mut names: Vec<String> = Vec::new();
-            let idx = labels
-                .iter()
-                .map(|l| match names.iter().position(|x| x == l) {
-                    Some(i) => i,
-                    None => {
-                        names.push(l.clone());
-                        names.len() - 1
-                    }
-                })
-                .collect();
-            // Names as printed (reports, parameter names): control and bidi characters escaped.
-            let names = names
-                .iter()
-                .map(|n| io::shown_text(n).into_owned())
-                .collect();
-            (idx, names)
-        }
-        None => (vec![0; n], vec![String::new()]),
-    };
-    Ok(FitInput {
-        geo,
-        y,
-        weight,
-        channel,
-        channel_names,
-    })
-}
-
-/// The residual floor: `--floor`, or 1e-6 × max |y| (as the fit computes it).
-fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
-    driver::residual_floor(
-        &FitConfig {
-            floor,
-            ..FitConfig::default()
-        },
-        y,
-    )
 }
 
 /// The whole setting of one dataset's fit, for the report (`report::Setting`).
@@ -348,15 +219,6 @@ pub fn setting_of(
     file: &report::setting::InputInfo,
 ) -> report::Setting {
     let (quantity, quantity_source) = args.quantity_for(ds);
-    let residual: ResidualKind = args.residual.into();
-    let floor = floor_for(args.floor, &input.y);
-    let (_, weights) = residual_weights(
-        ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
-        ds.sigma_l.as_deref(),
-        &input.y,
-        residual,
-        floor,
-    );
     let (unit, source) = match (args.wavelength, &ds.wavelength) {
         (Some((_, u)), _) => (u.map(String::from), "--wavelength"),
         (None, Some(_)) if io::is_astm(&ds.path, "") => {
@@ -365,40 +227,20 @@ pub fn setting_of(
         (None, Some(_)) => (ds.wavelength_unit.clone(), "wavelength column"),
         (None, None) => (None, "none"),
     };
-    let mut values: Vec<f64> = Vec::new();
-    if source != "none" {
-        for &l in &input.geo.wavelength {
-            if !values.contains(&l) {
-                values.push(l);
-            }
-        }
-    }
-    report::Setting {
-        input: file.clone(),
-        wavelength: report::setting::WavelengthInfo {
-            values,
-            unit: unit.clone(),
-            source: source.into(),
-        },
+    let source = SettingSource {
+        file: file.clone(),
         channel: args.channel.clone(),
         quantity,
         quantity_source: quantity_source.into(),
-        residual,
-        floor: report::setting::FloorInfo {
-            value: floor,
-            raised: floor_raised(&input.y, residual, floor),
-            used: residual != ResidualKind::Absolute,
-        },
-        weights,
+        residual: args.residual.into(),
+        floor: args.floor,
+        wavelength_unit: unit,
+        wavelength_source: source.into(),
         loss: LossKind::from(args.loss).name().into(),
         f_scale: (args.loss != LossArg::Linear).then_some(args.f_scale),
         absolute_sigma: args.absolute_sigma,
-        units: report::Units {
-            length: unit,
-            quantity,
-            radiance: None,
-        },
-    }
+    };
+    report::outcome::setting(ds, input, &source)
 }
 
 /// The input file's absolute path, size and SHA-256.
@@ -459,278 +301,40 @@ fn command_line() -> String {
         .join(" ")
 }
 
-/// One dataset's fit: every candidate model, and the chosen one (lowest BIC).
-pub struct Outcome {
-    pub label: String,
-    pub dataset: Dataset,
-    pub input: FitInput,
-    pub candidates: Vec<FitResult>,
-    pub result: FitResult,
-    /// Profile-likelihood intervals (empty when not computed).
-    pub intervals: Vec<goniofit::fit::profile::Interval>,
-}
-
-/// Fit one dataset with every candidate model; keep the lowest BIC.
-/// Every fit shares `stop` (the command's `--timeout` and signals): once it fires, the
-/// running fit ends at its best point, and candidates not yet started are skipped.
-fn fit_dataset(
-    args: &FitArgs,
-    label: String,
-    mut ds: Dataset,
-    progress: bool,
-    stop: &Stop,
-) -> anyhow::Result<Outcome> {
-    let candidates: Vec<String> = if args.model.eq_ignore_ascii_case("auto") {
-        AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect()
-    } else {
-        goniofit::model::by_name(&args.model, &ModelOptions::default()).map_err(|e| match e {
-            Error::UnknownModel(name) => Error::Usage(format!(
-                "unknown model '{name}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto to fit the last four and keep the lowest BIC)"
-            )),
-            e => e,
-        })?;
-        vec![args.model.to_ascii_lowercase()]
-    };
-    let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
-    let input = input_of(args, &ds, needs_wavelength)?;
-    if input.channel_names.len() <= 1 {
-        // The input now holds the angles (as geometry) and values; what is left of the
-        // dataset serves the residuals file (rows) and the report's setting (weights,
-        // wavelength). A joint fit keeps the samples for its one-channel comparison fit.
-        ds.samples = Vec::new();
-        ds.lines = Vec::new();
-        ds.value = None;
-    }
-    let uncertainties = ds.sigma_l.is_some();
-    let mut results: Vec<FitResult> = Vec::new();
-    let mut not_fitted = Vec::new();
-    for m in &candidates {
-        if stop.is_requested() && !results.is_empty() {
-            not_fitted.push(m.as_str());
-            continue;
-        }
-        let mut config = fit_config(args, m, uncertainties)?;
-        config.lm.progress = progress && args.show_progress();
-        config.lm.stop = Some(stop.clone());
-        results.push(
-            driver::fit(&input, &config).with_context(|| format!("{label}: fitting model {m}"))?,
-        );
-    }
-    let (best, skipped) = lowest_bic_usable(&results);
-    let mut result = results[best].clone();
-    result.notes.extend(skipped);
-    if !not_fitted.is_empty() {
-        result.notes.push(format!(
-            "the fit was stopped before the candidates {} were fitted",
-            not_fitted.join(", ")
-        ));
-    }
-    if args.absolute_sigma {
-        report::use_absolute_sigma(&mut result);
-    }
-    report::add_reflectance_factors(
-        &mut result,
-        &report::Units {
-            quantity: args.quantity_for(&ds).0,
-            ..Default::default()
-        },
-    );
-    if input.channel_names.len() > 1 && !stop.is_requested() {
-        if let Some(note) = joint_narrowing(args, &ds, &result, stop)? {
-            result.notes.push(note);
-        }
-    }
-    // Intervals for a single dataset (`progress` is true only then): many fits at once
-    // get the summary table instead.
-    let wanted = !args.no_intervals && progress && result.n_free <= MAX_PROFILED;
-    let mut intervals = if wanted {
-        profile_intervals(args, &input, &result, uncertainties, stop)?
-    } else {
-        Vec::new()
-    };
-    // A profile walk cut short by a stop request ends at a wrong likelihood: none is shown.
-    if wanted && stop.is_requested() {
-        intervals.clear();
-        result.notes.push(
-            "profile-likelihood intervals not computed: the fit was stopped (only the \
-             standard errors are shown)"
-                .into(),
-        );
-    }
-    Ok(Outcome {
-        label,
-        dataset: ds,
-        input,
-        candidates: results,
-        result,
-        intervals,
+/// The library's settings of a dataset's fit from the arguments, for dataset `ds` (its
+/// quantity may come from the file). `single`: the only dataset of the command (progress
+/// shown on a terminal, profile intervals unless `--no-intervals`).
+fn dataset_fit(args: &FitArgs, ds: &Dataset, single: bool) -> anyhow::Result<DatasetFit> {
+    let mut config = fit_config(args, &args.model, false)?;
+    config.lm.progress = single && args.show_progress();
+    Ok(DatasetFit {
+        model: args.model.clone(),
+        quantity: args.quantity_for(ds).0,
+        wavelength: args.wavelength_value(),
+        config,
+        absolute_sigma: args.absolute_sigma,
+        intervals: single && !args.no_intervals,
     })
-}
-
-/// The candidate with the lowest BIC among the converged fits (among all when none
-/// converged), and a note for each candidate with a lower BIC that was skipped because its
-/// fit is not a usable optimum (degenerate, or stopped without converging).
-fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
-    let any_converged = results.iter().any(|r| r.converged());
-    let best = results
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.converged() || !any_converged)
-        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
-        .map(|(i, _)| i)
-        .expect("at least one candidate");
-    let skipped = results
-        .iter()
-        .filter(|r| !r.converged() && any_converged && r.bic < results[best].bic)
-        .map(|r| {
-            format!(
-                "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
-                r.model,
-                r.bic,
-                r.notes
-                    .last()
-                    .map(String::as_str)
-                    .unwrap_or(r.termination.describe())
-            )
-        })
-        .collect();
-    (best, skipped)
-}
-
-/// Fits with more free parameters than this get no profile intervals (each needs two
-/// walks of refits per quantity).
-pub const MAX_PROFILED: usize = 8;
-
-/// Profile-likelihood intervals (`goniofit::fit::profile`) of every free parameter, of
-/// the parameters the reduced fit held, and of T/σ, the rms slope, the amplitudes and
-/// the reflectance factors, on the full problem at the reported optimum. Every refit shares
-/// the command's `stop`; once it fires the walks end (the caller discards their result).
-pub fn profile_intervals(
-    args: &FitArgs,
-    input: &FitInput,
-    r: &FitResult,
-    uncertainties: bool,
-    stop: &Stop,
-) -> anyhow::Result<Vec<goniofit::fit::profile::Interval>> {
-    use goniofit::fit::problem::FitProblem;
-    use goniofit::fit::profile::{Profiler, Target};
-    if stop.is_requested() {
-        return Ok(Vec::new());
-    }
-    let mut config = fit_config(args, &r.model, uncertainties)?;
-    config.lm.stop = Some(stop.clone());
-    let model = goniofit::model::by_name(&r.model, &config.model_opts)?;
-    let mut layout = r.layout.clone();
-    // Parameters held by the reduction (reported as not fixed) are profiled too.
-    for (fp, p) in layout.params.iter_mut().zip(&r.params) {
-        if !p.fixed {
-            fp.fixed = None;
-        }
-    }
-    let floor = driver::residual_floor(&config, &input.y);
-    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?
-        .with_loss(config.loss);
-    let prof = Profiler::new(&problem, &r.values, args.absolute_sigma, &config.lm);
-    let layout = &problem.layout;
-    let mut out = Vec::new();
-    for k in layout.free() {
-        if stop.is_requested() {
-            break;
-        }
-        if let Some(iv) = prof.interval(&layout.params[k].name, &Target::Param(k)) {
-            out.push(iv);
-        }
-    }
-    let first = |n: &str| layout.find(n).first().copied();
-    if let (Some(ks), Some(kt)) = (first("sigma"), first("T")) {
-        let ratio = Target::Product {
-            coef: vec![(kt, 1.0), (ks, -1.0)],
-            eliminate: ks,
-        };
-        if let Some(iv) = prof.interval("T/sigma", &ratio) {
-            out.push(iv.mapped("rms_slope", 2.0, true));
-            out.push(iv);
-        }
-        for d in &r.derived {
-            if !d.name.starts_with("amplitude") {
-                continue;
-            }
-            let scale = d.name.replacen("amplitude", "scale", 1);
-            let Some(ka) = layout.params.iter().position(|p| p.name == scale) else {
-                continue;
-            };
-            let coef = match r.verdict {
-                driver::Verdict::Smooth => vec![(ka, 1.0), (ks, 2.0)],
-                _ => vec![(ka, 1.0), (kt, 2.0), (ks, -2.0)],
-            };
-            let target = Target::Product {
-                coef,
-                eliminate: ks,
-            };
-            if let Some(iv) = prof.interval(&d.name, &target) {
-                out.push(iv);
-            }
-        }
-    }
-    for d in &r.derived {
-        if let Some(term) = d.doc.strip_prefix("π·").and_then(|t| t.split(',').next()) {
-            let src = d.name.replacen("reflectance_factor", term, 1);
-            if let Some(iv) = out.iter().find(|i| i.name == src) {
-                let m = iv.mapped(&d.name, std::f64::consts::PI, false);
-                out.push(m);
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// The fit input of a dataset with the quantity, wavelength, residual and floor of `args`.
 pub fn input_of(args: &FitArgs, ds: &Dataset, needs_wavelength: bool) -> anyhow::Result<FitInput> {
-    fit_input(
-        ds,
-        args.quantity_for(ds).0,
-        args.wavelength_value(),
-        needs_wavelength,
-        args.residual.into(),
-        args.floor,
-    )
+    Ok(dataset_fit(args, ds, false)?.input(ds, needs_wavelength)?)
 }
 
-/// The report of one outcome as JSON.
-fn outcome_json(o: &Outcome, info: &RunInfo) -> serde_json::Value {
-    let mut v = report::json::to_json(&o.result, info);
-    v["replay"] = replay_json(&o.result);
-    if o.candidates.len() > 1 {
-        v["comparison"] = serde_json::json!(o
-            .candidates
-            .iter()
-            .map(|r| serde_json::json!({"model": r.model, "bic": r.bic, "aic": r.aic, "cost": r.cost, "converged": r.converged()}))
-            .collect::<Vec<_>>());
-    }
-    v
-}
-
-/// The report of one outcome as text.
-fn outcome_text(o: &Outcome, info: &RunInfo) -> String {
-    let mut s = String::new();
-    if o.candidates.len() > 1 {
-        s += "[[Model comparison]] (lowest BIC wins)\n";
-        for r in &o.candidates {
-            s += &format!(
-                "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}{}\n",
-                r.model,
-                r.bic,
-                r.aic,
-                r.cost,
-                if r.model == o.result.model {
-                    "  <- chosen"
-                } else {
-                    ""
-                }
-            );
-        }
-    }
-    s + &report::text::render(&o.result, info)
+/// Fit one dataset with every candidate model; keep the lowest BIC among the usable fits.
+/// Every fit shares `stop` (the command's `--timeout` and signals).
+fn fit_one(
+    args: &FitArgs,
+    label: String,
+    ds: Dataset,
+    single: bool,
+    stop: &Stop,
+) -> anyhow::Result<Outcome> {
+    let mut spec = dataset_fit(args, &ds, single)?;
+    spec.config.lm.stop = Some(stop.clone());
+    let context = format!("{label}: fitting model {}", args.model);
+    fit_dataset(&spec, label, ds).context(context)
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
@@ -749,7 +353,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             bar.set_position(done)
         })?;
         bar.finish_and_clear();
-        check_magnitudes(&ds)?;
+        goniofit::fit::dataset::check_magnitudes(&ds)?;
         files.push((file.clone(), input_info(file)?));
         if args.by_group {
             let groups = ds.channel_groups();
@@ -791,7 +395,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
     let outcomes: Vec<anyhow::Result<Outcome>> = if single {
         let (label, ds) = jobs.pop().expect("one job");
-        vec![pool.install(|| fit_dataset(&args, label, ds, true, &stop))]
+        vec![pool.install(|| fit_one(&args, label, ds, true, &stop))]
     } else {
         use rayon::prelude::*;
         let bar = if args.show_progress() {
@@ -802,7 +406,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         let done = pool.install(|| {
             jobs.into_par_iter()
                 .map(|(label, ds)| {
-                    let outcome = fit_dataset(&args, label, ds, false, &stop);
+                    let outcome = fit_one(&args, label, ds, false, &stop);
                     bar.inc(1);
                     outcome
                 })
@@ -837,7 +441,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         let values: Vec<serde_json::Value> = outcomes
             .iter()
             .zip(&infos)
-            .map(|(o, i)| outcome_json(o, i))
+            .map(|(o, i)| report::outcome::to_json(o, i, &replay_args()))
             .collect();
         let v = if single {
             values.into_iter().next().expect("one outcome")
@@ -855,7 +459,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         let mut text: String = outcomes
             .iter()
             .zip(&infos)
-            .map(|(o, i)| outcome_text(o, i))
+            .map(|(o, i)| report::outcome::to_text(o, i))
             .collect();
         let joint = outcomes.iter().any(|o| o.input.channel_names.len() > 1);
         if !single || joint {
@@ -950,7 +554,7 @@ fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyho
             .unwrap_or_default();
         pictures.push((title, svg));
     }
-    let text = outcome_text(o, info);
+    let text = report::outcome::to_text(o, info);
     let page = report::html::page(&o.result, info, &text, &pictures);
     io::write_bytes(path, page.as_bytes())?;
     eprintln!(
@@ -978,70 +582,6 @@ fn summary_json(rows: &[report::summary::Row]) -> serde_json::Value {
     )
 }
 
-/// For a joint fit: how much narrower σ, T and T/σ are than from the middle channel alone,
-/// or that the data determines them neither way.
-fn joint_narrowing(
-    args: &FitArgs,
-    ds: &Dataset,
-    joint: &FitResult,
-    stop: &Stop,
-) -> anyhow::Result<Option<String>> {
-    let Some(labels) = &ds.channel else {
-        return Ok(None);
-    };
-    let names = &joint.layout.channel_names;
-    let mid = &names[names.len() / 2];
-    let idx: Vec<usize> = (0..labels.len())
-        .filter(|&i| io::shown_text(&labels[i]) == mid.as_str())
-        .collect();
-    let mut single = ds.subset(&idx);
-    single.channel = None;
-    let input = input_of(args, &single, true)?;
-    let mut config = fit_config(args, &joint.model, ds.sigma_l.is_some())?;
-    config.lm.progress = false;
-    config.lm.stop = Some(stop.clone());
-    let alone = driver::fit(&input, &config)?;
-    if stop.is_requested() {
-        // The single-channel fit was cut short: its errors say nothing.
-        return Ok(None);
-    }
-    let mut parts = Vec::new();
-    for name in ["sigma", "T", "T/sigma"] {
-        let se = |r: &FitResult| -> Option<Option<f64>> {
-            let p = r.params.iter().find(|p| p.name == name);
-            let d = r.derived.iter().find(|d| d.name == name);
-            match (p, d) {
-                (Some(p), _) => Some(p.stderr),
-                (None, Some(d)) => Some(d.stderr),
-                _ => None,
-            }
-        };
-        match (se(joint), se(&alone)) {
-            (Some(Some(j)), Some(Some(a))) => parts.push(format!(
-                "{name}: ±{j:.3e} joint vs ±{a:.3e} from {mid} alone ({:.1}× narrower)",
-                a / j
-            )),
-            (Some(Some(j)), Some(None)) => parts.push(format!(
-                "{name}: ±{j:.3e} joint, not determined from {mid} alone"
-            )),
-            (Some(None), Some(Some(a))) => parts.push(format!(
-                "{name}: not determined jointly, ±{a:.3e} from {mid} alone"
-            )),
-            (Some(None), Some(None)) => parts.push(format!(
-                "{name}: not determined by the data, jointly or from {mid} alone"
-            )),
-            _ => {}
-        }
-    }
-    Ok((!parts.is_empty()).then(|| {
-        format!(
-            "joint fit over {} channels: {}",
-            names.len(),
-            parts.join("; ")
-        )
-    }))
-}
-
 /// Write the input rows with L_fit, residual, std_residual and mode (atomically).
 fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<()> {
     let mut headers = ds.headers.clone();
@@ -1063,20 +603,13 @@ fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<(
     Ok(())
 }
 
-/// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
-/// arguments and the fitted values of every parameter (layout order).
-fn replay_json(r: &FitResult) -> serde_json::Value {
-    let args: Vec<String> = std::env::args_os()
+/// The fit's command-line arguments (without the program name), for the JSON report's
+/// `replay` block that `goniofit plot` parses again.
+fn replay_args() -> Vec<String> {
+    std::env::args_os()
         .skip(1)
         .map(|a| a.to_string_lossy().into_owned())
-        .collect();
-    serde_json::json!({
-        "args": args,
-        "model": r.model,
-        "names": r.layout.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
-        "values": r.values,
-        "n_free": r.n_free,
-    })
+        .collect()
 }
 
 /// Draw the pictures of a fit at parameter values `values` (layout order). For a joint fit

@@ -124,7 +124,7 @@ fn check_series_cost(
 fn with_stop(config: &FitConfig) -> FitConfig {
     let mut config = config.clone();
     if config.lm.stop.is_none() {
-        config.lm.stop = Some(Stop::new(config.lm.timeout, config.lm.interrupt.clone()));
+        config.lm.stop = Some(config.lm.new_stop());
     }
     config
 }

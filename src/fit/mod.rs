@@ -2,8 +2,10 @@
 //! identifiability ([`stats`]), the reflectance least-squares problem ([`problem`]),
 //! starting values ([`init`]) and the whole fit ([`driver`]), whose stages each have a
 //! file: start search (`start`), solve (`solve`), identify (`identify`), reduce
-//! (`reduce`), validate (`validate`) and assemble (`assemble`).
+//! (`reduce`), validate (`validate`) and assemble (`assemble`); a dataset's fit with
+//! model selection, shared by the CLI and the Python package ([`dataset`]).
 
+pub mod dataset;
 pub mod driver;
 pub mod grid_cache;
 pub mod init;

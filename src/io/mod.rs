@@ -28,6 +28,7 @@
 //! an [`Error::File`] (the whole file: empty, no data rows, missing column) or an
 //! [`Error::Io`]; no input makes the readers panic (proptest in `tests/io.rs`).
 
+pub mod arrays;
 pub mod astm;
 pub mod csv;
 pub mod output;

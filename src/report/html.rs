@@ -96,7 +96,6 @@ fn quantity_tables(s: &mut String, r: &FitResult, info: &RunInfo) {
 
 /// The page. `text` is the plain-text report; `pictures` are (title, SVG document) pairs.
 pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, String)]) -> String {
-    let st = &info.setting;
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -110,6 +109,54 @@ pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, Stri
         escape(&r.model),
         escape(&info.input)
     );
+    status(&mut s, r);
+    s.push_str("<h2>Reproduce</h2>\n");
+    let _ = writeln!(s, "<pre id=\"command\">{}</pre>", escape(&info.command));
+    s.push_str("<h2>Setting</h2>\n");
+    setting_table(&mut s, info);
+    results(&mut s, r, info);
+    s.push_str("<h2>Pictures</h2>\n");
+    for (title, svg) in pictures {
+        let _ = writeln!(
+            s,
+            "<figure>{}<figcaption>{}</figcaption></figure>",
+            inline_svg(svg),
+            escape(title)
+        );
+    }
+    s.push_str("<h2>Text report</h2>\n<details><summary>the report as printed</summary>\n");
+    let _ = writeln!(s, "<pre>{}</pre></details>", escape(text));
+    s.push_str("</body></html>\n");
+    s
+}
+
+/// The report as an HTML fragment for a notebook's rich display (the Python package's
+/// `FitResult._repr_html_`): the page's status line, statistics, parameter and derived
+/// tables with their intervals, verdict and notes, and the setting folded away; no
+/// document head, pictures or command line. The style is scoped to the fragment.
+pub fn fragment(r: &FitResult, info: &RunInfo) -> String {
+    let scoped = STYLE
+        .split('}')
+        .filter(|rule| !rule.is_empty() && !rule.starts_with("body"))
+        .map(|rule| format!(".goniofit-report {rule}}}"))
+        .collect::<String>();
+    let mut s = format!("<div class=\"goniofit-report\"><style>{scoped}</style>\n");
+    let _ = writeln!(
+        s,
+        "<h3>goniofit fit: {} on {}</h3>",
+        escape(&r.model),
+        escape(&info.input)
+    );
+    status(&mut s, r);
+    results(&mut s, r, info);
+    s.push_str("<details><summary>Setting</summary>\n");
+    setting_table(&mut s, info);
+    s.push_str("</details></div>\n");
+    s
+}
+
+/// Whether the fit converged, and its termination in words.
+fn status(s: &mut String, r: &FitResult) {
     let _ = writeln!(
         s,
         "<p class={}>{}: {}</p>",
@@ -121,12 +168,15 @@ pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, Stri
         },
         escape(r.termination.describe())
     );
-    s.push_str("<h2>Reproduce</h2>\n");
-    let _ = writeln!(s, "<pre id=\"command\">{}</pre>", escape(&info.command));
-    s.push_str("<h2>Setting</h2>\n");
+}
+
+/// The setting: input file and checksum, wavelength, quantity, residual, floor, weights,
+/// loss, absolute sigma.
+fn setting_table(s: &mut String, info: &RunInfo) {
+    let st = &info.setting;
     let wl: Vec<String> = st.wavelength.values.iter().map(|v| v.to_string()).collect();
     kv_table(
-        &mut s,
+        s,
         &[
             ("input file", st.input.path.clone()),
             ("sha256", st.input.sha256.clone()),
@@ -175,9 +225,14 @@ pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, Stri
             ("absolute sigma", st.absolute_sigma.to_string()),
         ],
     );
+}
+
+/// The fit statistics, the parameter and derived-quantity tables, and the identifiability
+/// verdict with the notes and the condition number.
+fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
     s.push_str("<h2>Fit statistics</h2>\n");
     kv_table(
-        &mut s,
+        s,
         &[
             ("samples", r.n.to_string()),
             ("free parameters", r.n_free.to_string()),
@@ -187,7 +242,7 @@ pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, Stri
             ("iterations", r.iterations.to_string()),
         ],
     );
-    quantity_tables(&mut s, r, info);
+    quantity_tables(s, r, info);
     s.push_str("<h2>Identifiability and validity</h2>\n");
     let _ = writeln!(
         s,
@@ -198,17 +253,4 @@ pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, Stri
         let _ = writeln!(s, "<li>{}</li>", escape(n));
     }
     let _ = writeln!(s, "</ul>\n<p>condition number {:.3e}</p>", r.condition);
-    s.push_str("<h2>Pictures</h2>\n");
-    for (title, svg) in pictures {
-        let _ = writeln!(
-            s,
-            "<figure>{}<figcaption>{}</figcaption></figure>",
-            inline_svg(svg),
-            escape(title)
-        );
-    }
-    s.push_str("<h2>Text report</h2>\n<details><summary>the report as printed</summary>\n");
-    let _ = writeln!(s, "<pre>{}</pre></details>", escape(text));
-    s.push_str("</body></html>\n");
-    s
 }

@@ -4,6 +4,7 @@
 pub mod checksum;
 pub mod html;
 pub mod json;
+pub mod outcome;
 pub mod setting;
 pub mod summary;
 pub mod text;

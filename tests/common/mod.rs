@@ -22,6 +22,7 @@ pub fn success_stdout<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
 }
 
 /// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
+#[allow(dead_code)]
 pub fn fit_json(args: &[&str]) -> serde_json::Value {
     serde_json::from_str(&success_stdout(args)).unwrap()
 }

@@ -107,6 +107,11 @@ pub struct LmConfig {
     /// search, solves and refits share one, so that a signal or the fit's deadline ends them
     /// all). Default none: the run makes its own from `timeout` and the signals.
     pub stop: Option<Stop>,
+    /// Install goniofit's process-wide Ctrl-C/SIGTERM/SIGHUP handler (see [`Stop`]) when
+    /// this configuration makes a stop request. Default true. False for a host that owns its
+    /// signals, such as the Python interpreter: its own handler stays in place and the host
+    /// sets `interrupt`.
+    pub install_signal_handler: bool,
     /// Gauss–Newton polishing after convergence, see [`LevenbergMarquardt::with_polish`].
     /// Default false: with measurement noise, parameters converged to `ftol = 1e-10` are
     /// already far more precise than their standard errors; turn it on when the last digits
@@ -129,8 +134,22 @@ impl Default for LmConfig {
             progress: false,
             interrupt: None,
             stop: None,
+            install_signal_handler: true,
             polish: false,
             predicted_stop: false,
+        }
+    }
+}
+
+impl LmConfig {
+    /// A stop request from this configuration: `timeout` from now, the `interrupt` flag,
+    /// and the process's signals (installing goniofit's handler only with
+    /// `install_signal_handler`; without it the signals are left to the host).
+    pub fn new_stop(&self) -> Stop {
+        if self.install_signal_handler {
+            Stop::new(self.timeout, self.interrupt.clone())
+        } else {
+            Stop::without_handler(self.timeout, self.interrupt.clone())
         }
     }
 }
@@ -191,7 +210,7 @@ fn solver_for(config: &LmConfig) -> LevenbergMarquardt {
     };
     let stop = match &config.stop {
         Some(stop) => stop.clone(),
-        None => Stop::new(config.timeout, None),
+        None => config.new_stop(),
     };
     match &config.interrupt {
         Some(flag) => solver.with_interrupt(flag.clone()),

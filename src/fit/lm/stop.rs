@@ -86,6 +86,13 @@ impl Stop {
     /// now on, or when `flag` becomes true.
     pub fn new(timeout: Option<Duration>, flag: Option<Arc<AtomicBool>>) -> Stop {
         install_handler();
+        Stop::without_handler(timeout, flag)
+    }
+
+    /// As [`Stop::new`], but without installing goniofit's signal handler, for a host that
+    /// owns the signals (the Python interpreter): only `flag` and the deadline (and the
+    /// signals, if the handler was installed by an earlier [`Stop::new`]) stop the work.
+    pub fn without_handler(timeout: Option<Duration>, flag: Option<Arc<AtomicBool>>) -> Stop {
         let active = Active::start();
         Stop(Arc::new(StopInner {
             deadline: timeout.map(|t| Instant::now() + t),

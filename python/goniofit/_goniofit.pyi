@@ -1,0 +1,131 @@
+"""Type stubs of the native module ``goniofit._goniofit`` (the PyO3 binding).
+
+The public functions live in ``goniofit`` (``goniofit/__init__.py``), which converts
+array-likes to contiguous float64 arrays and calls these. Conventions: angles in degrees
+unless ``radians=True`` (φr = 0 the forward, specular side); σ and T in the unit of the
+wavelength; cost = ½ Σ wᵢ rᵢ².
+"""
+
+from os import PathLike
+from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+AUTO_CANDIDATES: List[str]
+
+F64Array = npt.NDArray[np.float64]
+
+class _Intervals(TypedDict, total=False):
+    """Profile-likelihood intervals [lo, hi] (None for a side the data does not bound),
+    present where the CLI reports one (a single fit with at most 8 free parameters)."""
+
+    interval68: List[Optional[float]]
+    interval95: List[Optional[float]]
+
+class ParamReport(_Intervals):
+    """One fitted parameter, as in the CLI's JSON ``params``."""
+
+    value: Optional[float]
+    stderr: Optional[float]  # None when fixed or not determined by the data
+    determined: bool
+    fixed: bool
+    unit: str  # "λ unit" for sigma and T (the unit of the wavelength), "rad" for w
+
+class DerivedReport(_Intervals):
+    """One derived quantity (T/sigma, rms_slope, amplitude, ...), as in the CLI's JSON."""
+
+    value: Optional[float]
+    stderr: Optional[float]
+    determined: bool
+    doc: str
+
+Termination = Literal[
+    "ftol", "xtol", "ftolxtol", "predicted", "gtol",  # converged
+    "maxiterations", "maxevaluations", "timeout", "interrupted",
+    "nonfinitestart", "nonfinitejacobian", "noprogress",
+]
+Verdict = Literal["full", "rough", "smooth", "partial"]
+
+class FitResult:
+    """A finished fit (converged or not). Every field comes from the CLI's JSON report."""
+
+    @property
+    def model(self) -> str: ...
+    @property
+    def params(self) -> Dict[str, ParamReport]: ...
+    @property
+    def derived(self) -> Dict[str, DerivedReport]: ...
+    @property
+    def cost(self) -> float:
+        """½ Σ wᵢ rᵢ² at the optimum."""
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def termination(self) -> Termination: ...
+    @property
+    def verdict(self) -> Verdict: ...
+    @property
+    def notes(self) -> List[str]: ...
+    @property
+    def L_fit(self) -> F64Array:
+        """Fitted radiance or BRDF per sample."""
+    @property
+    def residuals(self) -> F64Array:
+        """fitted − measured per sample, in the chosen residual form, unweighted."""
+    @property
+    def std_residuals(self) -> F64Array: ...
+    @property
+    def n(self) -> int: ...
+    def report(self) -> str:
+        """The CLI's text report."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The CLI's JSON report (``goniofit fit --json``), key for key."""
+    def to_json(self) -> str: ...
+    def _repr_html_(self) -> str: ...
+
+def _fit(
+    theta_i: F64Array, theta_r: F64Array, phi_r: F64Array, L: F64Array, **options: Any
+) -> FitResult: ...
+def _fit_codes(
+    theta_i: F64Array,
+    theta_r: F64Array,
+    phi_r: F64Array,
+    L: F64Array,
+    codes: npt.NDArray[np.int64],
+    labels: List[str],
+    summary: bool,
+    **options: Any,
+) -> Union[List[FitResult], Dict[str, Any]]: ...
+def evaluate(
+    model: str,
+    params: Union[Mapping[str, float], Sequence[float]],
+    theta_i: F64Array,
+    theta_r: F64Array,
+    phi_r: F64Array,
+    *,
+    wavelength: Union[float, F64Array, None] = ...,
+    quantity: str = ...,
+    mode: str = ...,
+    tol: float = ...,
+    patch: Optional[Tuple[float, float]] = ...,
+    jacobian: bool = ...,
+    radians: bool = ...,
+) -> Union[F64Array, Tuple[F64Array, F64Array]]:
+    """The values, or with ``jacobian=True`` (values, J) with J of shape (n, p)."""
+def read(
+    path: Union[str, PathLike[str]],
+    channel: Optional[str] = None,
+    *,
+    radians: bool = False,
+    csv_radians: bool = False,
+    columns: Optional[str] = None,
+    signed_theta_r: bool = False,
+    require_value: bool = False,
+) -> Dict[str, Any]:
+    """The file's columns: theta_i, theta_r, phi_r (degrees unless radians), and where
+    present L, weights or sigma_L, wavelength (float arrays) and channel (list of str)."""
+def models() -> Dict[str, List[Tuple[str, str, str]]]:
+    """Model name → [(parameter, unit, meaning), ...]."""
+def _json_roundtrip(text: str) -> Any: ...

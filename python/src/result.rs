@@ -1,0 +1,277 @@
+//! `FitResult`: a finished fit as Python sees it, every field taken from the library's
+//! report of the outcome (the CLI's JSON object, [`report::outcome::to_json`]), so that
+//! `to_dict()` is the CLI's `--json` key for key; and the summary columns of many fits.
+
+use crate::convert::json_to_py;
+use crate::options::FitOptions;
+use goniofit::fit::dataset::Outcome;
+use goniofit::report::{self, RunInfo};
+use numpy::IntoPyArray;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use serde_json::Value;
+use std::sync::OnceLock;
+
+/// A finished fit (converged or not: see ``converged`` and ``termination``).
+///
+/// ``params`` and ``derived`` map a name to ``{"value", "stderr", "determined", "fixed",
+/// "unit"}`` (``derived``: ``"doc"`` instead of ``"fixed"``/``"unit"``) exactly as the
+/// CLI's JSON report; σ and T are in the unit of the wavelength, angles in the report's
+/// ``w`` in radians. ``cost`` is ½ Σ wᵢ rᵢ². ``L_fit`` and ``residuals`` (fitted − measured
+/// in the chosen residual form, unweighted) are numpy arrays in sample order.
+#[pyclass(frozen, module = "goniofit")]
+pub struct FitResult {
+    outcome: Outcome,
+    info: RunInfo,
+    args: Vec<String>,
+    json: OnceLock<Value>,
+}
+
+impl FitResult {
+    /// The result of `outcome`, fitted with options `o` (written into the report as the
+    /// equivalent CLI command).
+    pub fn new(outcome: Outcome, o: &FitOptions) -> Self {
+        let args = o.cli_args();
+        let setting =
+            report::outcome::setting(&outcome.dataset, &outcome.input, &o.setting_source());
+        let info = RunInfo {
+            input: outcome.label.clone(),
+            command: format!("goniofit {} ({})", args.join(" "), outcome.label),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            setting,
+            intervals: outcome.intervals.clone(),
+        };
+        FitResult {
+            outcome,
+            info,
+            args,
+            json: OnceLock::new(),
+        }
+    }
+
+    /// The CLI's JSON object of this fit (built once).
+    fn json(&self) -> &Value {
+        self.json
+            .get_or_init(|| report::outcome::to_json(&self.outcome, &self.info, &self.args))
+    }
+
+    fn field<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &self.json()[key])
+    }
+}
+
+#[pymethods]
+impl FitResult {
+    /// The fitted model's name (the winner of ``model="auto"``).
+    #[getter]
+    fn model(&self) -> &str {
+        &self.outcome.result.model
+    }
+
+    /// Parameter name → {value, stderr, determined, fixed, unit}.
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.field(py, "params")
+    }
+
+    /// Derived quantity name → {value, stderr, determined, doc} (T/sigma, rms slope,
+    /// the amplitude the rough regime determines, ...).
+    #[getter]
+    fn derived<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.field(py, "derived")
+    }
+
+    /// ½ Σ wᵢ rᵢ² at the optimum (the solver's cost, as MINPACK and scipy).
+    #[getter]
+    fn cost(&self) -> f64 {
+        self.outcome.result.cost
+    }
+
+    /// Whether the solver met a convergence criterion (a usable optimum).
+    #[getter]
+    fn converged(&self) -> bool {
+        self.outcome.result.converged()
+    }
+
+    /// Why the solver stopped: ``ftol``, ``xtol``, ``gtol``, ``predicted`` (converged) or
+    /// ``maxiterations``, ``maxevaluations``, ``timeout``, ``interrupted``, ...
+    #[getter]
+    fn termination<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.field(py, "termination")
+    }
+
+    /// What the data determines: ``full``, ``rough`` (only T/σ and the amplitude),
+    /// ``smooth`` (only T and s·σ²) or ``partial``.
+    #[getter]
+    fn verdict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.field(py, "verdict")
+    }
+
+    /// The report's notes (plain-language statements about the fit).
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.outcome.result.notes.clone()
+    }
+
+    /// The fitted values (radiance or BRDF, as measured) per sample.
+    #[getter]
+    #[allow(non_snake_case)]
+    fn L_fit<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        self.outcome.result.fitted.clone().into_pyarray(py)
+    }
+
+    /// The residuals per sample (fitted − measured in the chosen residual form, unweighted).
+    #[getter]
+    fn residuals<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        self.outcome.result.residuals.clone().into_pyarray(py)
+    }
+
+    /// Standardised residuals √wᵢ rᵢ / s per sample.
+    #[getter]
+    fn std_residuals<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        self.outcome.result.std_residuals.clone().into_pyarray(py)
+    }
+
+    /// Number of samples fitted.
+    #[getter]
+    fn n(&self) -> usize {
+        self.outcome.result.n
+    }
+
+    /// The CLI's text report of this fit.
+    fn report(&self) -> String {
+        report::outcome::to_text(&self.outcome, &self.info)
+    }
+
+    /// The CLI's JSON report of this fit (``goniofit fit --json``), key for key.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, self.json())
+    }
+
+    /// The CLI's JSON report as text.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string_pretty(self.json())
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
+    }
+
+    /// The report as an HTML table for notebooks.
+    fn _repr_html_(&self) -> String {
+        report::html::fragment(&self.outcome.result, &self.info)
+    }
+
+    fn __repr__(&self) -> String {
+        let r = &self.outcome.result;
+        format!(
+            "<goniofit.FitResult model={} n={} converged={} cost={:.7e} verdict={:?}>",
+            r.model,
+            r.n,
+            if r.converged() { "True" } else { "False" },
+            r.cost,
+            r.verdict
+        )
+    }
+}
+
+/// One entry per outcome for `fit_frame`: `model`, `n`, `converged`, `termination`,
+/// `verdict`, `cost`, `reduced_chi2`, `r2`, `iterations`, then per parameter and derived
+/// quantity `NAME`, `NAME_stderr` (NaN when undetermined or fixed) and `NAME_determined`;
+/// a name absent from some fits (another model under `auto`) is NaN / False there.
+pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    fn r(o: &Outcome) -> &goniofit::fit::driver::FitResult {
+        &o.result
+    }
+    let text = |f: &dyn Fn(&Outcome) -> String| outcomes.iter().map(f).collect::<Vec<String>>();
+    out.set_item("model", text(&|o| r(o).model.clone()))?;
+    out.set_item(
+        "n",
+        outcomes
+            .iter()
+            .map(|o| r(o).n as u64)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "converged",
+        outcomes
+            .iter()
+            .map(|o| r(o).converged())
+            .collect::<Vec<_>>(),
+    )?;
+    let info = empty_info();
+    let reports: Vec<Value> = outcomes
+        .iter()
+        .map(|o| report::json::to_json(r(o), &info))
+        .collect();
+    let json_text = |key: &str| {
+        reports
+            .iter()
+            .map(|v| v[key].as_str().unwrap_or_default().to_string())
+            .collect::<Vec<String>>()
+    };
+    out.set_item("termination", json_text("termination"))?;
+    out.set_item("verdict", json_text("verdict"))?;
+    let num = |f: &dyn Fn(&Outcome) -> f64| {
+        outcomes
+            .iter()
+            .map(f)
+            .collect::<Vec<f64>>()
+            .into_pyarray(py)
+    };
+    out.set_item("cost", num(&|o| r(o).cost))?;
+    out.set_item("reduced_chi2", num(&|o| r(o).reduced_chi2))?;
+    out.set_item("r2", num(&|o| r(o).r2))?;
+    out.set_item(
+        "iterations",
+        outcomes
+            .iter()
+            .map(|o| r(o).iterations)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    // Parameters, then derived quantities, by name in first-appearance order.
+    let mut names: Vec<String> = Vec::new();
+    for o in outcomes {
+        let all = r(o)
+            .params
+            .iter()
+            .map(|p| &p.name)
+            .chain(r(o).derived.iter().map(|d| &d.name));
+        for n in all {
+            if !names.contains(n) {
+                names.push(n.clone());
+            }
+        }
+    }
+    for name in &names {
+        let mut value = Vec::with_capacity(outcomes.len());
+        let mut stderr = Vec::with_capacity(outcomes.len());
+        let mut determined = Vec::with_capacity(outcomes.len());
+        for o in outcomes {
+            let p = r(o)
+                .params
+                .iter()
+                .find(|p| &p.name == name)
+                .map(|p| (p.value, p.stderr, p.determined));
+            let d = || {
+                r(o).derived
+                    .iter()
+                    .find(|d| &d.name == name)
+                    .map(|d| (d.value, d.stderr, d.determined))
+            };
+            let (v, se, det) = p.or_else(d).unwrap_or((f64::NAN, None, false));
+            value.push(v);
+            stderr.push(se.unwrap_or(f64::NAN));
+            determined.push(det);
+        }
+        out.set_item(name, value.into_pyarray(py))?;
+        out.set_item(format!("{name}_stderr"), stderr.into_pyarray(py))?;
+        out.set_item(format!("{name}_determined"), determined)?;
+    }
+    Ok(out)
+}
+
+/// Run info for a report whose run fields are not read.
+fn empty_info() -> RunInfo {
+    RunInfo::default()
+}

@@ -1,0 +1,153 @@
+//! Running fits from Python: panics caught at the boundary, the GIL released while rayon
+//! threads fit, and Ctrl-C (Python's own SIGINT handler) turned into the library's
+//! interrupt flag.
+
+use crate::convert::{to_py_err, to_py_err_in};
+use crate::options::FitOptions;
+use goniofit::fit::dataset::{fit_dataset, Outcome};
+use goniofit::io::Dataset;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use rayon::prelude::*;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
+
+/// How often the calling thread looks for a pending Ctrl-C while a fit runs.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// A panic's message as a `RuntimeError` (a panic is a bug: it must never cross into
+/// Python as a crash).
+fn panic_error(payload: Box<dyn std::any::Any + Send>) -> PyErr {
+    let msg = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into());
+    PyRuntimeError::new_err(format!(
+        "goniofit internal error (a bug, please report it): {msg}"
+    ))
+}
+
+/// `f()`, with a panic turned into a `RuntimeError`.
+pub fn guard<T>(f: impl FnOnce() -> T) -> PyResult<T> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(panic_error)
+}
+
+/// Run `work` on another thread with the GIL released (on a rayon pool of `threads`
+/// threads, all cores when None), while this thread runs Python's signal handlers every
+/// [`SIGNAL_POLL`]. On Ctrl-C (`KeyboardInterrupt` from a handler) `interrupt` is set, the
+/// running fits end after their current step, and the handler's exception is returned.
+pub fn interruptible<T: Send>(
+    py: Python<'_>,
+    interrupt: Option<Arc<AtomicBool>>,
+    threads: Option<usize>,
+    work: impl FnOnce() -> goniofit::Result<T> + Send,
+) -> PyResult<T> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| PyRuntimeError::new_err(format!("thread pool: {e}")))?;
+    let outcome = py.detach(|| {
+        std::thread::scope(|s| {
+            let (done_tx, done_rx) = mpsc::channel::<()>();
+            let worker = s.spawn(move || {
+                let r = catch_unwind(AssertUnwindSafe(|| pool.install(work)));
+                let _ = done_tx.send(());
+                r
+            });
+            let mut signal: Option<PyErr> = None;
+            while let Err(mpsc::RecvTimeoutError::Timeout) = done_rx.recv_timeout(SIGNAL_POLL) {
+                if signal.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        if let Some(flag) = &interrupt {
+                            flag.store(true, Ordering::SeqCst);
+                        }
+                        signal = Some(e);
+                    }
+                }
+            }
+            let joined = worker.join().unwrap_or_else(Err);
+            (joined, signal)
+        })
+    });
+    match outcome {
+        (_, Some(signal)) => Err(signal),
+        (Err(payload), None) => Err(panic_error(payload)),
+        (Ok(r), None) => r.map_err(to_py_err),
+    }
+}
+
+/// The datasets of group codes `0..labels.len()` (`codes[i]`: the group of sample i),
+/// labelled for the reports; a code out of range, or a group without samples, is an error
+/// naming it.
+pub fn split_codes(
+    ds: &Dataset,
+    codes: &[i64],
+    labels: &[String],
+) -> PyResult<Vec<(String, Dataset)>> {
+    if codes.len() != ds.len() {
+        return Err(PyValueError::new_err(format!(
+            "group has {} elements, theta_i has {}: give one group per sample",
+            codes.len(),
+            ds.len()
+        )));
+    }
+    let n_groups = labels.len();
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n_groups];
+    for (i, &c) in codes.iter().enumerate() {
+        let k = usize::try_from(c)
+            .ok()
+            .filter(|&k| k < n_groups)
+            .ok_or_else(|| {
+                PyValueError::new_err(format!(
+                    "codes[{i}]: {c} is not a group code in 0..{n_groups}"
+                ))
+            })?;
+        members[k].push(i);
+    }
+    members
+        .into_iter()
+        .zip(labels)
+        .map(|(idx, label)| {
+            if idx.is_empty() {
+                return Err(PyValueError::new_err(format!(
+                    "group {label} has no samples"
+                )));
+            }
+            Ok((label.clone(), ds.subset(&idx)))
+        })
+        .collect()
+}
+
+/// Fit every job in parallel (rayon, GIL released, Ctrl-C interrupts all of them); the
+/// first failing job's error is raised with its label in front. `single`: one dataset (profile intervals unless `intervals=False`).
+pub fn fit_all(
+    py: Python<'_>,
+    o: &FitOptions,
+    jobs: Vec<(String, Dataset)>,
+    single: bool,
+) -> PyResult<Vec<Outcome>> {
+    let spec = o.dataset_fit(single);
+    let interrupt = spec.config.lm.interrupt.clone();
+    let stop = interrupt.clone();
+    let results = interruptible(py, interrupt, o.threads, move || {
+        Ok(jobs
+            .into_par_iter()
+            .map(|(label, ds)| {
+                // After Ctrl-C the jobs not yet started are skipped (the call raises
+                // KeyboardInterrupt and drops every result).
+                if stop.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
+                    return Err((label, goniofit::Error::Usage("interrupted".into())));
+                }
+                let r = fit_dataset(&spec, label.clone(), ds);
+                r.map_err(|e| (label, e))
+            })
+            .collect::<Vec<_>>())
+    })?;
+    results
+        .into_iter()
+        .map(|r| r.map_err(|(label, e)| to_py_err_in(Some(&label), e)))
+        .collect()
+}

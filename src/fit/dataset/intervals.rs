@@ -1,0 +1,97 @@
+//! Profile-likelihood intervals of a dataset's chosen fit ([`crate::fit::profile`]): every
+//! free parameter, the parameters the reduced fit held, and T/σ, the rms slope, the
+//! amplitudes and the reflectance factors.
+
+use super::DatasetFit;
+use crate::error::Result;
+use crate::fit::driver::{self, FitInput, FitResult};
+use crate::fit::lm::Stop;
+use crate::fit::problem::FitProblem;
+use crate::fit::profile::{Interval, Profiler, Target};
+
+/// Fits with more free parameters than this get no profile intervals (each needs two
+/// walks of refits per quantity).
+pub const MAX_PROFILED: usize = 8;
+
+/// Profile-likelihood intervals of every free parameter, of the parameters the reduced
+/// fit held, and of T/σ, the rms slope, the amplitudes and the reflectance factors, on the
+/// full problem at the reported optimum `r` (`uncertainties`: the weights come from a
+/// stated `sigma_L`). A quantity whose profile cannot be walked is left out. Every refit
+/// shares the fit's `stop` (its time limit and signals): once it fires the walks end, and
+/// the caller discards what they found (a walk cut short ends at a wrong likelihood).
+pub fn profile_intervals(
+    spec: &DatasetFit,
+    input: &FitInput,
+    r: &FitResult,
+    uncertainties: bool,
+    stop: &Stop,
+) -> Result<Vec<Interval>> {
+    if stop.is_requested() {
+        return Ok(Vec::new());
+    }
+    let mut config = spec.config_for(&r.model, uncertainties);
+    config.lm.stop = Some(stop.clone());
+    let model = crate::model::by_name(&r.model, &config.model_opts)?;
+    let mut layout = r.layout.clone();
+    // Parameters held by the reduction (reported as not fixed) are profiled too.
+    for (fp, p) in layout.params.iter_mut().zip(&r.params) {
+        if !p.fixed {
+            fp.fixed = None;
+        }
+    }
+    let floor = driver::residual_floor(&config, &input.y);
+    let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?
+        .with_loss(config.loss);
+    let prof = Profiler::new(&problem, &r.values, spec.absolute_sigma, &config.lm);
+    let layout = &problem.layout;
+    let mut out = Vec::new();
+    for k in layout.free() {
+        if stop.is_requested() {
+            break;
+        }
+        if let Some(iv) = prof.interval(&layout.params[k].name, &Target::Param(k)) {
+            out.push(iv);
+        }
+    }
+    let first = |n: &str| layout.find(n).first().copied();
+    if let (Some(ks), Some(kt)) = (first("sigma"), first("T")) {
+        let ratio = Target::Product {
+            coef: vec![(kt, 1.0), (ks, -1.0)],
+            eliminate: ks,
+        };
+        if let Some(iv) = prof.interval("T/sigma", &ratio) {
+            out.push(iv.mapped("rms_slope", 2.0, true));
+            out.push(iv);
+        }
+        for d in &r.derived {
+            if !d.name.starts_with("amplitude") {
+                continue;
+            }
+            let scale = d.name.replacen("amplitude", "scale", 1);
+            let Some(ka) = layout.params.iter().position(|p| p.name == scale) else {
+                continue;
+            };
+            let coef = match r.verdict {
+                driver::Verdict::Smooth => vec![(ka, 1.0), (ks, 2.0)],
+                _ => vec![(ka, 1.0), (kt, 2.0), (ks, -2.0)],
+            };
+            let target = Target::Product {
+                coef,
+                eliminate: ks,
+            };
+            if let Some(iv) = prof.interval(&d.name, &target) {
+                out.push(iv);
+            }
+        }
+    }
+    for d in &r.derived {
+        if let Some(term) = d.doc.strip_prefix("π·").and_then(|t| t.split(',').next()) {
+            let src = d.name.replacen("reflectance_factor", term, 1);
+            if let Some(iv) = out.iter().find(|i| i.name == src) {
+                let m = iv.mapped(&d.name, std::f64::consts::PI, false);
+                out.push(m);
+            }
+        }
+    }
+    Ok(out)
+}

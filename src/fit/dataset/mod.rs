@@ -1,0 +1,430 @@
+//! A dataset's fit as the CLI and the Python package run it: the fit's data from a
+//! [`Dataset`] (values and weights checked against double-precision overflow), every
+//! candidate model (`auto` compares four by BIC, skipping fits that are not a usable
+//! optimum), for a joint multi-channel fit the note on how much narrower σ and T are than
+//! from one channel, and for one dataset the profile-likelihood intervals ([`intervals`]).
+//!
+//! This is the one path from measured samples to a finished [`Outcome`]; the reporters in
+//! [`crate::report::outcome`] turn an outcome into the text report and the JSON object.
+
+pub mod intervals;
+
+use super::driver::{self, FitConfig, FitInput, FitResult};
+use super::lm::Stop;
+use super::problem::ResidualKind;
+use super::weights::residual_weights;
+use crate::error::{Error, Result};
+use crate::geometry::{Geometry, Quantity};
+use crate::io::{self, Dataset};
+use crate::model::{self, domain::short_number, ModelOptions};
+use crate::report;
+
+pub use intervals::{profile_intervals, MAX_PROFILED};
+
+/// Candidate models for `model = "auto"`, compared by BIC.
+pub const AUTO_CANDIDATES: [&str; 4] = ["lambert", "lambert-specular", "kbs", "kbs+lambert"];
+
+/// Everything a dataset's fit needs beside the data.
+#[derive(Debug, Clone)]
+pub struct DatasetFit {
+    /// A model name (see [`model::by_name`]) or `auto`.
+    pub model: String,
+    /// Whether the measured value is a radiance (eq. 28) or a BRDF.
+    pub quantity: Quantity,
+    /// Wavelength (the unit of σ and T); overrides the dataset's own.
+    pub wavelength: Option<f64>,
+    /// The fit's settings; `model` and `weights_are_uncertainties` are set per candidate
+    /// and dataset. `config.lm.stop` (if any) is shared by every candidate; without one the
+    /// fit makes its own from `config.lm` ([`crate::fit::lm::LmConfig::new_stop`]).
+    pub config: FitConfig,
+    /// Standard errors from the stated uncertainties as they are (scipy's
+    /// `absolute_sigma=True`), not rescaled by the residual scatter.
+    pub absolute_sigma: bool,
+    /// Compute the profile-likelihood intervals of the chosen fit (when it has at most
+    /// [`MAX_PROFILED`] free parameters; they refit the data a few dozen times per quantity).
+    pub intervals: bool,
+}
+
+impl DatasetFit {
+    /// The candidate model names (lower case): the four of `auto`, or the one given
+    /// (checked to exist).
+    pub fn candidates(&self) -> Result<Vec<String>> {
+        if self.model.eq_ignore_ascii_case("auto") {
+            Ok(AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect())
+        } else {
+            model::by_name(&self.model, &ModelOptions::default()).map_err(|e| match e {
+                Error::UnknownModel(name) => Error::Usage(format!(
+                    "unknown model '{name}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto to fit the last four and keep the lowest BIC)"
+                )),
+                e => e,
+            })?;
+            Ok(vec![self.model.to_ascii_lowercase()])
+        }
+    }
+
+    /// The configuration of one candidate model on a dataset (`uncertainties`: its weights
+    /// come from a stated `sigma_L`).
+    pub fn config_for(&self, model: &str, uncertainties: bool) -> FitConfig {
+        FitConfig {
+            model: model.to_string(),
+            weights_are_uncertainties: uncertainties,
+            ..self.config.clone()
+        }
+    }
+
+    /// The fit input of a dataset with this fit's quantity, wavelength, residual and floor.
+    pub fn input(&self, ds: &Dataset, needs_wavelength: bool) -> Result<FitInput> {
+        fit_input(
+            ds,
+            self.quantity,
+            self.wavelength,
+            needs_wavelength,
+            self.config.residual,
+            self.config.floor,
+        )
+    }
+}
+
+/// One dataset's fit: every candidate model, and the chosen one (lowest BIC among the
+/// usable fits).
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// What the reports call the dataset (a file name, `file [group]`, a Python group).
+    pub label: String,
+    pub dataset: Dataset,
+    pub input: FitInput,
+    /// One result per candidate model fitted, in [`DatasetFit::candidates`] order (a stop
+    /// request leaves the later ones out).
+    pub candidates: Vec<FitResult>,
+    /// The chosen candidate (with the joint-fit note for several channels).
+    pub result: FitResult,
+    /// Profile-likelihood intervals of `result` (empty when not computed).
+    pub intervals: Vec<super::profile::Interval>,
+}
+
+/// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
+/// the Jacobian products square these, so beyond them double precision overflows (cost
+/// = inf, R² = NaN). The fit is the same in any unit of L (amplitudes scale with it) and
+/// under any common factor of the weights, so rescaling the file loses nothing.
+pub const MAGNITUDE_LIMIT: f64 = 1e100;
+
+/// Refuse values and weights the fit cannot square in double precision (see
+/// [`MAGNITUDE_LIMIT`]), naming the file, line and column of the first one (for arrays,
+/// which have no header: the array and its 0-based index, [`Error::Element`]).
+pub fn check_magnitudes(ds: &Dataset) -> Result<()> {
+    let Some(y) = &ds.value else { return Ok(()) };
+    let column = |i: usize, what: &str| match &ds.channel {
+        Some(ch) if ds.headers.iter().any(|h| h == "channel") => ch[i].clone(),
+        _ => what.to_string(),
+    };
+    let lim = MAGNITUDE_LIMIT;
+    for (i, &v) in y.iter().enumerate() {
+        let w = ds.weight.as_ref().map_or(1.0, |w| w[i]);
+        let (col, msg) = if v.abs() > lim {
+            (
+                column(i, "L"),
+                format!(
+                    "value {} is beyond ±{lim:e}: the fit squares values (cost ½Σw r²) and would overflow double precision; express L in another unit (the fit is the same in any unit of L)",
+                    short_number(v)
+                ),
+            )
+        } else if !(1.0 / lim..=lim).contains(&w) || v.abs() * w.sqrt() > lim {
+            let col = if ds.sigma_l.is_some() {
+                "sigma_L"
+            } else if ds.headers.is_empty() {
+                "weights"
+            } else {
+                "weight"
+            };
+            (
+                col.to_string(),
+                format!(
+                    "weight {} (with L = {}) is outside what the fit can square (weights in [{:e}, {lim:e}], |L|·√w ≤ {lim:e}); scale every weight or uncertainty by one factor (the fitted parameters do not change)",
+                    short_number(w),
+                    short_number(v),
+                    1.0 / lim
+                ),
+            )
+        } else {
+            continue;
+        };
+        return Err(if ds.headers.is_empty() {
+            Error::element(&col, i, msg)
+        } else {
+            Error::input(&ds.path, ds.lines[i], &col, msg)
+        });
+    }
+    Ok(())
+}
+
+/// The fit's data from a dataset (checked with [`check_magnitudes`]): geometry (λ from
+/// `wavelength`, else the dataset's own, else 1 unless `needs_wavelength`), values, the
+/// weights transformed for the residual kind ([`super::weights`]), and the channel index of
+/// every sample with the channel names (as printed: control and bidi characters escaped)
+/// in first-appearance order.
+pub fn fit_input(
+    ds: &Dataset,
+    quantity: Quantity,
+    wavelength: Option<f64>,
+    needs_wavelength: bool,
+    residual: ResidualKind,
+    floor: Option<f64>,
+) -> Result<FitInput> {
+    check_magnitudes(ds)?;
+    let n = ds.samples.len();
+    let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
+        (_, Some(l)) => vec![l],
+        (Some(w), None) => w.clone(),
+        (None, None) if needs_wavelength => {
+            return Err(Error::Usage(format!(
+                "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
+                io::shown(&ds.path)
+            )))
+        }
+        (None, None) => vec![1.0],
+    };
+    let geo = Geometry::new(&ds.samples, &lambda, quantity)?;
+    let y = ds.value.clone().ok_or_else(|| Error::File {
+        path: ds.path.clone(),
+        message: "no measured value column (L)".into(),
+    })?;
+    let floor = floor_for(floor, &y);
+    let (weight, _) = residual_weights(
+        ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
+        ds.sigma_l.as_deref(),
+        &y,
+        residual,
+        floor,
+    );
+    let (channel, channel_names) = match &ds.channel {
+        Some(labels) => channel_index(labels),
+        None => (vec![0; n], vec![String::new()]),
+    };
+    Ok(FitInput {
+        geo,
+        y,
+        weight,
+        channel,
+        channel_names,
+    })
+}
+
+/// The channel index of every label and the distinct names in first-appearance order (as
+/// printed: control and bidi characters escaped).
+fn channel_index(labels: &[String]) -> (Vec<usize>, Vec<String>) {
+    let mut names: Vec<String> = Vec::new();
+    let idx = labels
+        .iter()
+        .map(|l| match names.iter().position(|x| x == l) {
+            Some(i) => i,
+            None => {
+                names.push(l.clone());
+                names.len() - 1
+            }
+        })
+        .collect();
+    let names = names
+        .iter()
+        .map(|n| io::shown_text(n).into_owned())
+        .collect();
+    (idx, names)
+}
+
+/// The residual floor: `floor`, or 1e-6 × max |y| (as the fit computes it).
+pub fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
+    driver::residual_floor(
+        &FitConfig {
+            floor,
+            ..FitConfig::default()
+        },
+        y,
+    )
+}
+
+/// Fit one dataset with every candidate model and keep the lowest BIC among the usable
+/// fits. Every candidate shares one stop request (`spec.config.lm.stop`, or one made from
+/// `spec.config.lm`): once it fires, the running fit ends at its best point, and candidates
+/// not yet started are skipped (named in a note). Errors: the dataset's own (no wavelength
+/// for a KBS model, values that would overflow) and the fit's.
+pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<Outcome> {
+    let candidates = spec.candidates()?;
+    let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
+    let input = spec.input(&ds, needs_wavelength)?;
+    if input.channel_names.len() <= 1 {
+        // The input now holds the angles (as geometry) and values; what is left of the
+        // dataset serves the residuals file (rows) and the report's setting (weights,
+        // wavelength). A joint fit keeps the samples for its one-channel comparison fit.
+        ds.samples = Vec::new();
+        ds.lines = Vec::new();
+        ds.value = None;
+    }
+    let stop = match &spec.config.lm.stop {
+        Some(stop) => stop.clone(),
+        None => spec.config.lm.new_stop(),
+    };
+    let uncertainties = ds.sigma_l.is_some();
+    let mut results: Vec<FitResult> = Vec::new();
+    let mut not_fitted = Vec::new();
+    for m in &candidates {
+        if stop.is_requested() && !results.is_empty() {
+            not_fitted.push(m.as_str());
+            continue;
+        }
+        let mut config = spec.config_for(m, uncertainties);
+        config.lm.stop = Some(stop.clone());
+        results.push(driver::fit(&input, &config)?);
+    }
+    let (best, skipped) = lowest_bic_usable(&results);
+    let mut result = results[best].clone();
+    result.notes.extend(skipped);
+    if !not_fitted.is_empty() {
+        result.notes.push(format!(
+            "the fit was stopped before the candidates {} were fitted",
+            not_fitted.join(", ")
+        ));
+    }
+    finish_result(spec, &ds, &input, &stop, &mut result)?;
+    let wanted = spec.intervals && result.n_free <= MAX_PROFILED;
+    let mut intervals = if wanted {
+        profile_intervals(spec, &input, &result, uncertainties, &stop)?
+    } else {
+        Vec::new()
+    };
+    if wanted && stop.is_requested() {
+        intervals.clear();
+        result.notes.push(
+            "profile-likelihood intervals not computed: the fit was stopped (only the \
+             standard errors are shown)"
+                .into(),
+        );
+    }
+    Ok(Outcome {
+        label,
+        dataset: ds,
+        input,
+        candidates: results,
+        result,
+        intervals,
+    })
+}
+
+/// The chosen fit as reported: absolute-sigma standard errors if asked, the reflectance
+/// factors of a BRDF, and for a joint fit (not stopped) the narrowing note.
+fn finish_result(
+    spec: &DatasetFit,
+    ds: &Dataset,
+    input: &FitInput,
+    stop: &Stop,
+    result: &mut FitResult,
+) -> Result<()> {
+    if spec.absolute_sigma {
+        report::use_absolute_sigma(result);
+    }
+    report::add_reflectance_factors(
+        result,
+        &report::Units {
+            quantity: spec.quantity,
+            ..Default::default()
+        },
+    );
+    if input.channel_names.len() > 1 && !stop.is_requested() {
+        if let Some(note) = joint_narrowing(spec, ds, result, stop)? {
+            result.notes.push(note);
+        }
+    }
+    Ok(())
+}
+
+/// The candidate with the lowest BIC among the converged fits (among all when none
+/// converged), and a note for each candidate with a lower BIC that was skipped because its
+/// fit is not a usable optimum (degenerate, or stopped without converging). `results` is
+/// not empty.
+fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
+    let any_converged = results.iter().any(|r| r.converged());
+    let best = results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.converged() || !any_converged)
+        .min_by(|a, b| a.1.bic.total_cmp(&b.1.bic))
+        .map_or(0, |(i, _)| i);
+    let skipped = results
+        .iter()
+        .filter(|r| !r.converged() && any_converged && r.bic < results[best].bic)
+        .map(|r| {
+            format!(
+                "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
+                r.model,
+                r.bic,
+                r.notes
+                    .last()
+                    .map(String::as_str)
+                    .unwrap_or(r.termination.describe())
+            )
+        })
+        .collect();
+    (best, skipped)
+}
+
+/// For a joint fit: how much narrower σ, T and T/σ are than from the middle channel alone,
+/// or that the data determines them neither way.
+fn joint_narrowing(
+    spec: &DatasetFit,
+    ds: &Dataset,
+    joint: &FitResult,
+    stop: &Stop,
+) -> Result<Option<String>> {
+    let Some(labels) = &ds.channel else {
+        return Ok(None);
+    };
+    let names = &joint.layout.channel_names;
+    let mid = &names[names.len() / 2];
+    let idx: Vec<usize> = (0..labels.len())
+        .filter(|&i| io::shown_text(&labels[i]) == mid.as_str())
+        .collect();
+    let mut single = ds.subset(&idx);
+    single.channel = None;
+    let input = spec.input(&single, true)?;
+    let mut config = spec.config_for(&joint.model, ds.sigma_l.is_some());
+    config.lm.progress = false;
+    config.lm.stop = Some(stop.clone());
+    let alone = driver::fit(&input, &config)?;
+    if stop.is_requested() {
+        // The single-channel fit was cut short: its errors say nothing.
+        return Ok(None);
+    }
+    let mut parts = Vec::new();
+    for name in ["sigma", "T", "T/sigma"] {
+        let se = |r: &FitResult| -> Option<Option<f64>> {
+            let p = r.params.iter().find(|p| p.name == name);
+            let d = r.derived.iter().find(|d| d.name == name);
+            match (p, d) {
+                (Some(p), _) => Some(p.stderr),
+                (None, Some(d)) => Some(d.stderr),
+                _ => None,
+            }
+        };
+        match (se(joint), se(&alone)) {
+            (Some(Some(j)), Some(Some(a))) => parts.push(format!(
+                "{name}: ±{j:.3e} joint vs ±{a:.3e} from {mid} alone ({:.1}× narrower)",
+                a / j
+            )),
+            (Some(Some(j)), Some(None)) => parts.push(format!(
+                "{name}: ±{j:.3e} joint, not determined from {mid} alone"
+            )),
+            (Some(None), Some(Some(a))) => parts.push(format!(
+                "{name}: not determined jointly, ±{a:.3e} from {mid} alone"
+            )),
+            (Some(None), Some(None)) => parts.push(format!(
+                "{name}: not determined by the data, jointly or from {mid} alone"
+            )),
+            _ => {}
+        }
+    }
+    Ok((!parts.is_empty()).then(|| {
+        format!(
+            "joint fit over {} channels: {}",
+            names.len(),
+            parts.join("; ")
+        )
+    }))
+}
