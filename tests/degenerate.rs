@@ -66,8 +66,7 @@ fn kbs_lobe_flattened_to_the_diffuse_term_is_degenerate() {
 fn auto_never_picks_a_degenerate_fit() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("narrow.csv");
-    let synth = Command::cargo_bin("goniofit")
-        .unwrap()
+    let synth = common::goniofit()
         .args("synth --model lambert-specular --params scale=0.1,B=0.05,w=0.002 --layout inplane --noise 0.01 --seed 2 --out".split(' '))
         .arg(&csv)
         .output()
