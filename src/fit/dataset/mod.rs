@@ -100,6 +100,8 @@ pub struct Outcome {
     pub result: FitResult,
     /// Profile-likelihood intervals of `result` (empty when not computed).
     pub intervals: Vec<super::profile::Interval>,
+    /// Wall-clock seconds the intervals took (0 when not computed).
+    pub interval_seconds: f64,
 }
 
 /// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
@@ -284,20 +286,30 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         ));
     }
     finish_result(spec, &ds, &input, &stop, &mut result)?;
+    let t_intervals = std::time::Instant::now();
     let wanted = spec.intervals && result.n_free <= MAX_PROFILED;
-    let mut intervals = if wanted {
+    if wanted && !result.converged() {
+        // A profile around a point that is not a usable optimum (degenerate, stopped)
+        // would bound nothing the data says.
+        result
+            .notes
+            .push("no profile intervals: the fit did not converge to a usable optimum".into());
+    }
+    let mut intervals = if wanted && result.converged() {
         profile_intervals(spec, &input, &result, uncertainties, &stop)?
     } else {
         Vec::new()
     };
-    if wanted && stop.is_requested() {
+    if wanted && result.converged() && stop.is_requested() {
+        // A profile walk cut short ends at a wrong likelihood: none is shown.
         intervals.clear();
         result.notes.push(
-            "profile-likelihood intervals not computed: the fit was stopped (only the \
-             standard errors are shown)"
+            "profile-likelihood intervals not computed: the fit was stopped while they were \
+             walked (only the standard errors are shown)"
                 .into(),
         );
     }
+    let interval_seconds = t_intervals.elapsed().as_secs_f64();
     Ok(Outcome {
         label,
         dataset: ds,
@@ -305,6 +317,7 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         candidates: results,
         result,
         intervals,
+        interval_seconds,
     })
 }
 
