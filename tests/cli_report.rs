@@ -453,6 +453,20 @@ fn undetermined_parameters_are_reported_by_their_bounds() {
     assert!(lo.unwrap() < q && q < hi.unwrap());
 }
 
+/// χ² of the garnet fit `args` (without the file) holding `fix` (name=value), the rest
+/// fitted from scratch (the fit's own start search), unreduced.
+fn chi2_holding(args: &[&str], fix: &str) -> f64 {
+    let extra = [
+        "--no-reduce",
+        "--no-intervals",
+        "--fix",
+        fix,
+        "--json",
+        GARNET,
+    ];
+    f(&fit_json(&[args, &extra[..]].concat())["chi2"])
+}
+
 #[test]
 fn profile_ends_are_where_a_fit_holding_the_parameter_reaches_the_threshold() {
     // An independent check of the profile search: hold σ (or T) at a reported end and fit
@@ -473,22 +487,8 @@ fn profile_ends_are_where_a_fit_holding_the_parameter_reaches_the_threshold() {
         let (lo, hi) = interval(&v["params"][name][key]);
         let end = [lo, hi][side].unwrap();
         let fix = format!("{name}={end:.17e}");
-        let held = fit_json(
-            &[
-                &GARNET_550[..],
-                &[
-                    "--no-reduce",
-                    "--no-intervals",
-                    "--fix",
-                    &fix,
-                    "--json",
-                    GARNET,
-                ],
-            ]
-            .concat(),
-        );
         let th = goniofit::fit::profile::threshold(prob, chi2_min, dof, false);
-        let delta = f(&held["chi2"]) - chi2_min;
+        let delta = chi2_holding(&GARNET_550, &fix) - chi2_min;
         assert!(
             ((delta / th).sqrt() - 1.0).abs() < 2.0 * goniofit::fit::profile::CROSS_TOL,
             "{name} {key} end {end}: Δχ² {delta} against the threshold {th}"
@@ -520,21 +520,7 @@ fn a_profile_flat_out_to_the_domain_edge_is_open() {
     }
     for factor in [10.0, 100.0] {
         let fix = format!("sigma={}", factor * f(&v["params"]["sigma"]["value"]));
-        let held = fit_json(
-            &[
-                &args[..],
-                &[
-                    "--no-reduce",
-                    "--no-intervals",
-                    "--fix",
-                    &fix,
-                    "--json",
-                    GARNET,
-                ],
-            ]
-            .concat(),
-        );
-        let delta = f(&held["chi2"]) - chi2_min;
+        let delta = chi2_holding(&args, &fix) - chi2_min;
         assert!(delta < th, "σ × {factor}: Δχ² {delta} against {th}");
     }
 }
