@@ -39,6 +39,11 @@ pub(super) fn reduce<'m>(
         verdict: id.verdict,
         notes: Vec::new(),
     };
+    if super::validate::rough_by_construction(model, config) {
+        // σ is held from the start: nothing to reduce.
+        solved.notes.push(ROUGH_MODEL_NOTE.to_string());
+        return Ok(solved);
+    }
     let (Some(g_median), true) = (id.g_median, id.verdict != Verdict::Full) else {
         return Ok(solved);
     };
@@ -66,6 +71,10 @@ pub(super) fn reduce<'m>(
     });
     Ok(solved)
 }
+
+/// The note of a `kbs-rough` fit (σ held by construction, see
+/// [`super::validate::rough_by_construction`]).
+const ROUGH_MODEL_NOTE: &str = "kbs-rough (the paper's rough approximation, eq. 43) depends on σ and T only through T/σ: the data determines the slope T/σ (rms slope 2σ/T) and the lobe amplitude s·(T/σ)², but not σ and T separately; σ was held and σ, T are reported as undetermined (fit kbs for σ and T, which the full model can separate only where the lobe is not fully rough)";
 
 /// The report's note on a verdict other than [`Verdict::Full`].
 fn regime_note(verdict: Verdict, g_median: f64) -> String {
