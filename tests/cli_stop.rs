@@ -30,25 +30,30 @@ fn joint_fit_args() -> Vec<&'static str> {
     ]
 }
 
-#[test]
-fn timeout_ends_a_joint_fit_with_its_report_and_exit_3() {
-    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+/// Run `goniofit ARGS --json`, expect the report of a fit its time limit stopped (exit 3,
+/// termination "timeout", not converged): (wall seconds, report).
+fn timed_out_fit(args: &[std::ffi::OsString]) -> (f64, serde_json::Value) {
     let t0 = Instant::now();
     let out = goniofit()
-        .args(joint_fit_args())
-        .args(["--timeout", "1", "--json"])
+        .args(args)
+        .arg("--json")
         .output()
         .expect("run goniofit");
     let wall = t0.elapsed().as_secs_f64();
-    assert_eq!(
-        out.status.code(),
-        Some(3),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON report");
     assert_eq!(v["termination"], "timeout");
     assert_eq!(v["converged"], false);
+    (wall, v)
+}
+
+#[test]
+fn timeout_ends_a_joint_fit_with_its_report_and_exit_3() {
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let mut args: Vec<std::ffi::OsString> = joint_fit_args().iter().map(|a| a.into()).collect();
+    args.extend(["--timeout".into(), "1".into()]);
+    let (wall, v) = timed_out_fit(&args);
     let cost = v["cost"].as_f64().expect("a finite cost");
     assert!(cost.is_finite() && cost > 0.0);
     // The uninterrupted fit takes 4–5 s unloaded and 20 s on a loaded machine (before
@@ -123,31 +128,18 @@ fn timeout_bounds_a_slow_series_fit_with_its_intervals() {
         "{}",
         String::from_utf8_lossy(&made.stderr)
     );
-    let t0 = Instant::now();
-    let out = goniofit()
-        .args([
-            "fit",
-            "--model",
-            "kbs",
-            "--mode",
-            "series",
-            "--timeout",
-            "2",
-            "--json",
-        ])
-        .arg(&csv)
-        .output()
-        .expect("run goniofit");
-    let wall = t0.elapsed().as_secs_f64();
-    assert_eq!(
-        out.status.code(),
-        Some(3),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON report");
-    assert_eq!(v["termination"], "timeout");
-    assert_eq!(v["converged"], false);
+    let args = [
+        "fit",
+        "--model",
+        "kbs",
+        "--mode",
+        "series",
+        "--timeout",
+        "2",
+    ];
+    let mut args: Vec<std::ffi::OsString> = args.iter().map(|a| a.into()).collect();
+    args.push(csv.into());
+    let (wall, v) = timed_out_fit(&args);
     let notes = v["notes"].to_string();
     assert!(notes.contains("no profile intervals"), "{notes}");
     // 2 s of limit plus the first evaluation and the final Jacobian (never cut): ~3 s on an
