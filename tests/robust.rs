@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{goniofit, success_stdout};
+use common::{fit_json, goniofit, success_stdout};
 use rand::{Rng, SeedableRng};
 
 const SIGMA: f64 = 0.25;
@@ -80,7 +80,8 @@ fn fit_args(path: &std::path::Path, loss: &str, json: bool) -> Vec<String> {
 }
 
 fn fit(path: &std::path::Path, loss: &str) -> serde_json::Value {
-    serde_json::from_str(&success_stdout(&fit_args(path, loss, true))).unwrap()
+    let args = fit_args(path, loss, true);
+    fit_json(&args.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
 fn rel_err(j: &serde_json::Value, name: &str, truth: f64) -> f64 {

@@ -50,7 +50,10 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     let (problem, start) = (problem?, start?);
     check_series_cost(config, input, &problem.layout, &start.p0)?;
     let run = solve_checked(&problem, input, &start, config);
-    let identified = identify::identify(input, &problem, &run, config.reduce);
+    let mut identified = identify::identify(input, &problem, &run, config.reduce);
+    if validate::rough_by_construction(model, config) {
+        identified.verdict = Verdict::Rough;
+    }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();

@@ -247,6 +247,9 @@ impl FitInput {
         let Some(sc) = channel_roughness(model, layout, p) else {
             return false;
         };
+        if !width_resolved(layout, width_floor(model, &self.geo), p) {
+            return false;
+        }
         sc.is_empty()
             || (0..self.geo.len()).all(|i| sample_in_domain(&self.geo, i, sc[self.channel[i]]))
     }
@@ -285,6 +288,9 @@ pub struct FitProblem<'a> {
     n: usize,
     /// The robust loss on the weighted residuals (linear: plain least squares).
     loss: Loss,
+    /// The Gaussian lobe's width: (model parameter index of `w`, its lower bound from the
+    /// angular sampling, [`super::validate::width_floor`]); None without a lobe.
+    w_floor: Option<(usize, f64)>,
     /// The Jacobian (and with a robust loss the step residuals) computed alongside the last
     /// residual evaluation: the models produce derivatives at little extra cost, and LM asks
     /// for the Jacobian at the point it just accepted, so one model pass serves both.
@@ -351,6 +357,7 @@ impl<'a> FitProblem<'a> {
             floor,
             n,
             loss: Loss::default(),
+            w_floor: width_floor(model, geo),
             cache: std::sync::Mutex::new(None),
         })
     }
@@ -554,6 +561,18 @@ fn channel_roughness(
         .collect()
 }
 
+/// The lower bound of a Gaussian lobe's width over these samples: (model parameter index
+/// of `w`, bound), None for models without a lobe or samples that resolve no width.
+fn width_floor(model: &dyn Model, geo: &Geometry) -> Option<(usize, f64)> {
+    let jw = model.params().iter().position(|s| s.name == "w")?;
+    Some((jw, super::validate::width_floor(geo)?))
+}
+
+/// Whether every channel's lobe width w is at least its floor (true without one).
+fn width_resolved(layout: &ParamLayout, floor: Option<(usize, f64)>, p: &[f64]) -> bool {
+    floor.is_none_or(|(jw, w_min)| layout.index.iter().all(|ix| p[ix[jw]] >= w_min))
+}
+
 /// Whether sample i of `geo` stays within the fit's limits of g and a at σ, T.
 #[inline]
 fn sample_in_domain(geo: &Geometry, i: usize, (sigma, corr): (f64, f64)) -> bool {
@@ -561,14 +580,40 @@ fn sample_in_domain(geo: &Geometry, i: usize, (sigma, corr): (f64, f64)) -> bool
 }
 
 impl FitProblem<'_> {
+    /// How near full parameters `p` come to the edge of the domain of [`Self::in_domain`]:
+    /// the largest of g/[`G_FIT_MAX`] and a/[`A_FIT_MAX`] over the samples (0 for models
+    /// without σ and T, ∞ where σ or T is not a positive normal number).
+    pub fn domain_fraction(&self, p: &[f64]) -> f64 {
+        let Some(sc) = channel_roughness(self.model, &self.layout, p) else {
+            return f64::INFINITY;
+        };
+        if sc.is_empty() {
+            return 0.0;
+        }
+        let mut worst = 0.0f64;
+        for b in &self.blocks {
+            let (sigma, corr) = sc[b.channel];
+            for i in 0..b.geo.len() {
+                worst = worst.max(b.geo.g(i, sigma) / G_FIT_MAX);
+                worst = worst.max(b.geo.a(i, corr) / A_FIT_MAX);
+            }
+        }
+        worst
+    }
+
     /// Whether full parameters `p` keep every sample inside the domain where the models are
     /// evaluated at their stated cost and accuracy: finite values, σ, T > 0 and normal,
-    /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`]. Outside, the solver sees non-finite residuals
-    /// and rejects the step.
+    /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`], and a Gaussian lobe no narrower than half the
+    /// narrowest width the angular sampling resolves
+    /// ([`super::validate::width_floor`]). Outside, the solver sees non-finite residuals and
+    /// rejects the step.
     pub fn in_domain(&self, p: &[f64]) -> bool {
         let Some(sc) = channel_roughness(self.model, &self.layout, p) else {
             return false;
         };
+        if !width_resolved(&self.layout, self.w_floor, p) {
+            return false;
+        }
         sc.is_empty()
             || self
                 .blocks

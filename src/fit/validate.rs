@@ -5,8 +5,10 @@ use super::config::FitConfig;
 use super::lm::Termination;
 use super::problem::{FitInput, FitParam, ParamLayout, Transform, LINEAR};
 use super::reduce::Solved;
+use super::result::Verdict;
 use super::stats;
 use crate::error::{Error, Result};
+use crate::geometry::Geometry;
 use crate::model::{Model, ParamSpec};
 
 /// The parameter layout of the fit with the `--fix` values held, and the values the user
@@ -37,7 +39,35 @@ pub(super) fn prepare(
     }
     let mut given = fixed;
     assign(&layout, &config.init, &mut given)?;
+    if rough_by_construction(model, config) {
+        hold_rough_sigma(&mut layout, &mut given, input);
+    }
     Ok((layout, given))
+}
+
+/// Whether the fit is in the rough approximation's own parameters by construction: the
+/// `kbs-rough` model (eq. 43, ⟨|ρ|²⟩ ≈ πT²F²/(A g) · e^{−a/g}) depends on σ and T only
+/// through T/σ (g ∝ σ², a ∝ T²), so σ and T cannot both be fitted; unless the user fixes
+/// σ, the fit holds it (see [`hold_rough_sigma`]) and reports T/σ, the amplitude s(T/σ)²
+/// and s, with σ and T not determined.
+pub(super) fn rough_by_construction(model: &dyn Model, config: &FitConfig) -> bool {
+    model.name() == "kbs-rough"
+        && !config
+            .fix
+            .iter()
+            .any(|(name, _)| name.eq_ignore_ascii_case("sigma"))
+}
+
+/// Hold σ of a `kbs-rough` fit at its `--init` value, or else at the median wavelength
+/// (any value gives the same model values at the same T/σ; σ = λ keeps g ≈ 40–160, well
+/// inside the fit's domain). T then carries T/σ.
+fn hold_rough_sigma(layout: &mut ParamLayout, given: &mut [Option<f64>], input: &FitInput) {
+    let Some(&ks) = layout.find("sigma").first() else {
+        return;
+    };
+    let held = given[ks].unwrap_or_else(|| stats::median(&input.geo.wavelength));
+    layout.params[ks].fixed = Some(held);
+    given[ks] = Some(held);
 }
 
 /// Whether a free non-negative parameter at `value` with standard error `se` sits at its
@@ -115,6 +145,47 @@ pub const MIN_KT: f64 = 0.1;
 /// peak) for its width w to count as resolved by the angular sampling.
 pub const MIN_FLANK_SAMPLES: usize = 3;
 
+/// The offset √q = √((θr − θi)² + φr²/4) (rad) of sample i from the mirror direction, in
+/// the metric of the Gaussian lobe's exponent (eq. 34: the lobe is exp(−½ q/w²)).
+fn lobe_offset(geo: &Geometry, i: usize) -> f64 {
+    ((geo.theta_r[i] - geo.theta_i[i]).powi(2) + 0.25 * geo.phi_r[i].powi(2)).sqrt()
+}
+
+/// How many samples lie on the flank of a Gaussian lobe of width `w` (rad): between e^{-8}
+/// and e^{-1/8} of its peak, i.e. at an offset √q between w/2 and 4w.
+pub(super) fn flank_samples(geo: &Geometry, w: f64) -> usize {
+    (0..geo.len())
+        .filter(|&i| (0.5 * w..=4.0 * w).contains(&lobe_offset(geo, i)))
+        .count()
+}
+
+/// The narrowest Gaussian lobe width (rad) the angular sampling resolves: the smallest w
+/// with at least [`MIN_FLANK_SAMPLES`] samples on its flank ([`flank_samples`]). Exact: for
+/// the offsets d sorted ascending, three of them fit in [w/2, 4w] first for some three
+/// consecutive ones, at w = d_{j+2}/4 when d_{j+2} ≤ 8 d_j. None when no w resolves (fewer
+/// than three samples off the mirror direction). O(n log n).
+pub fn resolved_width(geo: &Geometry) -> Option<f64> {
+    let mut d: Vec<f64> = (0..geo.len())
+        .map(|i| lobe_offset(geo, i))
+        .filter(|&d| d > 0.0 && d.is_finite())
+        .collect();
+    d.sort_by(f64::total_cmp);
+    let k = MIN_FLANK_SAMPLES - 1;
+    d.windows(MIN_FLANK_SAMPLES)
+        .filter(|t| t[k] <= 8.0 * t[0])
+        .map(|t| 0.25 * t[k])
+        .reduce(f64::min)
+}
+
+/// The lower bound on a Gaussian lobe's width w in a fit: half of [`resolved_width`]. A
+/// solver step to a narrower lobe is rejected (as a step outside the models' domain), so a
+/// lobe the sampling does not resolve ends at this bound, where fewer than
+/// [`MIN_FLANK_SAMPLES`] samples lie on its flank and [`degeneracy`] says so, instead of
+/// running w to 1e-100. None (no bound) when no width is resolved at all.
+pub fn width_floor(geo: &Geometry) -> Option<f64> {
+    resolved_width(geo).map(|w| 0.5 * w)
+}
+
 /// Whether a KBS point (layout order) lies at an edge of the physical domain:
 /// T/σ < [`MIN_T_OVER_SIGMA`] or 2πT/λ < [`MIN_KT`] (λ: the median wavelength of `input`).
 /// The start search rejects such refined starts; false for models without σ and T.
@@ -162,17 +233,13 @@ pub(super) fn degeneracy(
     }
     if let Some(kw) = first("w") {
         let w = p[kw];
-        let flank = (0..input.geo.len())
-            .filter(|&i| {
-                let g = &input.geo;
-                let q = (g.theta_r[i] - g.theta_i[i]).powi(2) + 0.25 * g.phi_r[i].powi(2);
-                let z = 0.5 * q / (w * w);
-                (0.125..=8.0).contains(&z)
-            })
-            .count();
+        let flank = flank_samples(&input.geo, w);
         if flank < MIN_FLANK_SAMPLES {
+            let resolved = resolved_width(&input.geo).map_or(String::new(), |r| {
+                format!(" (the sampling resolves lobes of w ≥ {r:.3e} rad)")
+            });
             return Some(format!(
-                "the specular lobe is narrower than the angular sampling: its width w ran to {w:.3e} rad and only {flank} samples lie on its flank, so w is not measured"
+                "the specular lobe is narrower than the angular sampling: its width w ran to {w:.3e} rad and only {flank} samples lie on its flank, so w is not measured{resolved}"
             ));
         }
     }
@@ -215,8 +282,10 @@ fn null_space_names(layout: &ParamLayout, unc: &stats::Uncertainty) -> Vec<Strin
 }
 
 /// Mark a converged (or iteration-limited) fit that is not a usable optimum as
-/// [`Termination::Degenerate`], with the reason as a note. Interrupted and timed-out fits
-/// keep their termination (they say why they stopped already).
+/// [`Termination::Degenerate`], with the reason as a note; a verdict that said every
+/// parameter is determined becomes [`Verdict::Partial`] (the point does not determine
+/// them). Interrupted and timed-out fits keep their termination (they say why they stopped
+/// already).
 pub(super) fn accept(solved: &mut Solved, input: &FitInput) {
     let t = solved.run.lm.termination;
     if matches!(t, Termination::Interrupted | Termination::Timeout) {
@@ -233,6 +302,9 @@ pub(super) fn accept(solved: &mut Solved, input: &FitInput) {
     if let Some(reason) = reason {
         solved.run.lm.termination = Termination::Degenerate;
         solved.notes.push(reason);
+        if solved.verdict == Verdict::Full {
+            solved.verdict = Verdict::Partial;
+        }
     }
 }
 
@@ -240,4 +312,38 @@ pub(super) fn accept(solved: &mut Solved, input: &FitInput) {
 fn below(v: f64, limit: f64) -> bool {
     v.partial_cmp(&limit) != Some(std::cmp::Ordering::Greater)
         && v.partial_cmp(&limit) != Some(std::cmp::Ordering::Equal)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Quantity, Sample};
+
+    /// In-plane samples at θi = 0.2 rad and θr = θi + each offset (rad).
+    fn in_plane(offsets: &[f64]) -> Geometry {
+        let theta_i = 0.2;
+        let s: Vec<Sample> = offsets
+            .iter()
+            .map(|d| Sample {
+                theta_i,
+                theta_r: theta_i + d,
+                phi_r: 0.0,
+            })
+            .collect();
+        Geometry::new(&s, &[1.0], Quantity::Radiance).unwrap()
+    }
+
+    #[test]
+    fn resolved_width_is_the_narrowest_lobe_with_three_flank_samples() {
+        // Offsets 0, 0.1, 0.2, 0.3, 1.2 rad: the first three off the mirror fit in
+        // [w/2, 4w] from w = 0.3/4 on.
+        let geo = in_plane(&[0.0, 0.1, 0.2, 0.3, 1.2]);
+        let w = resolved_width(&geo).unwrap();
+        assert!((w - 0.075).abs() < 1e-15, "{w}");
+        assert_eq!(flank_samples(&geo, w), 3);
+        assert_eq!(flank_samples(&geo, w * (1.0 - 1e-12)), 2);
+        assert_eq!(width_floor(&geo), Some(0.5 * w));
+        // Offsets 0.01, 0.1, 1 rad: no three within a factor 8 of each other, so none.
+        assert_eq!(resolved_width(&in_plane(&[0.01, 0.1, 1.0])), None);
+    }
 }
