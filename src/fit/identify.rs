@@ -51,7 +51,7 @@ pub(super) fn identify(
         let sig = problem.layout.find("sigma")[0];
         let g = median_g(input, run.values[sig]);
         g_median = Some(g);
-        if let Some(v) = kbs_verdict(&problem.layout, &unc, &run.values, run.lm.x.as_slice(), g) {
+        if let Some(v) = kbs_verdict(&problem.layout, &unc, &run.values, g) {
             verdict = v;
         }
     }
@@ -102,7 +102,6 @@ fn kbs_verdict(
     layout: &ParamLayout,
     unc: &stats::Uncertainty,
     p: &[f64],
-    x: &[f64],
     g_median: f64,
 ) -> Option<Verdict> {
     let free = layout.free();
@@ -122,7 +121,7 @@ fn kbs_verdict(
         return None;
     }
     let idx: Vec<usize> = [Some(i_s), Some(i_t), i_a].into_iter().flatten().collect();
-    let Some(dir) = weakest_direction(&cov, unc, &x_to_log(layout, p, x), &idx, rank_deficient)
+    let Some(dir) = weakest_direction(&cov, unc, &log_factors(layout, p), &idx, rank_deficient)
     else {
         return Some(Verdict::Partial);
     };
@@ -155,23 +154,10 @@ fn log_factors(layout: &ParamLayout, p: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// d ln p / dx of each free parameter at the solver's own point `x` (free order), with its
-/// sign: a non-negative amplitude's x = ±√(p(p + 2)) can be negative, and then its
-/// Jacobian column (and a null direction's component) is that of −x.
-fn x_to_log(layout: &ParamLayout, p: &[f64], x: &[f64]) -> Vec<f64> {
-    layout
-        .free()
-        .iter()
-        .zip(x)
-        .map(|(&k, &xi)| layout.params[k].transform.dp_dx(xi) / p[k])
-        .collect()
-}
-
 /// The least determined direction in the (ln σ, ln T, ln s) block `idx` of the log-space
 /// covariance, normalised: the null direction when the Jacobian is rank deficient (a
-/// direction in the solver's x, taken to log space with `log_factor` = d ln p/dx at the
-/// solver's x: a scale at x < 0 would otherwise turn the smooth ridge's (1, 0, −2) into
-/// (1, 0, 2), and its magnitude hide it), else the
+/// direction in the solver's canonical x, taken to log space with `log_factor` =
+/// d ln p/dx; see `solve::canonicalise` for the sign of an amplitude's x), else the
 /// largest-variance eigenvector of that block; None when that has no finite direction.
 /// `idx` holds the positions among the free parameters of σ, T and (when free) the scale.
 fn weakest_direction(

@@ -31,8 +31,25 @@ pub(super) fn run_lm_in(
         (None, None) => lm::minimize(problem, x0, config),
         (stop, range) => lm::minimize(&Guarded::new(problem, stop.as_ref(), range), x0, config),
     };
+    let mut lm = lm;
+    canonicalise(problem, &mut lm);
     let values = problem.layout.from_x(&lm.x);
     Run { lm, values }
+}
+
+/// Take the solver's end point to the canonical x of its parameters, `to_x(from_x(x))`:
+/// a non-negative amplitude's x = ±√(p(p + 2)) may end negative, and there its Jacobian
+/// column is that of −x. Flipping both keeps every later use (covariance, null
+/// directions, their log-space form through dp/dx at `to_x(p)`) consistent in sign.
+fn canonicalise(problem: &FitProblem, lm: &mut lm::LmReport) {
+    let free = problem.layout.free();
+    for (j, &k) in free.iter().enumerate() {
+        let t = problem.layout.params[k].transform;
+        if lm.x[j] < 0.0 && t.to_x(t.from_x(lm.x[j])) > 0.0 {
+            lm.x[j] = -lm.x[j];
+            lm.jacobian.column_mut(j).neg_mut();
+        }
+    }
 }
 
 /// Median g up to which the first solve follows the rough ridge: the fit's own limit
