@@ -14,6 +14,7 @@ pub mod loss;
 pub mod problem;
 pub mod profile;
 pub mod stats;
+pub mod validity;
 pub mod weights;
 
 mod assemble;

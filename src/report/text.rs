@@ -397,8 +397,24 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     for note in &r.notes {
         let _ = writeln!(s, "    note: {note}");
     }
+    validity_lines(&mut s, r);
     correlation_lines(&mut s, r);
     s
+}
+
+/// The `[[Validity]]` lines of a KBS fit: each of the paper's assumptions at the fitted
+/// surface, satisfied, violated or not determined (warnings, not failures).
+fn validity_lines(s: &mut String, r: &FitResult) {
+    let Some(v) = &r.validity else {
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "[[Validity]] (the paper's assumptions at the fitted surface; a warning, not a failure)"
+    );
+    for c in &v.checks {
+        let _ = writeln!(s, "    {:<15} = {}", c.name, c.text);
+    }
 }
 
 #[cfg(test)]
