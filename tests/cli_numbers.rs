@@ -3,17 +3,10 @@
 //! warn on standard error outside the documented accuracy range, and say "not a number"
 //! for `nan`.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{data, fit_json, goniofit};
 use predicates::prelude::*;
-use std::path::{Path, PathBuf};
-
-fn data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(p)
-}
-
-fn goniofit() -> Command {
-    Command::cargo_bin("goniofit").unwrap()
-}
 
 /// `eval --model M --params P [extra] angles_inplane.csv`.
 fn eval(model: &str, params: &str, extra: &[&str]) -> assert_cmd::assert::Assert {
@@ -168,4 +161,64 @@ fn synth_refuses_noise_that_overflows() {
         .code(2)
         .stdout("")
         .stderr(predicate::str::contains("model kbs is not a finite number"));
+}
+
+/// data/synthetic/kbs_hemisphere.csv with L (and sigma_L) multiplied by `c`, written to a
+/// scratch file; `with_sigma` keeps the sigma_L column.
+fn hemisphere_times(c: f64, with_sigma: bool) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(data("synthetic/kbs_hemisphere.csv")).unwrap();
+    let mut out = String::new();
+    for (k, line) in text.lines().enumerate() {
+        let f: Vec<&str> = line.split(',').collect();
+        let keep = if with_sigma { 5 } else { 4 };
+        if k == 0 {
+            out += &f[..keep].join(",");
+        } else {
+            let v: Vec<f64> = f.iter().map(|x| x.parse().unwrap()).collect();
+            let mut row: Vec<String> = v[..3].iter().map(|x| x.to_string()).collect();
+            row.extend(v[3..keep].iter().map(|x| format!("{:e}", x * c)));
+            out += &row.join(",");
+        }
+        out.push('\n');
+    }
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("units_of_l");
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(format!("h_{c:e}_{with_sigma}.csv"));
+    std::fs::write(&p, out).unwrap();
+    p
+}
+
+#[test]
+fn the_verdict_does_not_depend_on_the_unit_of_l() {
+    // The same scan in units 1e10 larger or smaller: before the rank decision used
+    // unit-norm Jacobian columns, ×1e10 reported "scale not determined" and ended
+    // degenerate while ×1, ×1e6 and ×1e-10 reported every parameter determined.
+    for with_sigma in [true, false] {
+        let fit = |c: f64| {
+            let p = hemisphere_times(c, with_sigma);
+            let p = p.to_str().unwrap().to_string();
+            fit_json(&["fit", "--wavelength", "1", "--no-intervals", "--json", &p])
+        };
+        let one = fit(1.0);
+        assert_eq!(one["converged"], true);
+        for c in [1e-10, 1e6, 1e10] {
+            let v = fit(c);
+            assert_eq!(
+                v["verdict"], one["verdict"],
+                "×{c:e} (sigma_L: {with_sigma})"
+            );
+            assert_eq!(v["converged"], true, "×{c:e}");
+            for name in ["sigma", "T", "scale"] {
+                let unit = if name == "scale" { c } else { 1.0 };
+                let (a, b) = (&one["params"][name], &v["params"][name]);
+                for key in ["value", "stderr"] {
+                    let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap() / unit);
+                    assert!(
+                        (x - y).abs() <= 1e-6 * x.abs(),
+                        "{name}.{key}: {x} vs {y} at ×{c:e} (sigma_L: {with_sigma})"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -453,6 +453,78 @@ fn undetermined_parameters_are_reported_by_their_bounds() {
     assert!(lo.unwrap() < q && q < hi.unwrap());
 }
 
+/// χ² of the garnet fit `args` (without the file) holding `fix` (name=value), the rest
+/// fitted from scratch (the fit's own start search), unreduced.
+fn chi2_holding(args: &[&str], fix: &str) -> f64 {
+    let extra = [
+        "--no-reduce",
+        "--no-intervals",
+        "--fix",
+        fix,
+        "--json",
+        GARNET,
+    ];
+    f(&fit_json(&[args, &extra[..]].concat())["chi2"])
+}
+
+#[test]
+fn profile_ends_are_where_a_fit_holding_the_parameter_reaches_the_threshold() {
+    // An independent check of the profile search: hold σ (or T) at a reported end and fit
+    // the rest from scratch (the fit's own grid search for starting values, not the
+    // profile's warm starts). Δχ² there must equal the threshold s²·t²_{(1+P)/2, n−p} to
+    // the search's accuracy, CROSS_TOL in √Δχ²; a lower refit would mean the profile
+    // missed the minimum, a higher one that the end is off.
+    let v = fit_json(&[&GARNET_550[..], &["--json", GARNET]].concat());
+    let chi2_min = f(&v["chi2"]);
+    let p = v["params"].as_object().unwrap().len();
+    let dof = v["n"].as_u64().unwrap() as usize - p;
+    for (name, key, prob, side) in [
+        ("sigma", "interval95", 0.95, 0),
+        ("sigma", "interval95", 0.95, 1),
+        ("sigma", "interval68", 0.682_689_492_137_086, 0),
+        ("T", "interval95", 0.95, 1),
+    ] {
+        let (lo, hi) = interval(&v["params"][name][key]);
+        let end = [lo, hi][side].unwrap();
+        let fix = format!("{name}={end:.17e}");
+        let th = goniofit::fit::profile::threshold(prob, chi2_min, dof, false);
+        let delta = chi2_holding(&GARNET_550, &fix) - chi2_min;
+        assert!(
+            ((delta / th).sqrt() - 1.0).abs() < 2.0 * goniofit::fit::profile::CROSS_TOL,
+            "{name} {key} end {end}: Δχ² {delta} against the threshold {th}"
+        );
+    }
+}
+
+#[test]
+fn a_profile_flat_out_to_the_domain_edge_is_open() {
+    // Garnet at 400 nm: Δχ² of σ rises towards large σ but levels off below the 95 %
+    // threshold (fits holding σ at 10× and 100× the estimate, from scratch, stay below
+    // it), so the data bounds σ from below only; T follows σ along the rough ridge.
+    let args = [
+        "fit",
+        "--model",
+        "kbs+lambert",
+        "--channel",
+        "400nm",
+        "--residual",
+        "log",
+    ];
+    let v = fit_json(&[&args[..], &["--json", GARNET]].concat());
+    let chi2_min = f(&v["chi2"]);
+    let dof = v["n"].as_u64().unwrap() as usize - 4;
+    let th = goniofit::fit::profile::threshold(0.95, chi2_min, dof, false);
+    for name in ["sigma", "T"] {
+        let (lo, hi) = interval(&v["params"][name]["interval95"]);
+        assert!(lo.unwrap() < f(&v["params"][name]["value"]) && hi.is_none());
+    }
+    for factor in [10.0, 100.0] {
+        let fix = format!("sigma={}", factor * f(&v["params"]["sigma"]["value"]));
+        let delta = chi2_holding(&args, &fix) - chi2_min;
+        assert!(delta < th, "σ × {factor}: Δχ² {delta} against {th}");
+    }
+}
+
 #[test]
 fn absolute_sigma_drops_the_residual_scale() {
     let rel = fit_json(&["fit", "--wavelength", "1", "--json", HEMI]);

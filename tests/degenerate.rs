@@ -2,20 +2,9 @@
 //! physical domain end `degenerate` (exit 3) with a note naming the parameter, and
 //! `--model auto` does not pick them.
 
-use assert_cmd::Command;
+mod common;
 
-/// Run goniofit with `args` and `--json`: (exit code, parsed report).
-fn run_json(args: &[&str]) -> (Option<i32>, serde_json::Value) {
-    let out = Command::cargo_bin("goniofit")
-        .unwrap()
-        .args(args)
-        .arg("--json")
-        .output()
-        .unwrap();
-    let v = serde_json::from_slice(&out.stdout)
-        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
-    (out.status.code(), v)
-}
+use common::run_json;
 
 fn notes(v: &serde_json::Value) -> Vec<String> {
     v["notes"]
@@ -77,8 +66,7 @@ fn kbs_lobe_flattened_to_the_diffuse_term_is_degenerate() {
 fn auto_never_picks_a_degenerate_fit() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("narrow.csv");
-    let synth = Command::cargo_bin("goniofit")
-        .unwrap()
+    let synth = common::goniofit()
         .args("synth --model lambert-specular --params scale=0.1,B=0.05,w=0.002 --layout inplane --noise 0.01 --seed 2 --out".split(' '))
         .arg(&csv)
         .output()

@@ -476,3 +476,30 @@ fn fit_plots_cope_with_awkward_data() {
         .collect();
     assert_eq!(measured_pts, vec![1, 1]);
 }
+
+#[test]
+fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
+    use goniofit::plot::fit::PolarPlot;
+    let pic = PolarPlot {
+        title: "clipped".into(),
+        theta_i: 45f64.to_radians(),
+        curve: (0..=90).map(|t| (t as f64, 0.5)).collect(),
+        measured: vec![(10.0, 0.5), (60.0, 3.0), (70.0, 12.5), (80.0, f64::NAN)],
+        l_max: 2.0,
+    };
+    assert_eq!(pic.clipped(), (2, 12.5));
+    let svg = goniofit::plot::svg_string(&pic).unwrap();
+    assert!(
+        svg.contains("2 measured beyond the rim (up to 12.5× L_max)"),
+        "legend"
+    );
+    // Nothing beyond the rim: no such legend entry.
+    let inside = PolarPlot {
+        measured: vec![(10.0, 0.5)],
+        ..pic
+    };
+    assert_eq!(inside.clipped().0, 0);
+    assert!(!goniofit::plot::svg_string(&inside)
+        .unwrap()
+        .contains("beyond the rim"));
+}

@@ -5,8 +5,8 @@ run, the tools interleaved run by run.
     python python/benches/fit_frame_vs_cli.py [N=2000] [repeats=7]
 
 The scans are issue 15's texel batch (`benches/texels.py gen`: N in-plane KBS scans of 66
-samples from `goniofit synth`, 1 % noise); the CSV is read into pandas exactly
-(`float_precision="round_trip"`), so both tools fit the same numbers (checked: every
+samples from `goniofit synth`, 1 % noise); the CSV is read into pandas exactly (Python's
+float() of each field), so both tools fit the same numbers (checked: every
 group's cost agrees). Needs the package installed (tests/all.sh's virtual environment has
 everything) and the CLI built (`cargo build --release`; GONIOFIT_BIN overrides the path).
 Prints medians:
@@ -16,6 +16,7 @@ Prints medians:
   overhead per partition (Dask − fit_frame on the same 2 cores) / P.
 """
 
+import csv
 import json
 import os
 import pathlib
@@ -41,7 +42,12 @@ def texel_batch(exe, n, tmp):
     path = tmp / "texels.csv"
     subprocess.run([sys.executable, str(REPO / "benches" / "texels.py"), "gen", "--goniofit",
                     exe, "--texels", str(n), "--out", str(path)], check=True)
-    return path, pd.read_csv(path, float_precision="round_trip")
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    # float() of the text is the value the CLI parses (correctly rounded, as Rust's).
+    df = pd.DataFrame({k: [float(r[k]) for r in rows] for k in ("theta_i", "theta_r", "phi_r", "L")})
+    df["group"] = [r["group"] for r in rows]
+    return path, df
 
 
 def main():

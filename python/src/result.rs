@@ -40,6 +40,7 @@ impl FitResult {
             version: env!("CARGO_PKG_VERSION").to_string(),
             setting,
             intervals: outcome.intervals.clone(),
+            interval_seconds: outcome.interval_seconds,
         };
         FitResult {
             outcome,

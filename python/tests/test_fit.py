@@ -13,7 +13,7 @@ from conftest import DATA
 
 # Fields that describe the run, not the fit: wall times, where the samples came from, and
 # the command line (the CLI's argv; the Python report writes the equivalent CLI options).
-RUN_FIELDS = {"seconds", "init_seconds", "start_seconds", "input", "command"}
+RUN_FIELDS = {"seconds", "init_seconds", "start_seconds", "interval_seconds", "input", "command"}
 # Where the setting's choices came from: a file and flags for the CLI, arrays and keywords
 # for Python (the values themselves, floor, weights, residual, quantity, units, agree).
 PROVENANCE = {".setting.input", ".setting.wavelength.source", ".setting.quantity_source",

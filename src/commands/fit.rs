@@ -429,6 +429,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             version: env!("CARGO_PKG_VERSION").to_string(),
             setting: setting_of(&args, &o.dataset, &o.input, &file),
             intervals: o.intervals.clone(),
+            interval_seconds: o.interval_seconds,
         }
     };
     let infos: Vec<RunInfo> = outcomes.iter().map(info_for).collect();

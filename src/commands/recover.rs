@@ -31,6 +31,10 @@ pub struct RecoverArgs {
     /// Wall-clock limit of each fit's solver, seconds.
     #[arg(long, default_value_t = 60.0)]
     pub timeout: f64,
+    /// Fit only these scene ids (comma-separated, each below --scenes): the scenes are
+    /// drawn as in the whole run, so a scene keeps its truth, layout and noise.
+    #[arg(long, value_delimiter = ',', value_name = "ID,...")]
+    pub only: Option<Vec<usize>>,
     /// Print one JSON object (summary per regime and every scene) instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -53,13 +57,23 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
             goniofit::Error::Usage(format!("--timeout {} must be positive", args.timeout)).into(),
         );
     }
+    if let Some(bad) = args.only.iter().flatten().find(|&&id| id >= args.scenes) {
+        return Err(goniofit::Error::Usage(format!(
+            "--only {bad}: scene ids run from 0 to {} (--scenes {})",
+            args.scenes - 1,
+            args.scenes
+        ))
+        .into());
+    }
     let config = RecoverConfig {
         scenes: args.scenes,
         seed: args.seed,
         noise: args.noise,
         fit_timeout: Some(Duration::from_secs_f64(args.timeout)),
+        only: args.only.clone(),
     };
-    let bar = progress_bar(args.scenes as u64, "fitting scenes");
+    let fitted = args.only.as_ref().map_or(args.scenes, Vec::len);
+    let bar = progress_bar(fitted as u64, "fitting scenes");
     let report = recover::run(&config, &|_r| bar.inc(1));
     bar.finish_and_clear();
     if args.json {

@@ -13,6 +13,7 @@ pub mod lm;
 pub mod loss;
 pub mod problem;
 pub mod profile;
+pub mod quantile;
 pub mod stats;
 pub mod validity;
 pub mod weights;

@@ -580,6 +580,27 @@ fn sample_in_domain(geo: &Geometry, i: usize, (sigma, corr): (f64, f64)) -> bool
 }
 
 impl FitProblem<'_> {
+    /// How near full parameters `p` come to the edge of the domain of [`Self::in_domain`]:
+    /// the largest of g/[`G_FIT_MAX`] and a/[`A_FIT_MAX`] over the samples (0 for models
+    /// without σ and T, ∞ where σ or T is not a positive normal number).
+    pub fn domain_fraction(&self, p: &[f64]) -> f64 {
+        let Some(sc) = channel_roughness(self.model, &self.layout, p) else {
+            return f64::INFINITY;
+        };
+        if sc.is_empty() {
+            return 0.0;
+        }
+        let mut worst = 0.0f64;
+        for b in &self.blocks {
+            let (sigma, corr) = sc[b.channel];
+            for i in 0..b.geo.len() {
+                worst = worst.max(b.geo.g(i, sigma) / G_FIT_MAX);
+                worst = worst.max(b.geo.a(i, corr) / A_FIT_MAX);
+            }
+        }
+        worst
+    }
+
     /// Whether full parameters `p` keep every sample inside the domain where the models are
     /// evaluated at their stated cost and accuracy: finite values, σ, T > 0 and normal,
     /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`], and a Gaussian lobe no narrower than half the

@@ -9,20 +9,33 @@
 //! - z²_{(1+P)/2} when the weights are true inverse variances (`absolute`: scipy's
 //!   `absolute_sigma=True`).
 //!
-//! The search walks from ψ̂ in steps that double, starting at ψ's standard error, until the
-//! profile exceeds the largest threshold, then finds each crossing by safeguarded secant
-//! steps on √Δχ² (to 1e-3 of the step there). Where the profile stays below the threshold
-//! out to the search limit (a factor [`LOG_RANGE`] for positive parameters) that side is
-//! *open*: the data bounds ψ on one side only ("σ > 180 nm at 95 %"). For an amplitude whose
-//! profile stays low down to 0, the bound is the domain edge 0.
+//! The search, per side: the first refit is where the linearisation's quadratic profile
+//! s²(Δt/se)² reaches the 68 % threshold; each next one where √Δχ², taken as linear in t
+//! through the last two points, reaches the next threshold (at most 4× as far per step),
+//! so that where the profile is nearly quadratic the walk points are the crossings
+//! already. A crossing not yet met to [`CROSS_TOL`] is found in its bracket by inverse
+//! quadratic interpolation on √Δχ², bisecting where that stalls. Every refit is
+//! warm-started where the points so far predict the other parameters (linear through the
+//! two nearest points; along the covariance's conditional direction Cg/gᵀCg for the first).
+//! The sides run on two threads when there are two.
 //!
-//! Accuracy: each profile point is a Levenberg–Marquardt fit to the solver's ftol, so the
-//! crossings carry the error of χ² at ftol relative, far below the interval's width.
+//! Where the profile stays below a threshold out to the search limit (a factor
+//! [`LOG_RANGE`] for positive parameters), or to where the refits reach the model's
+//! domain edge (g or a past half the fit's limit, where Δχ² rises because the model can go
+//! no further), that side is *open*: the data bounds ψ on one side only ("σ > 180 nm at
+//! 95 %"). For an amplitude whose profile stays low down to 0, the bound is the domain
+//! edge 0.
+//!
+//! Accuracy: each end meets |√Δχ² − √threshold| ≤ [`CROSS_TOL`]·√threshold, which for a
+//! profile quadratic near the end puts it within 0.1 % of its distance from the estimate;
+//! each refit runs to a relative cost change that keeps the error of Δχ² a tenth of that.
 
 use super::lm::{self, LeastSquaresProblem, LmConfig};
 use super::problem::{FitProblem, Transform};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
+
+pub use super::quantile::{incomplete_beta, normal_quantile, student_t_quantile};
 
 /// The probabilities of the reported intervals: one standard deviation (68.27 %) and 95 %.
 pub const LEVELS: [f64; 2] = [0.682_689_492_137_086, 0.95];
@@ -33,8 +46,13 @@ pub const LOG_RANGE: f64 = 6.907_755_278_982_137;
 /// Maximum number of doubling steps on one side.
 const MAX_STEPS: usize = 24;
 
-/// Secant refinements per crossing.
-const REFINE_STEPS: usize = 8;
+/// Refinements per crossing (secant steps, bisections where they stall).
+const REFINE_STEPS: usize = 12;
+
+/// Accuracy of a crossing: |√Δχ²(t) − √th| ≤ CROSS_TOL·√th. Where the profile is
+/// quadratic near the crossing, this puts the end within CROSS_TOL of its distance from
+/// the estimate.
+pub const CROSS_TOL: f64 = 1e-3;
 
 /// One end of an interval.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -258,8 +276,6 @@ pub struct Profiler<'a, 'p> {
     pub p_best: Vec<f64>,
     /// χ² at `p_best`.
     pub chi2_min: f64,
-    /// Standard errors of the free x at the optimum (NaN where undetermined).
-    pub x_se: Vec<f64>,
     /// Covariance of the free x at the optimum, s²(JᵀJ)⁺.
     pub x_cov: DMatrix<f64>,
     pub absolute: bool,
@@ -274,19 +290,21 @@ impl<'a, 'p> Profiler<'a, 'p> {
         let (r, j) = problem.residuals_and_jacobian(&x);
         let chi2_min = r.norm_squared();
         let unc = super::stats::uncertainty(&j, 0.5 * chi2_min, problem.len(), 1e-9);
-        let x_se = (0..x.len())
-            .map(|i| unc.covariance[(i, i)].max(0.0).sqrt())
-            .collect();
+        let dof = problem.len().saturating_sub(x.len());
+        // Each refit to the relative cost change that keeps the error of Δχ² below a tenth
+        // of what CROSS_TOL allows at the smallest threshold (never looser than 1e-6).
+        let th = threshold(LEVELS[0], chi2_min, dof, absolute);
+        let ftol = (0.1 * CROSS_TOL * th / chi2_min).min(1e-6).max(lm.ftol);
         Profiler {
             problem,
             p_best: p_best.to_vec(),
             chi2_min,
-            x_se,
-            x_cov: unc.covariance.clone(),
+            x_cov: unc.covariance,
             absolute,
             lm: LmConfig {
                 progress: false,
                 max_iters: 200,
+                ftol: if ftol.is_finite() { ftol } else { lm.ftol },
                 ..lm.clone()
             },
         }
@@ -335,46 +353,68 @@ impl<'a, 'p> Profiler<'a, 'p> {
         })
     }
 
-    /// ψ at the best fit, its standard error, and the search limits (lo, hi, whether each
-    /// is the domain edge) in the variable t.
-    fn start(&self, target: &Target) -> Option<(f64, f64, Limit, Limit)> {
+    /// The gradient g of t (the search variable of `target`) with respect to the free x at
+    /// the optimum, and t there: e_i for a parameter, c_j d ln p_j/dx_j for a product.
+    fn gradient(&self, target: &Target) -> Option<(f64, DVector<f64>)> {
         let layout = &self.problem.layout;
         let free = layout.free();
         let x = layout.to_x(&self.p_best);
+        let mut g = DVector::zeros(free.len());
         match target {
             Target::Param(k) => {
                 let i = free.iter().position(|f| f == k)?;
-                let tr = layout.params[*k].transform;
-                let t0 = x[i];
-                let se = self.x_se[i];
-                let (lo, hi) = match tr {
-                    Transform::Log => ((t0 - LOG_RANGE, false), (t0 + LOG_RANGE, false)),
-                    Transform::NonNegative => {
-                        let top = tr.to_x(1e3 * tr.from_x(t0) + 1e3 * se.min(1e300));
-                        ((0.0, true), (top.max(t0 + 1.0), false))
-                    }
-                    Transform::Identity => {
-                        let w = 1e3 * t0.abs().max(if se.is_finite() { se } else { 1.0 });
-                        ((t0 - w, false), (t0 + w, false))
-                    }
-                };
-                Some((t0, se, lo, hi))
+                g[i] = 1.0;
+                Some((x[i], g))
             }
             Target::Product { coef, .. } => {
                 let mut t0 = 0.0;
-                let mut grad = vec![0.0; free.len()];
                 for &(k, c) in coef {
                     t0 += c * self.p_best[k].ln();
                     if let Some(i) = free.iter().position(|&f| f == k) {
-                        grad[i] = c * dlnp_dx(layout.params[k].transform, x[i])?;
+                        g[i] = c * dlnp_dx(layout.params[k].transform, x[i])?;
                     }
                 }
-                // Linearised standard error of ψ: gᵀ C g (it sets the first step only).
-                let g = DVector::from_vec(grad);
-                let se = (g.transpose() * &self.x_cov * &g)[(0, 0)].max(0.0).sqrt();
-                Some((t0, se, (t0 - LOG_RANGE, false), (t0 + LOG_RANGE, false)))
+                Some((t0, g))
             }
         }
+    }
+
+    /// ψ at the best fit (as t), the linearised standard error of t (gᵀCg; it sets the
+    /// first step only), and the search limits (lo, hi, whether each is the domain edge).
+    fn start(&self, target: &Target) -> Option<(f64, f64, Limit, Limit)> {
+        let (t0, g) = self.gradient(target)?;
+        let se = (g.transpose() * &self.x_cov * &g)[(0, 0)].max(0.0).sqrt();
+        let (lo, hi) = match target {
+            Target::Param(k) => match self.problem.layout.params[*k].transform {
+                Transform::Log => ((t0 - LOG_RANGE, false), (t0 + LOG_RANGE, false)),
+                tr @ Transform::NonNegative => {
+                    let top = tr.to_x(1e3 * tr.from_x(t0) + 1e3 * se.min(1e300));
+                    ((0.0, true), (top.max(t0 + 1.0), false))
+                }
+                Transform::Identity => {
+                    let w = 1e3 * t0.abs().max(if se.is_finite() { se } else { 1.0 });
+                    ((t0 - w, false), (t0 + w, false))
+                }
+            },
+            Target::Product { .. } => ((t0 - LOG_RANGE, false), (t0 + LOG_RANGE, false)),
+        };
+        Some((t0, se, lo, hi))
+    }
+
+    /// dz/dt along the linearised profile path: the other free x follow t as their
+    /// conditional mean does, dx/dt = Cg / (gᵀCg), without the held component. None where
+    /// the covariance gives no finite direction. Used only to warm-start the first refit.
+    fn path_slope(&self, target: &Target, held: usize) -> Option<DVector<f64>> {
+        let (_, g) = self.gradient(target)?;
+        let cg = &self.x_cov * &g;
+        let v = g.dot(&cg);
+        if !(v > 0.0 && v.is_finite() && cg.iter().all(|c| c.is_finite())) {
+            return None;
+        }
+        Some(DVector::from_iterator(
+            cg.len() - 1,
+            (0..cg.len()).filter(|&i| i != held).map(|i| cg[i] / v),
+        ))
     }
 
     /// The profile χ² at t, refitting from z0; returns (χ², z) or None when the fit
@@ -391,51 +431,93 @@ impl<'a, 'p> Profiler<'a, 'p> {
         chi2.is_finite().then_some((chi2, rep.x))
     }
 
-    /// z at the best fit (the free x without the held one).
-    fn z_best(&self, target: &Target) -> Option<DVector<f64>> {
+    /// The profile point at t: the refit warm-started where the points already computed
+    /// predict z (linear through the two nearest, or along `slope` from the estimate; from
+    /// the estimate's z if that first start fails). None where the refit cannot be
+    /// evaluated, or the predicted path leaves the model's domain: refitting from farther
+    /// away against the domain edge costs many evaluations at large g and tells nothing
+    /// about the data.
+    fn point(&self, walk: &Walk, t: f64) -> Option<Point> {
+        let mut near: Vec<&Point> = walk.pts.iter().collect();
+        near.sort_by(|a, b| (a.t - t).abs().total_cmp(&(b.t - t).abs()));
+        let p = near[0];
+        let guess = match (near.get(1), walk.slope.as_ref()) {
+            (Some(q), _) if q.t != p.t => &p.z + (&q.z - &p.z) * ((t - p.t) / (q.t - p.t)),
+            (_, Some(s)) => &p.z + s * (t - p.t),
+            _ => p.z.clone(),
+        };
+        let first = walk.pts.len() == 1;
+        let (chi2, z) = self
+            .solve(walk.target, t, &guess)
+            .or_else(|| first.then(|| self.solve(walk.target, t, &p.z)).flatten())?;
+        Some(Point {
+            t,
+            delta: (chi2 - self.chi2_min).max(0.0),
+            z,
+        })
+    }
+
+    /// z at the best fit (the free x without the held one), and the held position.
+    fn z_best(&self, target: &Target) -> Option<(DVector<f64>, usize)> {
         let prob = self.restricted(target, 0.0)?;
         let x = self.problem.layout.to_x(&self.p_best);
-        Some(DVector::from_iterator(
+        let z = DVector::from_iterator(
             x.len() - 1,
             (0..x.len()).filter(|&i| i != prob.held).map(|i| x[i]),
-        ))
+        );
+        Some((z, prob.held))
     }
 
     /// The intervals of `target` at every [`LEVELS`] probability, in the variable t
-    /// (x of a parameter, ln ψ of a product); `to_value` maps t back to ψ.
+    /// (x of a parameter, ln ψ of a product), mapped back to ψ.
     pub fn interval(&self, name: &str, target: &Target) -> Option<Interval> {
         let (t0, se, lo_lim, hi_lim) = self.start(target)?;
-        let z0 = self.z_best(target)?;
+        let (z0, held) = self.z_best(target)?;
         let thr: Vec<f64> = LEVELS
             .iter()
             .map(|&p| threshold(p, self.chi2_min, self.dof(), self.absolute))
             .collect();
-        let top = thr.iter().copied().fold(0.0, f64::max);
+        // First trial: where the quadratic profile of the linearisation, Δχ² = s²(Δt/se)²,
+        // reaches the smallest threshold.
+        let s2 = self.chi2_min / self.dof().max(1) as f64;
         let span = (hi_lim.0 - lo_lim.0).abs();
-        let h0 = if se.is_finite() && se > 0.0 {
-            se.clamp(1e-9 * span.max(1e-300), 0.1 * span)
+        let first = se * (thr[0] / s2).sqrt();
+        let first = if first.is_finite() && first > 0.0 {
+            first.clamp(1e-9 * span.max(1e-300), 0.1 * span)
         } else {
             0.05 * span.min(2.0 * LOG_RANGE)
         };
-        let mut sides = Vec::new();
-        for (dir, lim) in [(-1.0, lo_lim), (1.0, hi_lim)] {
-            sides.push(self.side(target, t0, dir, h0, lim, &z0, &thr, top));
-        }
+        let slope = self.path_slope(target, held);
+        // The two sides are independent searches: on two threads when there are two.
+        let side = |dir: f64, lim: Limit| {
+            let mut walk = Walk {
+                target,
+                t0,
+                dir,
+                slope: slope.clone(),
+                pts: vec![Point {
+                    t: t0,
+                    delta: 0.0,
+                    z: z0.clone(),
+                }],
+            };
+            self.side(&mut walk, first, lim, &thr)
+        };
+        let (lo, hi) = rayon::join(|| side(-1.0, lo_lim), || side(1.0, hi_lim));
+        let sides = [lo, hi];
         let value_of = |t: f64| self.value_of(target, t);
+        let map = |b: Bound| match b {
+            Bound::At(t) => Bound::At(value_of(t)),
+            Bound::Edge(t) => Bound::Edge(value_of(t)),
+            Bound::Open(t) => Bound::Open(value_of(t)),
+        };
         let levels = LEVELS
             .iter()
             .enumerate()
-            .map(|(l, &prob)| {
-                let map = |b: Bound| match b {
-                    Bound::At(t) => Bound::At(value_of(t)),
-                    Bound::Edge(t) => Bound::Edge(value_of(t)),
-                    Bound::Open(t) => Bound::Open(value_of(t)),
-                };
-                Level {
-                    prob,
-                    lo: map(sides[0][l]),
-                    hi: map(sides[1][l]),
-                }
+            .map(|(l, &prob)| Level {
+                prob,
+                lo: map(sides[0][l]),
+                hi: map(sides[1][l]),
             })
             .collect();
         Some(Interval {
@@ -453,225 +535,190 @@ impl<'a, 'p> Profiler<'a, 'p> {
         }
     }
 
-    /// One side of the profile: the crossing of every threshold, walking from t0 in
-    /// direction `dir` to the limit `lim` (value, whether it is the domain edge).
-    #[allow(clippy::too_many_arguments)]
-    fn side(
-        &self,
-        target: &Target,
-        t0: f64,
-        dir: f64,
-        h0: f64,
-        lim: Limit,
-        z0: &DVector<f64>,
-        thr: &[f64],
-        top: f64,
-    ) -> Vec<Bound> {
-        // Walk: (t, Δχ², z) with Δ increasing until it passes `top` or the limit.
-        let mut pts: Vec<(f64, f64, DVector<f64>)> = vec![(t0, 0.0, z0.clone())];
-        let mut h = h0;
-        let mut end = Bound::Open(t0);
+    /// One side of the profile: the crossing of every threshold `thr` (ascending). Walks
+    /// from the estimate to `first`, then to where √Δχ², taken as linear in t through the
+    /// last two points, reaches the smallest threshold not yet reached (at most 4× as far
+    /// per step), until Δχ² reaches the largest or the limit `lim` (value, whether it is
+    /// the domain edge); then finds each crossing (most are walk points already).
+    fn side(&self, walk: &mut Walk, first: f64, lim: Limit, thr: &[f64]) -> Vec<Bound> {
+        let reached = |d: f64, th: f64| d.sqrt() >= th.sqrt() * (1.0 - CROSS_TOL);
+        let mut dist = first;
+        let mut end = Bound::Open(walk.t0);
+        let mut retries = 0;
         for _ in 0..MAX_STEPS {
-            let last = pts.last().expect("one point").clone();
-            let mut t = last.0 + dir * h;
-            let at_limit = (t - lim.0) * dir >= 0.0;
+            let mut t = walk.t0 + walk.dir * dist;
+            let at_limit = (t - lim.0) * walk.dir >= 0.0;
             if at_limit {
                 t = lim.0;
             }
-            let Some((chi2, z)) = self.solve(target, t, &last.2) else {
-                end = Bound::Open(last.0);
+            let Some(p) = self.point(walk, t) else {
+                // A step too long for the predicted path: halve it towards the last point
+                // (three times at most) before the side ends open there.
+                let last = (walk.pts[walk.pts.len() - 1].t - walk.t0).abs();
+                retries += 1;
+                if retries > 3 || walk.pts.len() == 1 {
+                    break;
+                }
+                dist = 0.5 * (last + (t - walk.t0).abs());
+                continue;
+            };
+            let delta = p.delta;
+            let edge = self.at_domain_edge(walk.target, &p);
+            walk.insert(p);
+            let Some(&next) = thr.iter().find(|&&th| !reached(delta, th)) else {
                 break;
             };
-            let delta = (chi2 - self.chi2_min).max(0.0);
-            pts.push((t, delta, z));
-            if delta >= top {
+            if edge {
+                // Going on would only refit against the domain edge (costly at large g).
+                end = Bound::Open(t);
                 break;
             }
+            end = match at_limit {
+                true if lim.1 => Bound::Edge(t),
+                _ => Bound::Open(t),
+            };
             if at_limit {
-                end = if lim.1 {
-                    Bound::Edge(t)
-                } else {
-                    Bound::Open(t)
-                };
                 break;
             }
-            end = Bound::Open(t);
-            h *= 2.0;
+            let n = walk.pts.len();
+            let (a, b) = (&walk.pts[n - 2], &walk.pts[n - 1]);
+            let (da, db) = ((a.t - walk.t0).abs(), (b.t - walk.t0).abs());
+            let slope = (b.delta.sqrt() - a.delta.sqrt()) / (db - da);
+            let aim = if slope > 0.0 {
+                db + (next.sqrt() - b.delta.sqrt()) / slope
+            } else {
+                f64::INFINITY
+            };
+            dist = aim.clamp(db * (1.0 + CROSS_TOL), 4.0 * db);
         }
         thr.iter()
-            .map(|&th| match pts.iter().position(|p| p.1 >= th) {
-                Some(i) => Bound::At(self.crossing(target, &pts[i - 1], &pts[i], th)),
-                None => end,
-            })
+            .map(|&th| self.crossing(walk, th).unwrap_or(end))
             .collect()
     }
 
-    /// The t between two walk points where Δχ² = th: secant steps on √Δχ² (nearly linear
-    /// in t near a smooth minimum), kept inside the bracket (Illinois rule).
-    fn crossing(
-        &self,
-        target: &Target,
-        a: &(f64, f64, DVector<f64>),
-        b: &(f64, f64, DVector<f64>),
-        th: f64,
-    ) -> f64 {
+    /// The bound where Δχ² = th, to [`CROSS_TOL`] in √Δχ²: a computed point already there,
+    /// or the root in the first bracket of the walk by secant steps on √Δχ² (nearly linear
+    /// in t near a smooth minimum), bisecting where a secant step leaves the bracket or two
+    /// steps do not halve it. A profile that jumps over th (the refits cannot follow it
+    /// across the model's domain edge: the bracket shrinks below 1 % of its distance with
+    /// Δχ² still above 4 th on its far side) is open up to the jump. None when no point
+    /// reaches th.
+    fn crossing(&self, walk: &mut Walk, th: f64) -> Option<Bound> {
         let g = |d: f64| d.sqrt() - th.sqrt();
-        let (mut ta, mut fa, mut za) = (a.0, g(a.1), a.2.clone());
-        let (mut tb, mut fb) = (b.0, g(b.1));
-        let tol = 1e-3 * (tb - ta).abs();
-        let mut t = tb;
-        let mut side = 0i8;
-        for _ in 0..REFINE_STEPS {
-            if (tb - ta).abs() <= tol || fb == fa {
-                break;
-            }
-            t = tb - fb * (tb - ta) / (fb - fa);
-            let Some((chi2, z)) = self.solve(target, t, &za) else {
+        let tol = CROSS_TOL * th.sqrt();
+        let i = walk.pts.iter().position(|p| g(p.delta) >= -tol)?;
+        if g(walk.pts[i].delta).abs() <= tol || i == 0 {
+            return Some(self.bound_at(walk, walk.pts[i].t));
+        }
+        let (mut ta, mut fa) = (walk.pts[i - 1].t, g(walk.pts[i - 1].delta));
+        let (mut tb, mut fb) = (walk.pts[i].t, g(walk.pts[i].delta));
+        let mut widths = vec![(tb - ta).abs()];
+        for step in 0..REFINE_STEPS {
+            let s = interpolate(&walk.pts, g);
+            let inside = (s - ta) * (s - tb) < 0.0;
+            let halving = step < 2 || widths[step] <= 0.5 * widths[step - 2];
+            let t = if inside && halving {
+                s
+            } else {
+                0.5 * (ta + tb)
+            };
+            let Some(p) = self.point(walk, t) else {
                 break;
             };
-            let ft = g((chi2 - self.chi2_min).max(0.0));
-            if ft.abs() < 1e-9 * th.sqrt() {
-                return t;
+            let ft = g(p.delta);
+            walk.insert(p);
+            if ft.abs() <= tol {
+                return Some(self.bound_at(walk, t));
             }
-            if (ft < 0.0) == (fa < 0.0) {
-                ta = t;
-                fa = ft;
-                za = z;
-                if side == -1 {
-                    fb *= 0.5;
-                }
-                side = -1;
+            if ft < 0.0 {
+                (ta, fa) = (t, ft);
             } else {
-                tb = t;
-                fb = ft;
-                if side == 1 {
-                    fa *= 0.5;
-                }
-                side = 1;
+                (tb, fb) = (t, ft);
             }
+            widths.push((tb - ta).abs());
         }
-        t
-    }
-}
-
-/// The standard normal quantile: Φ⁻¹(q) for q ∈ (0, 1), by bisection and Newton on
-/// Φ(z) = erfc(−z/√2)/2 (to 1e-14 absolute).
-pub fn normal_quantile(q: f64) -> f64 {
-    let cdf = |z: f64| 0.5 * libm::erfc(-z / std::f64::consts::SQRT_2);
-    let (mut lo, mut hi) = (-40.0f64, 40.0f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if cdf(mid) < q {
-            lo = mid;
+        let jump = fb > th.sqrt() && (tb - ta).abs() < 1e-2 * (tb - walk.t0).abs();
+        Some(if jump {
+            Bound::Open(ta)
+        } else if fb < -fa {
+            self.bound_at(walk, tb)
         } else {
-            hi = mid;
-        }
-        if hi - lo < 1e-15 {
-            break;
-        }
+            self.bound_at(walk, ta)
+        })
     }
-    0.5 * (lo + hi)
-}
 
-/// The Student-t quantile t_q(ν) for q ∈ (0.5, 1) and ν > 0 degrees of freedom: the root of
-/// F(t) = q with F(t) = 1 − ½ I_{ν/(ν+t²)}(ν/2, ½), by bisection; accurate to about 1e-9
-/// relative (the incomplete beta's 1e-10 in F), far below what an interval needs.
-pub fn student_t_quantile(q: f64, nu: f64) -> f64 {
-    if nu > 1e7 {
-        return normal_quantile(q);
-    }
-    let cdf = |t: f64| 1.0 - 0.5 * incomplete_beta(0.5 * nu, 0.5, nu / (nu + t * t));
-    let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    while cdf(hi) < q && hi < 1e12 {
-        hi *= 2.0;
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if cdf(mid) < q {
-            lo = mid;
+    /// The crossing at t (a computed point of `walk`), or open there when its refit lies
+    /// at the edge of the model's domain (g or a past half its fit limit,
+    /// [`FitProblem::domain_fraction`]): Δχ² then rises because the model can go no
+    /// further, not because the data bounds ψ.
+    fn bound_at(&self, walk: &Walk, t: f64) -> Bound {
+        let edge = walk.pts.iter().find(|p| p.t == t);
+        if edge.is_some_and(|p| self.at_domain_edge(walk.target, p)) {
+            Bound::Open(t)
         } else {
-            hi = mid;
-        }
-        if hi - lo <= 1e-13 * hi {
-            break;
+            Bound::At(t)
         }
     }
-    0.5 * (lo + hi)
-}
 
-/// The regularised incomplete beta function I_x(a, b), by its continued fraction (Lentz),
-/// accurate to about 1e-10 for the a, b of the t distribution (lgamma's rounding in the
-/// prefactor dominates).
-pub fn incomplete_beta(a: f64, b: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x >= 1.0 {
-        return 1.0;
-    }
-    let ln_front =
-        libm::lgamma(a + b) - libm::lgamma(a) - libm::lgamma(b) + a * x.ln() + b * (1.0 - x).ln();
-    let front = ln_front.exp();
-    if x < (a + 1.0) / (a + b + 2.0) {
-        front * beta_cf(a, b, x) / a
-    } else {
-        1.0 - front * beta_cf(b, a, 1.0 - x) / b
+    /// Whether the refit of a profile point lies past half the fit's limits of g or a.
+    fn at_domain_edge(&self, target: &Target, p: &Point) -> bool {
+        self.restricted(target, p.t)
+            .and_then(|prob| prob.full_x(&p.z))
+            .is_some_and(|(x, _)| {
+                self.problem
+                    .domain_fraction(&self.problem.layout.from_x(&x))
+                    > 0.5
+            })
     }
 }
 
-/// The continued fraction of the incomplete beta function (modified Lentz).
-fn beta_cf(a: f64, b: f64, x: f64) -> f64 {
-    let tiny = 1e-300;
-    let (qab, qap, qam) = (a + b, a + 1.0, a - 1.0);
-    let mut c = 1.0;
-    let mut d = 1.0 - qab * x / qap;
-    if d.abs() < tiny {
-        d = tiny;
+/// The t where g(Δχ²) = 0 as the points nearest it (by |g|) predict: inverse quadratic
+/// interpolation through three of them, a secant through two when the g values coincide
+/// (NaN when no two differ).
+fn interpolate(pts: &[Point], g: impl Fn(f64) -> f64) -> f64 {
+    let mut near: Vec<(f64, f64)> = pts.iter().map(|p| (g(p.delta), p.t)).collect();
+    near.sort_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
+    near.dedup_by(|a, b| a.0 == b.0);
+    match near[..] {
+        [(fa, ta), (fb, tb), (fc, tc), ..] => {
+            ta * fb * fc / ((fa - fb) * (fa - fc))
+                + tb * fa * fc / ((fb - fa) * (fb - fc))
+                + tc * fa * fb / ((fc - fa) * (fc - fb))
+        }
+        [(fa, ta), (fb, tb)] => tb - fb * (tb - ta) / (fb - fa),
+        _ => f64::NAN,
     }
-    d = 1.0 / d;
-    let mut h = d;
-    // One Lentz step with coefficient aa: the new d, c and their product.
-    let step = |aa: f64, d: &mut f64, c: &mut f64| -> f64 {
-        *d = 1.0 + aa * *d;
-        if d.abs() < tiny {
-            *d = tiny;
-        }
-        *c = 1.0 + aa / *c;
-        if c.abs() < tiny {
-            *c = tiny;
-        }
-        *d = 1.0 / *d;
-        *d * *c
-    };
-    for m in 1..10_000 {
-        let m = m as f64;
-        let m2 = 2.0 * m;
-        h *= step(m * (b - m) * x / ((qam + m2) * (a + m2)), &mut d, &mut c);
-        let del = step(
-            -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2)),
-            &mut d,
-            &mut c,
-        );
-        h *= del;
-        if (del - 1.0).abs() < 1e-15 {
-            break;
-        }
-    }
-    h
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// A computed point of a profile: t, Δχ² = χ²(t) − χ²_min (≥ 0) and the refitted z.
+#[derive(Debug, Clone)]
+struct Point {
+    t: f64,
+    delta: f64,
+    z: DVector<f64>,
+}
 
-    #[test]
-    fn quantiles_match_tables() {
-        // Tables (scipy.stats t.ppf / norm.ppf): t_0.975(10), t_0.975(1), t_0.95(5) (also
-        // checked by Simpson integration of the t density: F = 0.95 to 1e-10), z_0.975.
-        assert!((student_t_quantile(0.975, 10.0) - 2.228_138_851_986_273_5).abs() < 1e-8);
-        assert!((student_t_quantile(0.975, 1.0) - 12.706_204_736_174_698).abs() < 1e-8);
-        assert!((student_t_quantile(0.95, 5.0) - 2.015_048_372_669_157_5).abs() < 1e-8);
-        assert!((normal_quantile(0.975) - 1.959_963_984_540_054).abs() < 1e-12);
-        assert!((normal_quantile(0.841_344_746_068_542_9) - 1.0).abs() < 1e-12);
+/// One side of a profile being searched: the points so far, ordered by distance from the
+/// estimate t0 (the first is t0 itself).
+struct Walk<'t> {
+    target: &'t Target,
+    t0: f64,
+    /// −1 for the lower side, +1 for the upper.
+    dir: f64,
+    /// dz/dt at the estimate, see [`Profiler::path_slope`].
+    slope: Option<DVector<f64>>,
+    pts: Vec<Point>,
+}
+
+impl Walk<'_> {
+    /// Add a point, keeping the order by distance from t0.
+    fn insert(&mut self, p: Point) {
+        let d = (p.t - self.t0) * self.dir;
+        let at = self
+            .pts
+            .iter()
+            .position(|q| (q.t - self.t0) * self.dir > d)
+            .unwrap_or(self.pts.len());
+        self.pts.insert(at, p);
     }
 }

@@ -45,6 +45,18 @@ pub enum Verdict {
     Partial,
 }
 
+impl Verdict {
+    /// Lower-case name, as in JSON (`full`, `rough`, `smooth`, `partial`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Full => "full",
+            Verdict::Rough => "rough",
+            Verdict::Smooth => "smooth",
+            Verdict::Partial => "partial",
+        }
+    }
+}
+
 /// A finished fit (converged or not).
 #[derive(Debug, Clone)]
 pub struct FitResult {

@@ -39,14 +39,28 @@ pub(super) struct Start {
 
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
 /// for KBS models its rough approximation (exact in the rough band, and it avoids the
-/// O(√g) series far from the specular peak).
+/// O(√g) series far from the specular peak). The rough approximation depends on σ and T
+/// only through T/σ, so its problem is built per candidate with σ held.
 struct Refiners<'m> {
     exact: FitProblem<'m>,
-    rough: Option<FitProblem<'m>>,
+    rough: Option<&'m dyn Model>,
     /// Layout index of σ (KBS models).
     sigma_k: Option<usize>,
     /// The subsample both problems are built on.
     sub: FitInput,
+}
+
+impl<'m> Refiners<'m> {
+    /// The rough approximation's problem on the subsample with σ held at `start`'s value (the
+    /// approximation has no gradient along the rough ridge, so a free σ would wander along it,
+    /// to σ → 0 as readily as anywhere); None without a rough approximation.
+    fn rough_problem(&self, start: &[f64]) -> Option<FitProblem<'m>> {
+        let (model, k) = (self.rough?, self.sigma_k?);
+        let mut layout = self.exact.layout.clone();
+        layout.params[k].fixed = Some(start[k]);
+        let (kind, floor) = (self.exact.kind(), self.exact.floor);
+        FitProblem::new(model, layout, &self.sub, kind, floor).ok()
+    }
 }
 
 /// The quick refinement's solver settings: loose tolerances, at most 100 iterations.
@@ -110,19 +124,9 @@ pub(super) fn starting_point(
         config.residual,
         floor,
     )?;
-    let rough = match &rough_model {
-        Some(m) => Some(FitProblem::new(
-            m.as_ref(),
-            layout.clone(),
-            &sub,
-            config.residual,
-            floor,
-        )?),
-        None => None,
-    };
     let refiners = Refiners {
         exact,
-        rough,
+        rough: rough_model.as_deref(),
         sigma_k,
         sub,
     };
@@ -178,15 +182,10 @@ fn refine_candidates(
             let rough_band = refiners.sigma_k.is_some_and(|k| {
                 super::identify::median_g(&refiners.sub, start[k]) > init::ROUGH_BAND_G
             });
-            let (cost, values) = match (&refiners.rough, rough_band) {
+            let (cost, values) = match (refiners.rough_problem(start), rough_band) {
                 (Some(rough), true) => {
-                    let run = run_lm(rough, start, coarse);
-                    let cost = 0.5
-                        * refiners
-                            .exact
-                            .weighted_residuals(&run.values)
-                            .norm_squared();
-                    (cost, run.values)
+                    let run = run_lm(&rough, start, coarse);
+                    slide_rough_ridge(refiners, run.values, inside)
                 }
                 _ => {
                     let run = run_lm(&refiners.exact, start, coarse);
@@ -198,6 +197,56 @@ fn refine_candidates(
             (if usable { cost } else { f64::INFINITY }, values)
         })
         .collect()
+}
+
+/// Factor by which [`slide_rough_ridge`] scales σ and T per step.
+pub const RIDGE_STEP: f64 = 2.0;
+
+/// Most steps of [`slide_rough_ridge`] (σ up to 2¹² ≈ 4000 times the refined one; the
+/// domain's g limit usually ends the slide first).
+pub const RIDGE_STEPS: usize = 12;
+
+/// Slide a point refined with the rough approximation along the rough ridge to where the
+/// exact model fits the subsample best, and return (exact cost, point). The ridge scales σ
+/// and T together and holds T/σ and the scales: the rough approximation is the same all
+/// along it, so its refinement cannot move σ there, yet at a σ of a few λ the exact model
+/// is still far from its rough limit wherever the lobe is faint (its low-order series terms
+/// are wider than the Gaussian limit), and weights that follow the values (relative noise,
+/// 1/σ_L² with σ_L ∝ L) count those samples as much as the peak. The grid's σ axis ends at
+/// 4λ, so a lobe of σ ≈ 8λ would otherwise be judged at a σ where the exact cost is 10⁵
+/// times the truth's, and lose to a smooth-looking optimum (recovery issue #17). The slide
+/// steps by [`RIDGE_STEP`] while the exact cost falls, the point stays `inside` the domain,
+/// and at most [`RIDGE_STEPS`] times.
+fn slide_rough_ridge(
+    refiners: &Refiners,
+    mut p: Vec<f64>,
+    inside: &(dyn Fn(&[f64]) -> bool + Sync),
+) -> (f64, Vec<f64>) {
+    let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
+    let mut cost = exact_cost(&p);
+    let (Some(ks), Some(&kt)) = (refiners.sigma_k, refiners.exact.layout.find("T").first()) else {
+        return (cost, p);
+    };
+    // A held σ (--fix) or T is not moved: the ridge is then not free to slide along.
+    let held = |k: usize| refiners.exact.layout.params[k].fixed.is_some();
+    if held(ks) || held(kt) {
+        return (cost, p);
+    }
+    for _ in 0..RIDGE_STEPS {
+        let mut q = p.clone();
+        q[ks] *= RIDGE_STEP;
+        q[kt] *= RIDGE_STEP;
+        if !inside(&q) {
+            break;
+        }
+        let c = exact_cost(&q);
+        // NaN (a failed evaluation) ends the slide too.
+        if c.partial_cmp(&cost) != Some(std::cmp::Ordering::Less) {
+            break;
+        }
+        (cost, p) = (c, q);
+    }
+    (cost, p)
 }
 
 /// The refined point with the lowest cost, and the grid point it came from. Costs within

@@ -1,13 +1,19 @@
 //! Statistics of a finished least-squares fit, from the Jacobian at the optimum.
 //!
-//! With `J = U Σ Vᵀ` (thin SVD, `J` padded with zero rows when `n < p`):
+//! The Jacobian's columns are first brought to unit norm, `Ĵ = J D⁻¹` with `D = diag(‖J₍ⱼ₎‖)`
+//! (a zero column stays zero), so that what is called determined does not depend on the
+//! units of the data or of the parameters: `L → c·L` or a parameter in other units rescales
+//! columns of `J` and leaves `Ĵ` unchanged. With `Ĵ = U Σ Vᵀ` (thin SVD, padded with zero
+//! rows when `n < p`):
 //! * residual variance `s² = 2·cost / (n − p) = Σ r̃ᵢ² / (n − p)` (NaN when `n ≤ p`);
-//! * covariance `C = s² (JᵀJ)⁺ = s² V Σ⁺² Vᵀ`, where singular values `σₖ ≤ rel_threshold · σ₁`
-//!   are treated as zero (pseudo-inverse) — `JᵀJ` is never formed;
+//! * covariance `C = s² (JᵀJ)⁺ = s² D⁻¹ V Σ⁺² Vᵀ D⁻¹`, where singular values
+//!   `σₖ ≤ rel_threshold · σ₁` are treated as zero (pseudo-inverse) — `JᵀJ` is never formed;
+//!   with every `σₖ` kept this is exactly `s² (JᵀJ)⁻¹`;
 //! * standard errors `√Cⱼⱼ`, correlations `Cᵢⱼ / (sᵢ sⱼ)` (NaN where a standard error is 0);
-//! * condition number `σ₁ / σₚ` (∞ when `σₚ = 0`);
-//! * the undetermined directions: right singular vectors of the dropped singular values, i.e.
-//!   parameter combinations the data do not determine.
+//! * condition number `σ₁ / σₚ` of `Ĵ` (∞ when `σₚ = 0`): at most √p from the best one any
+//!   column scaling reaches (van der Sluis);
+//! * the undetermined directions: `D⁻¹ v` for the right singular vectors `v` of the dropped
+//!   singular values (normalised), i.e. parameter combinations the data do not determine.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -34,9 +40,9 @@ pub struct Uncertainty {
     pub covariance: DMatrix<f64>,
     pub stderr: DVector<f64>,
     pub correlation: DMatrix<f64>,
-    /// Singular values of `J`, descending (length `p`).
+    /// Singular values of `Ĵ` (`J` with unit-norm columns), descending (length `p`).
     pub singular_values: DVector<f64>,
-    /// `σ_max / σ_min` (∞ when singular).
+    /// `σ_max / σ_min` of `Ĵ` (∞ when singular).
     pub condition: f64,
     /// Right singular vectors (unit, length `p`) of directions the data do not determine.
     pub undetermined: Vec<DVector<f64>>,
@@ -97,6 +103,20 @@ pub fn uncertainty(
             residual_variance: s2,
         };
     }
+    // Unit-norm columns (a zero column keeps its zeros and a unit factor).
+    let norms: Vec<f64> = (0..p)
+        .map(|k| {
+            let d = j.column(k).norm();
+            if d > 0.0 && d.is_finite() {
+                d
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    for (k, d) in norms.iter().enumerate() {
+        j.column_mut(k).unscale_mut(*d);
+    }
     let svd = j.svd(false, true);
     let v_t = svd.v_t.expect("SVD computed with V");
     let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
@@ -114,9 +134,16 @@ pub fn uncertainty(
             rank += 1;
             cov += (&v * v.transpose()) * (s2 / (s * s));
         } else {
-            undetermined.push(v);
+            let x = DVector::from_iterator(p, v.iter().zip(&norms).map(|(a, d)| a / d));
+            let len = x.norm();
+            undetermined.push(if len > 0.0 && len.is_finite() {
+                x / len
+            } else {
+                v
+            });
         }
     }
+    let cov = DMatrix::from_fn(p, p, |a, b| cov[(a, b)] / (norms[a] * norms[b]));
     let stderr = DVector::from_iterator(p, (0..p).map(|i| cov[(i, i)].max(0.0).sqrt()));
     let correlation = DMatrix::from_fn(p, p, |a, b| {
         let d = stderr[a] * stderr[b];
@@ -238,6 +265,30 @@ mod tests {
         // The pseudo-inverse gives zero variance along the undetermined direction.
         let var_d = (d.transpose() * &u.covariance * d)[(0, 0)];
         assert!(var_d.abs() < 1e-12);
+    }
+
+    #[test]
+    fn rank_and_errors_do_not_depend_on_column_units() {
+        // A well-posed 3-parameter Jacobian, then the same with one column in units 1e10
+        // smaller (e.g. a scale when L is given ×1e10) and one 1e-8: the rank, the
+        // condition and the standard errors in each column's own unit are unchanged.
+        let jac = DMatrix::from_fn(20, 3, |i, j| {
+            let t = i as f64 / 19.0;
+            [1.0, t, (3.0 * t).sin()][j]
+        });
+        let c = [1.0, 1e10, 1e-8];
+        let scaled = DMatrix::from_fn(20, 3, |i, j| jac[(i, j)] * c[j]);
+        let a = uncertainty(&jac, 0.7, 20, 1e-9);
+        let b = uncertainty(&scaled, 0.7, 20, 1e-9);
+        assert_eq!((a.rank, b.rank), (3, 3));
+        assert!(b.undetermined.is_empty());
+        assert_relative_eq!(a.condition, b.condition, max_relative = 1e-10);
+        for (k, ck) in c.iter().enumerate() {
+            assert_relative_eq!(a.stderr[k], b.stderr[k] * ck, max_relative = 1e-10);
+        }
+        // Unscaled, the 1e-9 cut would have dropped the 1e-8 column.
+        let raw = nalgebra::linalg::SVD::new(scaled.clone(), false, false).singular_values;
+        assert!(raw.min() < 1e-9 * raw.max());
     }
 
     #[test]

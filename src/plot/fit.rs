@@ -392,6 +392,20 @@ pub struct PolarPlot {
     pub l_max: f64,
 }
 
+/// The radius (in L / L_max) of the polar plot's rim: values beyond it are drawn there as
+/// arrows pointing outwards, counted in the legend.
+pub const POLAR_RIM: f64 = 1.15;
+
+impl PolarPlot {
+    /// The measured points beyond [`POLAR_RIM`]: (how many, the largest L / L_max).
+    pub fn clipped(&self) -> (usize, f64) {
+        self.measured
+            .iter()
+            .filter(|p| p.1.is_finite() && p.1 > POLAR_RIM)
+            .fold((0, 0.0f64), |(n, m), p| (n + 1, m.max(p.1)))
+    }
+}
+
 /// The polar plot of the fit at the θi with the most samples.
 pub fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
     let gs = checked_groups(input)?;
@@ -522,7 +536,7 @@ impl Picture for PolarPlot {
                 self.curve
                     .iter()
                     .filter(|p| p.1.is_finite())
-                    .map(|&(t, r)| polar_xy(t, r.clamp(0.0, 1.15))),
+                    .map(|&(t, r)| polar_xy(t, r.clamp(0.0, POLAR_RIM))),
                 blue.stroke_width(2),
             ))?
             .label(format!("fitted model (L_max = {})", fmt_num(self.l_max)))
@@ -530,15 +544,51 @@ impl Picture for PolarPlot {
                 PathElement::new(vec![(x, y), (x + 24, y)], blue.stroke_width(2))
             });
         let red = series_color(3);
+        let inside = |p: &&(f64, f64)| p.1.is_finite() && p.1 <= POLAR_RIM;
         chart
             .draw_series(
                 self.measured
                     .iter()
-                    .filter(|p| p.1.is_finite())
-                    .map(|&(t, r)| Circle::new(polar_xy(t, r.clamp(0.0, 1.15)), 4, red.filled())),
+                    .filter(inside)
+                    .map(|&(t, r)| Circle::new(polar_xy(t, r.max(0.0)), 4, red.filled())),
             )?
             .label("measured (in-plane samples)")
             .legend(move |(x, y)| Circle::new((x + 12, y), 4, red.filled()));
+        let (n_out, worst) = self.clipped();
+        if n_out > 0 {
+            // Each clipped point: a radial arrow from inside the rim to the rim.
+            let arrows = self
+                .measured
+                .iter()
+                .filter(|p| p.1.is_finite() && p.1 > POLAR_RIM)
+                .map(|&(t, _)| {
+                    let tip = polar_xy(t, POLAR_RIM);
+                    let tail = polar_xy(t, POLAR_RIM - 0.12);
+                    let side = |d: f64| polar_xy(t + d, POLAR_RIM - 0.05);
+                    PathElement::new(
+                        vec![tail, tip, side(2.5), tip, side(-2.5)],
+                        red.stroke_width(2),
+                    )
+                });
+            chart
+                .draw_series(arrows)?
+                .label(format!(
+                    "{n_out} measured beyond the rim (up to {}× L_max), drawn at {POLAR_RIM}",
+                    fmt_num(worst)
+                ))
+                .legend(move |(x, y)| {
+                    PathElement::new(
+                        vec![
+                            (x, y),
+                            (x + 22, y),
+                            (x + 16, y - 4),
+                            (x + 22, y),
+                            (x + 16, y + 4),
+                        ],
+                        red.stroke_width(2),
+                    )
+                });
+        }
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperLeft)

@@ -113,6 +113,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "evaluations": r.evaluations,
         "jacobian_evaluations": r.jacobian_evaluations,
         "seconds": r.seconds,
+        "interval_seconds": info.interval_seconds,
         "init_seconds": r.init_seconds,
         "start_seconds": r.start_seconds,
         "modes": r.modes,

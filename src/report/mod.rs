@@ -27,6 +27,8 @@ pub struct RunInfo {
     /// not computed).
     #[serde(skip)]
     pub intervals: Vec<crate::fit::profile::Interval>,
+    /// Wall-clock seconds the intervals took (0 when not computed).
+    pub interval_seconds: f64,
 }
 
 use crate::fit::driver::{Derived, FitResult};

@@ -226,7 +226,7 @@ fn interval_lines(s: &mut String, r: &FitResult, info: &RunInfo) {
     let units = &info.setting.units;
     let _ = writeln!(
         s,
-        "[[Intervals]] (profile likelihood, as lmfit's conf_interval; one-sided where χ² stays flat to a factor 1000)"
+        "[[Intervals]] (profile likelihood, as lmfit's conf_interval; one-sided where χ² stays flat to a factor 1000 or up to the model's domain edge)"
     );
     let width = info
         .intervals
@@ -344,6 +344,13 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         r.start_seconds,
         r.init_seconds - r.start_seconds
     );
+    if !info.intervals.is_empty() {
+        let _ = writeln!(
+            s,
+            "    run time        + {:.4} s for the profile intervals",
+            info.interval_seconds
+        );
+    }
     if r.loss.is_linear() {
         let _ = writeln!(s, "    cost ½Σwr²      = {:.7e}", r.cost);
     } else {

@@ -1,4 +1,6 @@
 //! Helpers shared by the CLI test files.
+// Each test binary uses some of these helpers.
+#![allow(dead_code)]
 
 use assert_cmd::Command;
 
@@ -26,9 +28,17 @@ pub fn fit_json(args: &[&str]) -> serde_json::Value {
 }
 
 /// A file of the bundled `data/` folder.
-#[allow(dead_code)]
 pub fn data(p: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("data")
         .join(p)
+}
+
+/// Run goniofit with `args` and `--json`, whatever its exit code: (exit code, parsed
+/// report); panics with its standard error when the output is not one JSON document.
+pub fn run_json<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, serde_json::Value) {
+    let out = goniofit().args(args).arg("--json").output().unwrap();
+    let v = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
+    (out.status.code(), v)
 }

@@ -5,6 +5,7 @@
 use super::DatasetFit;
 use crate::error::Result;
 use crate::fit::driver::{self, FitInput, FitResult};
+use crate::fit::lm::Stop;
 use crate::fit::problem::FitProblem;
 use crate::fit::profile::{Interval, Profiler, Target};
 
@@ -15,16 +16,21 @@ pub const MAX_PROFILED: usize = 8;
 /// Profile-likelihood intervals of every free parameter, of the parameters the reduced
 /// fit held, and of T/σ, the rms slope, the amplitudes and the reflectance factors, on the
 /// full problem at the reported optimum `r` (`uncertainties`: the weights come from a
-/// stated `sigma_L`). A quantity whose profile cannot be walked is left out.
+/// stated `sigma_L`). A quantity whose profile cannot be walked is left out. Every refit
+/// shares the fit's `stop` (its time limit and signals): once it fires the walks end, and
+/// the caller discards what they found (a walk cut short ends at a wrong likelihood).
 pub fn profile_intervals(
     spec: &DatasetFit,
     input: &FitInput,
     r: &FitResult,
     uncertainties: bool,
+    stop: &Stop,
 ) -> Result<Vec<Interval>> {
+    if stop.is_requested() {
+        return Ok(Vec::new());
+    }
     let mut config = spec.config_for(&r.model, uncertainties);
-    // Each refit makes its own stop request (the fit's own has done its work).
-    config.lm.stop = None;
+    config.lm.stop = Some(stop.clone());
     let model = crate::model::by_name(&r.model, &config.model_opts)?;
     let mut layout = r.layout.clone();
     // Parameters held by the reduction (reported as not fixed) are profiled too.
@@ -40,6 +46,9 @@ pub fn profile_intervals(
     let layout = &problem.layout;
     let mut out = Vec::new();
     for k in layout.free() {
+        if stop.is_requested() {
+            break;
+        }
         if let Some(iv) = prof.interval(&layout.params[k].name, &Target::Param(k)) {
             out.push(iv);
         }

@@ -100,6 +100,8 @@ pub struct Outcome {
     pub result: FitResult,
     /// Profile-likelihood intervals of `result` (empty when not computed).
     pub intervals: Vec<super::profile::Interval>,
+    /// Wall-clock seconds the intervals took (0 when not computed).
+    pub interval_seconds: f64,
 }
 
 /// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
@@ -284,11 +286,30 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         ));
     }
     finish_result(spec, &ds, &input, &stop, &mut result)?;
-    let intervals = if spec.intervals && result.n_free <= MAX_PROFILED {
-        profile_intervals(spec, &input, &result, uncertainties)?
+    let t_intervals = std::time::Instant::now();
+    let wanted = spec.intervals && result.n_free <= MAX_PROFILED;
+    if wanted && !result.converged() {
+        // A profile around a point that is not a usable optimum (degenerate, stopped)
+        // would bound nothing the data says.
+        result
+            .notes
+            .push("no profile intervals: the fit did not converge to a usable optimum".into());
+    }
+    let mut intervals = if wanted && result.converged() {
+        profile_intervals(spec, &input, &result, uncertainties, &stop)?
     } else {
         Vec::new()
     };
+    if wanted && result.converged() && stop.is_requested() {
+        // A profile walk cut short ends at a wrong likelihood: none is shown.
+        intervals.clear();
+        result.notes.push(
+            "profile-likelihood intervals not computed: the fit was stopped while they were \
+             walked (only the standard errors are shown)"
+                .into(),
+        );
+    }
+    let interval_seconds = t_intervals.elapsed().as_secs_f64();
     Ok(Outcome {
         label,
         dataset: ds,
@@ -296,6 +317,7 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         candidates: results,
         result,
         intervals,
+        interval_seconds,
     })
 }
 
@@ -319,7 +341,7 @@ fn finish_result(
         },
     );
     if input.channel_names.len() > 1 && !stop.is_requested() {
-        if let Some(note) = joint_narrowing(spec, ds, result)? {
+        if let Some(note) = joint_narrowing(spec, ds, result, stop)? {
             result.notes.push(note);
         }
     }
@@ -358,7 +380,12 @@ fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
 
 /// For a joint fit: how much narrower σ, T and T/σ are than from the middle channel alone,
 /// or that the data determines them neither way.
-fn joint_narrowing(spec: &DatasetFit, ds: &Dataset, joint: &FitResult) -> Result<Option<String>> {
+fn joint_narrowing(
+    spec: &DatasetFit,
+    ds: &Dataset,
+    joint: &FitResult,
+    stop: &Stop,
+) -> Result<Option<String>> {
     let Some(labels) = &ds.channel else {
         return Ok(None);
     };
@@ -372,7 +399,12 @@ fn joint_narrowing(spec: &DatasetFit, ds: &Dataset, joint: &FitResult) -> Result
     let input = spec.input(&single, true)?;
     let mut config = spec.config_for(&joint.model, ds.sigma_l.is_some());
     config.lm.progress = false;
+    config.lm.stop = Some(stop.clone());
     let alone = driver::fit(&input, &config)?;
+    if stop.is_requested() {
+        // The single-channel fit was cut short: its errors say nothing.
+        return Ok(None);
+    }
     let mut parts = Vec::new();
     for name in ["sigma", "T", "T/sigma"] {
         let se = |r: &FitResult| -> Option<Option<f64>> {

@@ -99,7 +99,7 @@ mod progress;
 mod qr;
 mod run;
 mod step;
-mod stop;
+pub mod stop;
 mod termination;
 #[cfg(test)]
 mod tests;

@@ -6,11 +6,12 @@
 //! [`super::minimize`] turns the Executor's handler off, and one process-wide handler
 //! (installed on first use) bumps a global generation counter while any [`Stop`] is alive
 //! (every running solver and every evaluation that checks the token sees the change). When
-//! none is alive — nothing is being computed — it exits the process with status 130, as an
-//! unhandled SIGINT would.
+//! none is alive — nothing is being computed — it runs the cleanup registered with
+//! [`on_exit`] (the command line removes its unfinished output temporaries there) and exits
+//! the process with status 130, as an unhandled SIGINT would.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
-use std::sync::{Arc, Once};
+use std::sync::{Arc, Once, OnceLock};
 use std::time::{Duration, Instant};
 
 use super::Termination;
@@ -18,19 +19,32 @@ use super::Termination;
 static INTERRUPTS: AtomicU64 = AtomicU64::new(0);
 static ACTIVE_RUNS: AtomicUsize = AtomicUsize::new(0);
 static HANDLER: Once = Once::new();
+static CLEANUP: OnceLock<fn()> = OnceLock::new();
 
-/// Install the process-wide handler (once; later calls do nothing).
-fn install_handler() {
+/// Install the process-wide handler (once; later calls do nothing). A [`Stop`] installs it
+/// on first use; a program that wants Ctrl-C handled the same way everywhere (also while
+/// nothing is being fitted) calls this at its start.
+pub fn install_handler() {
     HANDLER.call_once(|| {
         // If another handler is already installed (e.g. by a direct argmin Executor run),
         // Ctrl-C keeps working through that one; nothing else to do.
         let _ = ctrlc::set_handler(|| {
             if ACTIVE_RUNS.load(Ordering::SeqCst) == 0 {
+                if let Some(cleanup) = CLEANUP.get() {
+                    cleanup();
+                }
                 std::process::exit(130);
             }
             INTERRUPTS.fetch_add(1, Ordering::SeqCst);
         });
     });
+}
+
+/// Register `cleanup`, run by the handler just before it ends the process (a signal while no
+/// [`Stop`] is alive). Only the first registration counts. It runs on the handler's thread
+/// while other threads may still be working, so it must be safe to call at any time.
+pub fn on_exit(cleanup: fn()) {
+    let _ = CLEANUP.set(cleanup);
 }
 
 /// Marks work in progress for as long as it lives (the handler then interrupts instead of

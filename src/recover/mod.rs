@@ -36,6 +36,9 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Duration;
 
+pub mod outliers;
+pub use outliers::Outlier;
+
 /// Two-sided normal coverage of ±2 standard errors.
 pub const NOMINAL_COVERAGE: f64 = 0.9545;
 
@@ -169,6 +172,10 @@ pub struct RecoverReport {
     pub median_seconds: f64,
     pub total_seconds: f64,
     pub regimes: Vec<RegimeSummary>,
+    /// The scenes with a truth outside ±2 s.e., with the commands that reproduce each.
+    pub outliers: Vec<Outlier>,
+    /// Converged scenes that are confidently wrong (see [`outliers`]).
+    pub wrong_converged: usize,
     pub results: Vec<SceneResult>,
 }
 
@@ -181,6 +188,9 @@ pub struct RecoverConfig {
     pub noise: f64,
     /// Wall-clock limit of one fit's solver.
     pub fit_timeout: Option<Duration>,
+    /// Fit only the scenes with these ids (all `scenes` are still drawn, so each keeps the
+    /// truth and noise it has in the whole run); None fits every scene.
+    pub only: Option<Vec<usize>>,
 }
 
 impl Default for RecoverConfig {
@@ -190,6 +200,7 @@ impl Default for RecoverConfig {
             seed: 11,
             noise: 0.01,
             fit_timeout: Some(Duration::from_secs(60)),
+            only: None,
         }
     }
 }
@@ -260,8 +271,17 @@ pub fn draw_scenes(n: usize, seed: u64, noise: f64) -> Vec<Scene> {
         .collect()
 }
 
-/// The fit's data for a scene, with weights 1/σ_L² (σ_L floored at 1e-9 of its largest
-/// value so that an underflowed sample cannot get an infinite weight).
+/// Smallest σ_L a scene's weights use, relative to its largest σ_L: it only keeps the
+/// weight of a sample whose value underflowed to 0 finite. Every other sample is weighted by
+/// its true 1/σ_L², so that its standardized residual is N(0, 1) and χ²/(n − p) estimates 1:
+/// a floor of 1e-9 (before issue #17) cut the weight of every sample of a narrow relative-noise
+/// lobe below 1e-9 of its peak (1387 of 2160 samples of a smooth scene), so those samples
+/// added nothing to χ² yet counted in n − p, the fit's s² came out near 0.36 and its
+/// standard errors 0.6 times too small (±2 s.e. covered 0.84 of smooth truths).
+pub const SIGMA_L_FLOOR: f64 = 1e-100;
+
+/// The fit's data for a scene, with weights 1/σ_L² (σ_L floored at [`SIGMA_L_FLOOR`] of its
+/// largest value).
 pub fn scene_input(scene: &Scene) -> Result<FitInput> {
     let model = model::by_name("kbs", &ModelOptions::default())?;
     let params = [scene.sigma, scene.corr_len, scene.scale];
@@ -278,7 +298,7 @@ pub fn scene_input(scene: &Scene) -> Result<FitInput> {
     let weight: Vec<f64> = if max_sd > 0.0 {
         data.sigma_l
             .iter()
-            .map(|s| 1.0 / s.max(1e-9 * max_sd).powi(2))
+            .map(|s| 1.0 / s.max(SIGMA_L_FLOOR * max_sd).powi(2))
             .collect()
     } else {
         vec![1.0; data.len()]
@@ -414,8 +434,13 @@ fn coverage_of<'a>(checks: impl Iterator<Item = &'a Check>) -> (Option<f64>, usi
     ((n > 0).then(|| inside as f64 / n as f64), n)
 }
 
-/// Summarise scene results.
-pub fn summarize(results: Vec<SceneResult>, seed: u64, total_seconds: f64) -> RecoverReport {
+/// Summarise scene results of a run of `config`.
+pub fn summarize(
+    results: Vec<SceneResult>,
+    config: &RecoverConfig,
+    total_seconds: f64,
+) -> RecoverReport {
+    let seed = config.seed;
     let mut regimes = Vec::new();
     for regime in Regime::ALL {
         let rs: Vec<&SceneResult> = results
@@ -428,12 +453,7 @@ pub fn summarize(results: Vec<SceneResult>, seed: u64, total_seconds: f64) -> Re
         let mut verdicts = BTreeMap::new();
         let mut terminations = BTreeMap::new();
         for r in &rs {
-            let v = r.verdict.map_or("error".to_string(), |v| {
-                serde_json::to_value(v)
-                    .ok()
-                    .and_then(|j| j.as_str().map(str::to_string))
-                    .unwrap_or_default()
-            });
+            let v = r.verdict.map_or("error", Verdict::name).to_string();
             *verdicts.entry(v).or_insert(0) += 1;
             *terminations.entry(termination_name(r)).or_insert(0) += 1;
         }
@@ -495,6 +515,7 @@ pub fn summarize(results: Vec<SceneResult>, seed: u64, total_seconds: f64) -> Re
         .filter(|r| r.error.is_none())
         .map(|r| r.seconds)
         .collect();
+    let outliers = outliers::outliers(&results, config);
     RecoverReport {
         scenes: results.len(),
         seed,
@@ -507,6 +528,8 @@ pub fn summarize(results: Vec<SceneResult>, seed: u64, total_seconds: f64) -> Re
         median_seconds: median(&secs),
         total_seconds,
         regimes,
+        wrong_converged: outliers.iter().filter(|o| o.wrong).count(),
+        outliers,
         results,
     }
 }
@@ -515,7 +538,10 @@ pub fn summarize(results: Vec<SceneResult>, seed: u64, total_seconds: f64) -> Re
 /// called once per finished scene (e.g. to advance a progress bar).
 pub fn run(config: &RecoverConfig, on_done: &(dyn Fn(&SceneResult) + Sync)) -> RecoverReport {
     let t0 = std::time::Instant::now();
-    let scenes = draw_scenes(config.scenes, config.seed, config.noise);
+    let mut scenes = draw_scenes(config.scenes, config.seed, config.noise);
+    if let Some(only) = &config.only {
+        scenes.retain(|s| only.contains(&s.id));
+    }
     let mut results: Vec<SceneResult> = scenes
         .par_iter()
         .map(|s| {
@@ -525,7 +551,7 @@ pub fn run(config: &RecoverConfig, on_done: &(dyn Fn(&SceneResult) + Sync)) -> R
         })
         .collect();
     results.sort_by_key(|r| r.scene.id);
-    summarize(results, config.seed, t0.elapsed().as_secs_f64())
+    summarize(results, config, t0.elapsed().as_secs_f64())
 }
 
 /// Format a number for the table: 3 significant digits, or `-`.
@@ -635,6 +661,15 @@ impl RecoverReport {
             fmt_num(Some(self.median_seconds)),
             fmt_num(Some(self.total_seconds))
         );
+        let _ = writeln!(
+            s,
+            "truths outside ±{COVERAGE_K} se: {} scenes, {} of them converged and confidently wrong (> {} se and > {:.0} %)",
+            self.outliers.len(),
+            self.wrong_converged,
+            outliers::WRONG_SE,
+            100.0 * outliers::WRONG_REL
+        );
+        s.push_str(&outliers::table(&self.outliers));
         for r in self.results.iter().filter(|r| r.error.is_some()) {
             let _ = writeln!(
                 s,
