@@ -117,7 +117,7 @@ fn curvature(s: &Surface) -> Check {
             "not determined: the rms radius of curvature T²/(√12 σ) = (T/σ)² σ/√12 needs σ itself, which the data does not determine (at the fitted values it would be {value:.3e} λ)"
         ),
         Some(ok) => format!(
-            "{}: rms radius of curvature T²/(√12 σ) = {value:.3e} λ ({} λ; the Kirchhoff approximation needs it ≫ λ)",
+            "{}: rms radius of curvature T²/(√12 σ) = {value:.3e} λ {} λ (the Kirchhoff approximation needs it ≫ λ)",
             if ok { "satisfied" } else { "violated" },
             if ok { "≥" } else { "<" },
         ),
@@ -157,7 +157,7 @@ fn shadowing(s: &Surface, theta_i: &[f64], theta_r: &[f64]) -> Check {
     );
     let text = match satisfied {
         None => format!(
-            "not determined: T/σ is not determined by the data (at the fitted values: {detail})"
+            "not determined: T/σ is not determined by the data; at the fitted values, {detail}"
         ),
         Some(true) => format!("satisfied: {detail}"),
         Some(false) => format!("violated: {detail}; the model ignores shadowing there"),

@@ -420,7 +420,14 @@ fn validity_lines(s: &mut String, r: &FitResult) {
         "[[Validity]] (the paper's assumptions at the fitted surface; a warning, not a failure)"
     );
     for c in &v.checks {
-        let _ = writeln!(s, "    {:<15} = {}", c.name, c.text);
+        // One clause per line (the texts separate clauses by "; "), so that no line runs
+        // past the width of a terminal.
+        let mut clauses = c.text.split("; ");
+        let first = clauses.next().unwrap_or_default();
+        let _ = writeln!(s, "    {:<15} = {first}", c.name);
+        for clause in clauses {
+            let _ = writeln!(s, "{:22}{clause}", "");
+        }
     }
 }
 
