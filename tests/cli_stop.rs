@@ -55,8 +55,7 @@ fn timeout_ends_a_joint_fit_with_its_report_and_exit_3() {
     // point) once hung in an SVD that never converged, and it ignored the time limit.
     for paint in ["garnet_red", "acryl_blue", "cayman", "krylon_blue"] {
         let file = format!("data/cornell/{paint}.astm");
-        let mut args: Vec<std::ffi::OsString> =
-            joint_fit_args().iter().map(|a| a.into()).collect();
+        let mut args: Vec<std::ffi::OsString> = joint_fit_args().iter().map(|a| a.into()).collect();
         *args.last_mut().unwrap() = file.into();
         args.extend(["--timeout".into(), "1".into()]);
         let (wall, v) = timed_out_fit(&args);
