@@ -406,6 +406,10 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         let done = pool.install(|| {
             jobs.into_par_iter()
                 .map(|(label, ds)| {
+                    // After a stop request no further dataset is started.
+                    if stop.is_requested() {
+                        return Err(not_fitted(&label, &stop));
+                    }
                     let outcome = fit_one(&args, label, ds, false, &stop);
                     bar.inc(1);
                     outcome
@@ -416,7 +420,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         done
     };
     let wall = t0.elapsed().as_secs_f64();
-    let outcomes: Vec<Outcome> = outcomes.into_iter().collect::<anyhow::Result<_>>()?;
+    let (outcomes, skipped) = fitted_and_stopped(outcomes, single)?;
     let info_for = |o: &Outcome| {
         let file = files
             .iter()
@@ -450,6 +454,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             serde_json::json!({
                 "fits": values,
                 "datasets": outcomes.len(),
+                "not_fitted": skipped,
                 "seconds": wall,
                 "threads": pool.current_num_threads(),
                 "summary": summary_json(&rows),
@@ -471,6 +476,14 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     if let Some(path) = &args.summary {
         let headers: Vec<String> = report::summary::CSV_HEADER.map(String::from).to_vec();
         io::write_csv(path, &headers, &report::summary::csv_rows(&rows))?;
+    }
+    if !skipped.is_empty() {
+        eprintln!(
+            "goniofit: {} of {} datasets not fitted:\n  {}",
+            skipped.len(),
+            skipped.len() + outcomes.len(),
+            skipped.join("\n  ")
+        );
     }
     if !single && !args.quiet {
         eprintln!(
@@ -503,12 +516,45 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // run was interrupted: every output is complete, and the exit code is 3.
     let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
     Ok(
-        if outcomes.iter().all(|o| o.result.converged()) && !interrupted {
+        if outcomes.iter().all(|o| o.result.converged()) && !interrupted && skipped.is_empty() {
             0
         } else {
             3
         },
     )
+}
+
+/// The error of a dataset `label` a stop request kept from being fitted.
+fn not_fitted(label: &str, stop: &Stop) -> anyhow::Error {
+    let why = stop.requested().map_or("stopped", |t| t.describe());
+    anyhow::Error::new(Error::Stopped(format!(
+        "{label}: {why} before its fit started"
+    )))
+}
+
+/// The fits of a batch, and the labels of the datasets a stop request kept from a result
+/// ([`Error::Stopped`]: not started, or stopped before the first evaluation on the whole
+/// data finished). Any other error ends the command; so does a stopped single dataset
+/// (nothing to report: exit 3 with the message).
+fn fitted_and_stopped(
+    outcomes: Vec<anyhow::Result<Outcome>>,
+    single: bool,
+) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
+    let mut fitted = Vec::new();
+    let mut skipped = Vec::new();
+    for o in outcomes {
+        match o {
+            Ok(o) => fitted.push(o),
+            Err(e) if !single && e.chain().any(is_stopped) => skipped.push(format!("{e:#}")),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok((fitted, skipped))
+}
+
+/// Whether an error in a chain is [`Error::Stopped`].
+fn is_stopped(c: &(dyn std::error::Error + 'static)) -> bool {
+    matches!(c.downcast_ref::<Error>(), Some(Error::Stopped(_)))
 }
 
 /// A bar of bytes read from `file` on standard error (hidden unless `show`).

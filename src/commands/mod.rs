@@ -28,6 +28,15 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
 
 /// Exit code for an error: 2 for the user's input or usage, 1 for internal failures.
 pub fn exit_code_of(e: &anyhow::Error) -> u8 {
+    let stopped = |c: &(dyn std::error::Error + 'static)| {
+        matches!(
+            c.downcast_ref::<goniofit::Error>(),
+            Some(goniofit::Error::Stopped(_))
+        )
+    };
+    if e.chain().any(stopped) {
+        return 3;
+    }
     match e.downcast_ref::<goniofit::Error>() {
         Some(ge) if !ge.is_user_error() => 1,
         Some(_) => 2,

@@ -48,22 +48,34 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let (problem, start) = (problem?, start?);
-    // A stop during the start search leaves an unrefined start (see start::starting_point).
-    let stopped_in_start = stop_requested(config);
     check_series_cost(config, input, &problem.layout, &start.p0)?;
     let run = solve_checked(&problem, input, &start, config);
+    if !run.lm.cost.is_finite() {
+        if let Some(why) = config.lm.stop.as_ref().and_then(Stop::requested) {
+            return Err(stopped_before_first_evaluation(why, input.geo.len()));
+        }
+    }
     let mut identified = identify::identify(input, &problem, &run, config.reduce);
     if validate::rough_by_construction(model, config) {
         identified.verdict = Verdict::Rough;
     }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
-    if stopped_in_start {
+    if start.stopped {
         solved.notes.push(STOPPED_IN_START.to_string());
     }
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     Ok(assemble::assemble(
         model, input, config, solved, seconds, start,
+    ))
+}
+
+/// The error of a fit whose stop request (`why`) cut its first evaluation on the whole data
+/// (`n` samples): no point of the fit was evaluated, so there is nothing to report.
+fn stopped_before_first_evaluation(why: super::lm::Termination, n: usize) -> Error {
+    Error::Stopped(format!(
+        "{} before the first evaluation of the model on the {n} samples had finished; nothing was fitted (a larger --timeout lets one evaluation finish)",
+        why.describe()
     ))
 }
 

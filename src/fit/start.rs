@@ -51,6 +51,9 @@ pub(super) struct Start {
     /// [`RIVAL_MARGIN`] of the winner's: a second valley the full fit also solves from,
     /// keeping the lower cost.
     pub rival: Option<Vec<f64>>,
+    /// Whether the stop request came before the grid's candidates were refined (the start
+    /// is then the grid's best point found by then).
+    pub stopped: bool,
 }
 
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
@@ -169,7 +172,8 @@ pub(super) fn starting_point(
     let mut rival = None;
     // After a stop request the grid's best point inside the domain is the start (nothing is
     // refined: the fit then reports the full data's cost there).
-    if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
+    let stopped_early = stopped(stop);
+    if refiners.sub.y.len() > layout.free().len() && !stopped_early {
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
         // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
         // worth starting from while another candidate's valley is about as low; when the
@@ -223,6 +227,7 @@ pub(super) fn starting_point(
         init_seconds: t0.elapsed().as_secs_f64(),
         alternatives,
         rival,
+        stopped: stopped_early,
     })
 }
 
