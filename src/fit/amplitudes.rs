@@ -69,17 +69,37 @@ pub fn linear_weights(problem: &FitProblem) -> Vec<f64> {
         .collect()
 }
 
-/// The non-negative least-squares amplitudes of the residuals dᵢ(yᵢ − fᵢ).
+/// The non-negative least-squares amplitudes of the residuals dᵢ(yᵢ − fᵢ), from the normal
+/// equations accumulated in one pass over the samples (no n × k matrix is formed: the grid
+/// solves this at every one of its points).
 fn linearised(problem: &FitProblem, basis: &PointBasis, d: &[f64]) -> Option<Vec<f64>> {
     let n = problem.len();
     let k = basis.columns.len() / n.max(1);
     let y = problem.y();
-    let a = DMatrix::from_fn(n, k, |i, c| d[i] * basis.columns[c * n + i]);
-    let b = DVector::from_fn(n, |i, _| d[i] * (y[i] - basis.rest[i]));
-    if !a.iter().chain(b.iter()).all(|v| v.is_finite()) {
-        return None;
+    let mut ata = DMatrix::<f64>::zeros(k, k);
+    let mut atb = DVector::<f64>::zeros(k);
+    let mut row = vec![0.0; k];
+    for i in 0..n {
+        let b = d[i] * (y[i] - basis.rest[i]);
+        for (c, r) in row.iter_mut().enumerate() {
+            *r = d[i] * basis.columns[c * n + i];
+        }
+        if !(b.is_finite() && row.iter().all(|v| v.is_finite())) {
+            return None;
+        }
+        for a in 0..k {
+            atb[a] += row[a] * b;
+            for c in 0..=a {
+                ata[(a, c)] += row[a] * row[c];
+            }
+        }
     }
-    nnls(&a.tr_mul(&a), &a.tr_mul(&b))
+    for a in 0..k {
+        for c in 0..a {
+            ata[(c, a)] = ata[(a, c)];
+        }
+    }
+    nnls(&ata, &atb)
 }
 
 /// Non-negative least squares from the normal equations (AᵀA, Aᵀb) of a few unknowns, by
@@ -89,6 +109,12 @@ fn linearised(problem: &FitProblem, basis: &PointBasis, d: &[f64]) -> Option<Vec
 /// point no worse than clamping. None when the solve is not finite.
 pub fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
     let k = atb.len();
+    if k == 1 {
+        // One unknown: x = Aᵀb / AᵀA when AᵀA > 0 (what the SVD solve gives), else 0.
+        let a = ata[(0, 0)];
+        let x = if a > 0.0 { atb[0] / a } else { 0.0 };
+        return x.is_finite().then_some(vec![x.max(0.0)]);
+    }
     let mut free: Vec<usize> = (0..k).collect();
     let mut coef = vec![0.0; k];
     while !free.is_empty() {
@@ -143,18 +169,28 @@ fn values(basis: &PointBasis, p: &[f64], linear: &[usize]) -> Vec<f64> {
         .collect()
 }
 
-/// ½Σwr² at `p` with the problem's own residuals; None when not finite.
+/// ½Σwr² at `p` with the problem's own residuals, in one pass over the samples (no
+/// vectors: the grid takes this at every point); None when not finite.
 fn exact_cost(
     problem: &FitProblem,
     basis: &PointBasis,
     p: &[f64],
     linear: &[usize],
 ) -> Option<f64> {
-    let r = problem.raw_residuals(&values(basis, p, linear));
+    let n = basis.rest.len();
+    let sw = problem.sqrt_weight();
     let cost = 0.5
-        * r.iter()
-            .zip(problem.sqrt_weight())
-            .map(|(r, s)| (r * s) * (r * s))
+        * (0..n)
+            .map(|i| {
+                let f = linear
+                    .iter()
+                    .enumerate()
+                    .fold(basis.rest[i], |acc, (c, &k)| {
+                        acc + p[k] * basis.columns[c * n + i]
+                    });
+                let r = problem.residual(i, f) * sw[i];
+                r * r
+            })
             .sum::<f64>();
     cost.is_finite().then_some(cost)
 }
