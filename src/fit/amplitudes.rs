@@ -22,6 +22,10 @@ use nalgebra::{DMatrix, DVector};
 /// near their optimum are enough, and they bound the work at a grid point.
 pub const LOG_ITERS: usize = 10;
 
+/// Most sweeps of the SVD in [`nnls`] (a few unknowns converge in a handful; the bound only
+/// turns a matrix the SVD cannot handle into "no amplitudes" instead of an endless loop).
+pub const SVD_MAX_ITERS: usize = 1000;
+
 /// Relative cost reduction below which the log-residual refinement stops.
 pub const LOG_FTOL: f64 = 1e-6;
 
@@ -106,8 +110,14 @@ fn linearised(problem: &FitProblem, basis: &PointBasis, d: &[f64]) -> Option<Vec
 /// active sets: solve the free unknowns (SVD, rank-safe), fix the most negative one at 0,
 /// repeat. Exact when at most one bound is active (every goniofit model has at most two
 /// amplitudes per channel, and the channels' columns do not overlap), otherwise a feasible
-/// point no worse than clamping. None when the solve is not finite.
+/// point no worse than clamping. None when the normal equations or the solve are not
+/// finite, or the SVD does not converge within [`SVD_MAX_ITERS`] sweeps.
 pub fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
+    // nalgebra's unbounded SVD never returns on a matrix with an infinite or NaN entry
+    // (AᵀA of finite columns can overflow): such a grid point has no amplitudes.
+    if !ata.iter().chain(atb.iter()).all(|v| v.is_finite()) {
+        return None;
+    }
     let k = atb.len();
     if k == 1 {
         // One unknown: x = Aᵀb / AᵀA when AᵀA > 0 (what the SVD solve gives), else 0.
@@ -121,7 +131,7 @@ pub fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
         let m = free.len();
         let sub = DMatrix::from_fn(m, m, |i, j| ata[(free[i], free[j])]);
         let rhs = DVector::from_fn(m, |i, _| atb[free[i]]);
-        let svd = sub.svd(true, true);
+        let svd = sub.try_svd(true, true, f64::EPSILON, SVD_MAX_ITERS)?;
         let tol = 1e-14 * svd.singular_values.max();
         let x = svd.solve(&rhs, tol).ok()?;
         if !x.iter().all(|v| v.is_finite()) {

@@ -48,6 +48,8 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let (problem, start) = (problem?, start?);
+    // A stop during the start search leaves an unrefined start (see start::starting_point).
+    let stopped_in_start = stop_requested(config);
     check_series_cost(config, input, &problem.layout, &start.p0)?;
     let run = solve_checked(&problem, input, &start, config);
     let mut identified = identify::identify(input, &problem, &run, config.reduce);
@@ -55,12 +57,18 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         identified.verdict = Verdict::Rough;
     }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
+    if stopped_in_start {
+        solved.notes.push(STOPPED_IN_START.to_string());
+    }
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     Ok(assemble::assemble(
         model, input, config, solved, seconds, start,
     ))
 }
+
+/// The note of a fit stopped while its starting values were searched for.
+pub const STOPPED_IN_START: &str = "the fit was stopped during the search for starting values: the values are the best starting point found by then (evaluated once on the full data), not a fit, and their standard errors describe that point only";
 
 /// Solve from the start, and from the start search's rival valley when there is one
 /// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain

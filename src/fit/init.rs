@@ -7,6 +7,7 @@
 
 use super::amplitudes::{self, linear_weights};
 use super::grid_cache;
+use super::lm::Stop;
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::stats::median;
 use rayon::prelude::*;
@@ -70,12 +71,20 @@ pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::Pa
 /// tolerance (the grid only ranks candidates; LM then works at the requested one). For KBS
 /// models, grid points whose median g is far into a limit use that limit's approximation
 /// (the grid's corners, σ ≫ λ or T ≫ λ, would otherwise dominate its cost).
+///
+/// Once `stop` is requested no further grid point is started: the candidates are the best
+/// of the points completed by then (every cost is that of a whole point), or the fallback
+/// start (all ones, infinite cost) when the grid's model side was not complete.
 pub fn initial_values(
     problem: &FitProblem,
     grid_model: &dyn crate::model::Model,
     input: &FitInput,
     given: &[Option<f64>],
+    stop: Option<&Stop>,
 ) -> Vec<(f64, Vec<f64>)> {
+    let stopped = || stop.is_some_and(Stop::is_requested);
+    // Where a search without any usable grid point starts.
+    let fallback = || vec![(f64::INFINITY, vec![1.0; problem.layout.len()])];
     use crate::model::{by_name, EvalMode, ModelOptions};
     let layout = &problem.layout;
     let specs = problem.model.params();
@@ -163,6 +172,9 @@ pub fn initial_values(
         let points = (0..total)
             .into_par_iter()
             .map(|flat| {
+                if stopped() {
+                    return None;
+                }
                 let (p, g) = point(flat);
                 let grid_problem = match (g, &sub_rough, &sub_smooth) {
                     (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
@@ -172,8 +184,12 @@ pub fn initial_values(
                 grid_cache::point_basis(grid_problem, &p, &linear)
             })
             .collect();
-        grid_cache::GridBasis { points }
+        // A grid cut short by a stop is incomplete: not cached, not ranked.
+        (!stopped()).then_some(grid_cache::GridBasis { points })
     });
+    let Some(basis) = basis else {
+        return fallback();
+    };
     // Residual weights of the linear solve: relative/log residuals linearised around the
     // data.
     let d = linear_weights(&sub);
@@ -181,6 +197,9 @@ pub fn initial_values(
     let mut scored: Vec<(f64, Vec<f64>, usize)> = (0..total)
         .into_par_iter()
         .filter_map(|flat| {
+            if stopped() {
+                return None;
+            }
             let (mut p, g) = point(flat);
             let band = match g {
                 Some(g) if g < SMOOTH_BAND_G => 0,
@@ -217,7 +236,7 @@ pub fn initial_values(
         }
     }
     if picked.is_empty() {
-        picked.push((f64::INFINITY, vec![1.0; layout.len()]));
+        return fallback();
     }
     picked
 }

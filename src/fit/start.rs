@@ -7,7 +7,7 @@
 
 use super::config::FitConfig;
 use super::init;
-use super::lm::LmConfig;
+use super::lm::{LmConfig, Stop};
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::solve::run_lm;
 use crate::error::Result;
@@ -160,8 +160,14 @@ pub(super) fn starting_point(
         sub,
     };
     // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
-    let candidates =
-        init::initial_values(&refiners.exact, grid_model.as_ref(), &refiners.sub, given);
+    let stop = config.lm.stop.as_ref();
+    let candidates = init::initial_values(
+        &refiners.exact,
+        grid_model.as_ref(),
+        &refiners.sub,
+        given,
+        stop,
+    );
     let start_seconds = t0.elapsed().as_secs_f64();
     // A start must lie inside the models' domain on every sample, not only on the
     // subsample: a rough-valley candidate can drift to a σ where a sample outside the
@@ -174,7 +180,9 @@ pub(super) fn starting_point(
     let coarse = coarse_config(config);
     let mut alternatives = Vec::new();
     let mut rival = None;
-    if refiners.sub.y.len() > layout.free().len() {
+    // After a stop request the grid's best point inside the domain is the start (nothing is
+    // refined: the fit then reports the full data's cost there).
+    if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
         // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
         // worth starting from while another candidate's valley is about as low; when the
@@ -238,7 +246,9 @@ pub(super) fn starting_point(
 /// (σ → ∞ at fixed T/σ) while the truth is elsewhere. A candidate in the rough band
 /// (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation and its
 /// refined cost then taken with the exact model. Returns (cost, values) per candidate;
-/// the cost is infinite for a refined point that is not finite or not inside the domain.
+/// the cost is infinite for a refined point that is not finite or not inside the domain,
+/// or for a candidate whose refinement was not started before a stop request (the fit's
+/// `coarse.stop`; a refinement under way ends at its last complete point).
 fn refine_candidates(
     refiners: &Refiners,
     candidates: &[(f64, Vec<f64>)],
@@ -248,13 +258,16 @@ fn refine_candidates(
     candidates
         .par_iter()
         .map(|(_, start)| {
+            if stopped(coarse.stop.as_ref()) {
+                return (f64::INFINITY, start.clone());
+            }
             let rough_band = refiners.sigma_k.is_some_and(|k| {
                 super::identify::median_g(&refiners.sub, start[k]) > init::ROUGH_BAND_G
             });
             let (cost, values) = match (refiners.rough_problem(start), rough_band) {
                 (Some(rough), true) => {
                     let run = run_lm(&rough, start, coarse);
-                    slide_rough_ridge(refiners, run.values, inside)
+                    slide_rough_ridge(refiners, run.values, inside, coarse.stop.as_ref())
                 }
                 _ => {
                     let run = run_lm(&refiners.exact, start, coarse);
@@ -266,6 +279,11 @@ fn refine_candidates(
             (if usable { cost } else { f64::INFINITY }, values)
         })
         .collect()
+}
+
+/// Whether `stop` was requested (the fit's stop request; none: never).
+fn stopped(stop: Option<&Stop>) -> bool {
+    stop.is_some_and(Stop::is_requested)
 }
 
 /// Factor by which [`slide_rough_ridge`] scales σ and T per step.
@@ -285,11 +303,12 @@ pub const RIDGE_STEPS: usize = 12;
 /// 4λ, so a lobe of σ ≈ 8λ would otherwise be judged at a σ where the exact cost is 10⁵
 /// times the truth's, and lose to a smooth-looking optimum (recovery issue #17). The slide
 /// steps by [`RIDGE_STEP`] while the exact cost falls, the point stays `inside` the domain,
-/// and at most [`RIDGE_STEPS`] times.
+/// and at most [`RIDGE_STEPS`] times, and no step is started after a stop request.
 fn slide_rough_ridge(
     refiners: &Refiners,
     mut p: Vec<f64>,
     inside: &(dyn Fn(&[f64]) -> bool + Sync),
+    stop: Option<&Stop>,
 ) -> (f64, Vec<f64>) {
     let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
     let mut cost = exact_cost(&p);
@@ -302,6 +321,9 @@ fn slide_rough_ridge(
         return (cost, p);
     }
     for _ in 0..RIDGE_STEPS {
+        if stopped(stop) {
+            break;
+        }
         let mut q = p.clone();
         q[ks] *= RIDGE_STEP;
         q[kt] *= RIDGE_STEP;
