@@ -30,19 +30,6 @@ pub const EDGE_MARGIN: f64 = 1e-3;
 /// subsample, the narrow one is 6 % lower on the full data).
 pub const RIVAL_MARGIN: f64 = 0.1;
 
-/// Relative difference in every parameter within which two refined candidates ended at the
-/// same optimum: the refinement stops at relative steps of its `xtol` (10⁻⁶), so one valley
-/// reached from two starts agrees far closer than this, while distinct valleys of the grid
-/// lie a factor of ~2 apart ([`init::initial_values`]).
-pub const SAME_OPTIMUM: f64 = 1e-3;
-
-/// Whether two refined points (layout order) are the same optimum (see [`SAME_OPTIMUM`]).
-fn same_optimum(a: &[f64], b: &[f64]) -> bool {
-    a.iter()
-        .zip(b)
-        .all(|(x, y)| (x - y).abs() <= SAME_OPTIMUM * x.abs().max(y.abs()))
-}
-
 /// Model accuracy of the quick refinement on a subsample (it only has to land near the
 /// optimum; the full fit then works at the requested accuracy).
 pub const REFINE_TOL: f64 = 1e-6;
@@ -219,11 +206,9 @@ pub(super) fn starting_point(
             (Some((values, start)), _) => {
                 p0 = values;
                 grid_start = start;
-                // A second valley about as low on the subsample is solved too (a candidate
-                // whose refinement ended at the winner's optimum is no second valley).
+                // A second valley about as low on the subsample is solved too.
                 rival = others
-                    .iter()
-                    .find(|(_, v)| !same_optimum(v, &p0))
+                    .first()
                     .filter(|(c, _)| *c <= best_usable * (1.0 + RIVAL_MARGIN))
                     .map(|(_, v)| v.clone());
             }
