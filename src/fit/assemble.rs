@@ -10,6 +10,7 @@ use super::result::{Derived, FitResult, ParamResult, Verdict};
 use super::start::Start;
 use super::stats;
 use super::validate;
+use super::validity;
 use crate::model::{Model, ParamSpec};
 use nalgebra::DMatrix;
 use std::collections::BTreeMap;
@@ -76,6 +77,7 @@ pub(super) fn assemble(
         condition: unc.condition,
         verdict,
         notes,
+        validity: None,
         loss: problem.loss(),
         beyond_f_scale: gof.beyond_f_scale,
         cost: gof.cost,
@@ -105,6 +107,7 @@ pub(super) fn assemble(
         values: p.clone(),
         start: start.grid_start,
     };
+    result.validity = validity_of(&result, input);
     if !result.is_finite() {
         result.notes.push(
             "not a usable optimum: the cost, a parameter, a standard error or a correlation is not a finite number (the values overflow double precision; rescale L or the weights)".into(),
@@ -348,6 +351,25 @@ fn derived_quantities(
         });
     }
     derived
+}
+
+/// The validity checks of a KBS fit at its σ and T (None for other models).
+fn validity_of(r: &FitResult, input: &FitInput) -> Option<validity::Validity> {
+    let param = |name: &str| r.params.iter().find(|p| p.name == name);
+    let (sigma, corr) = (param("sigma")?, param("T")?);
+    let ratio = r.derived.iter().find(|d| d.name == "T/sigma")?;
+    let surface = validity::Surface {
+        sigma: sigma.value,
+        corr_len: corr.value,
+        ratio_determined: ratio.determined,
+        both_determined: (sigma.determined || sigma.fixed) && (corr.determined || corr.fixed),
+        wavelength: stats::median(&input.geo.wavelength),
+    };
+    Some(validity::check(
+        &surface,
+        &input.geo.theta_i,
+        &input.geo.theta_r,
+    ))
 }
 
 /// Range of g over the samples at the fitted σ (KBS models).

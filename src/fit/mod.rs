@@ -15,6 +15,7 @@ pub mod problem;
 pub mod profile;
 pub mod quantile;
 pub mod stats;
+pub mod validity;
 pub mod weights;
 
 mod assemble;

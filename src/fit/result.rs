@@ -70,6 +70,9 @@ pub struct FitResult {
     pub condition: f64,
     pub verdict: Verdict,
     pub notes: Vec<String>,
+    /// Whether the fitted surface satisfies the paper's assumptions (KBS models; a warning,
+    /// not a failure): [`super::validity`].
+    pub validity: Option<super::validity::Validity>,
     /// The robust loss the fit minimised (linear: plain least squares).
     pub loss: Loss,
     /// Under a robust loss, how many samples have a weighted residual beyond `f_scale`

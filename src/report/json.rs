@@ -85,6 +85,17 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         },
         "singular_values": r.singular_values.iter().map(|v| num(*v)).collect::<Vec<_>>(),
         "condition": num(r.condition),
+        "validity": r.validity.as_ref().map(|v| {
+            v.checks
+                .iter()
+                .map(|c| {
+                    (
+                        c.name.to_string(),
+                        json!({"satisfied": c.satisfied, "value": num(c.value), "limit": c.limit, "text": c.text}),
+                    )
+                })
+                .collect::<Map<String, Value>>()
+        }),
         "cost": num(r.cost),
         "loss": {"kind": r.loss.kind, "f_scale": num(r.loss.f_scale), "beyond_f_scale": r.beyond_f_scale},
         "chi2": num(r.chi2),

@@ -404,8 +404,31 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     for note in &r.notes {
         let _ = writeln!(s, "    note: {note}");
     }
+    validity_lines(&mut s, r);
     correlation_lines(&mut s, r);
     s
+}
+
+/// The `[[Validity]]` lines of a KBS fit: each of the paper's assumptions at the fitted
+/// surface, satisfied, violated or not determined (warnings, not failures).
+fn validity_lines(s: &mut String, r: &FitResult) {
+    let Some(v) = &r.validity else {
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "[[Validity]] (the paper's assumptions at the fitted surface; a warning, not a failure)"
+    );
+    for c in &v.checks {
+        // One clause per line (the texts separate clauses by "; "), so that no line runs
+        // past the width of a terminal.
+        let mut clauses = c.text.split("; ");
+        let first = clauses.next().unwrap_or_default();
+        let _ = writeln!(s, "    {:<15} = {first}", c.name);
+        for clause in clauses {
+            let _ = writeln!(s, "{:22}{clause}", "");
+        }
+    }
 }
 
 #[cfg(test)]
