@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{fit_json, goniofit};
+use common::{fit_json, goniofit, GARNET_550};
 use predicates::str::contains;
 use std::path::{Path, PathBuf};
 
@@ -28,17 +28,6 @@ fn f(v: &serde_json::Value) -> f64 {
 
 const HEMI: &str = "data/synthetic/kbs_hemisphere.csv";
 const GARNET: &str = "data/cornell/garnet_red.astm";
-
-/// The README's fit of the garnet paint's 550 nm channel (append the file).
-const GARNET_550: [&str; 7] = [
-    "fit",
-    "--model",
-    "kbs+lambert",
-    "--channel",
-    "550nm",
-    "--residual",
-    "log",
-];
 
 #[test]
 fn wavelength_units_scale_sigma_and_t_and_are_stated() {

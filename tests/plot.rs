@@ -1,6 +1,8 @@
 //! Pictures: what each one must show (Peters 2000, Figures 4–7), and that the files are
 //! valid PNG and SVG.
 
+mod common;
+
 use assert_cmd::Command;
 use goniofit::geometry::{Geometry, Quantity, Sample};
 use goniofit::model::{by_name, Model, ModelOptions};
@@ -512,14 +514,14 @@ fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
 }
 
 /// `fit --plot` on the bundled real data: the SVG of each picture, by stem.
+/// `args` start with the subcommand `fit`.
 fn real_fit_pictures(args: &[&str]) -> std::collections::HashMap<String, String> {
     let dir = tempfile::tempdir().unwrap();
-    Command::cargo_bin("goniofit")
-        .unwrap()
+    common::goniofit()
         .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(["fit", "--no-intervals", "--quiet", "--plot"])
-        .arg(dir.path())
         .args(args)
+        .args(["--no-intervals", "--quiet", "--plot"])
+        .arg(dir.path())
         .assert()
         .code(0);
     [
@@ -552,15 +554,8 @@ fn svg_texts(svg: &str) -> Vec<String> {
 #[test]
 fn a_paint_fit_linear_is_not_crushed_by_its_grazing_points() {
     // Garnet red at 550 nm: BRDF up to 28 sr⁻¹ at grazing angles, the lobe ≈ 0.5 sr⁻¹.
-    let pics = real_fit_pictures(&[
-        "--model",
-        "kbs+lambert",
-        "--channel",
-        "550nm",
-        "--residual",
-        "log",
-        "data/cornell/garnet_red.astm",
-    ]);
+    let pics =
+        real_fit_pictures(&[&common::GARNET_550[..], &["data/cornell/garnet_red.astm"]].concat());
     let lin = svg_texts(&pics["fit_linear"]);
     assert!(
         lin.iter()
@@ -585,6 +580,7 @@ fn a_paint_fit_linear_is_not_crushed_by_its_grazing_points() {
 fn ptfe_pictures_have_log_ticks_and_a_colour_bar() {
     // All four wavelengths: 24 (θi, λ) series, more than the 10 colours.
     let pics = real_fit_pictures(&[
+        "fit",
         "--model",
         "kbs+lambert",
         "--residual",

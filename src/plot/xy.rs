@@ -372,16 +372,15 @@ pub fn clip_polyline(
     out
 }
 
-fn draw_series_of<'a, DB, X, Y>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+/// An axis of an x–y chart: f64 values, tick labels formatted by our formatters.
+pub trait Axis: Ranged<ValueType = f64> + ValueFormatter<f64> {}
+impl<T: Ranged<ValueType = f64> + ValueFormatter<f64>> Axis for T {}
+
+fn draw_series_of<DB: DrawingBackend, X: Axis, Y: Axis>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
     plot: &XyPlot,
     s: &Series,
-) -> Result<(), DrawError<DB>>
-where
-    DB: DrawingBackend + 'a,
-    X: Ranged<ValueType = f64>,
-    Y: Ranged<ValueType = f64>,
-{
+) -> Result<(), DrawError<DB>> {
     let (xr, yr) = (plot.x_range, plot.y_range);
     let color = s.color;
     let dashed = |w: u32, on: u32, off: u32| (w, on, off);
@@ -430,15 +429,10 @@ where
     Ok(())
 }
 
-fn draw_annotations<'a, DB, X, Y>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+fn draw_annotations<DB: DrawingBackend, X: Axis, Y: Axis>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
     plot: &XyPlot,
-) -> Result<(), DrawError<DB>>
-where
-    DB: DrawingBackend + 'a,
-    X: Ranged<ValueType = f64>,
-    Y: Ranged<ValueType = f64>,
-{
+) -> Result<(), DrawError<DB>> {
     if plot.annotations.is_empty() {
         return Ok(());
     }
@@ -492,15 +486,10 @@ where
     Ok(())
 }
 
-fn draw_body<'a, DB, X, Y>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+fn draw_body<DB: DrawingBackend, X: Axis, Y: Axis>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
     plot: &XyPlot,
-) -> Result<(), DrawError<DB>>
-where
-    DB: DrawingBackend + 'a,
-    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
-    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
-{
+) -> Result<(), DrawError<DB>> {
     let grey = RGBColor(150, 150, 150);
     let (x0, x1) = plot.x_range;
     let (y0, y1) = plot.y_range;
