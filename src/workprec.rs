@@ -346,6 +346,7 @@ pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkP
         grid_model.as_ref(),
         &input,
         &vec![None; layout.len()],
+        None,
     );
     let x0 = layout.to_x(&candidates[0].1);
     for (label, jac, lm_config) in solver_settings() {

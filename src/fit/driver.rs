@@ -48,6 +48,8 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let (problem, start) = (problem?, start?);
+    // A stop during the start search leaves an unrefined start (see start::starting_point).
+    let stopped_in_start = stop_requested(config);
     check_series_cost(config, input, &problem.layout, &start.p0)?;
     let run = solve_checked(&problem, input, &start, config);
     let mut identified = identify::identify(input, &problem, &run, config.reduce);
@@ -55,6 +57,9 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         identified.verdict = Verdict::Rough;
     }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
+    if stopped_in_start {
+        solved.notes.push(STOPPED_IN_START.to_string());
+    }
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     Ok(assemble::assemble(
@@ -62,30 +67,71 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     ))
 }
 
-/// Solve from the start; when that run ends at an edge of the physical domain
-/// ([`validate::at_kbs_edge`]), solve again from each other usable refined candidate and keep
-/// the lowest-cost run inside the domain (the first run when every one ends at an edge).
+/// The note of a fit stopped while its starting values were searched for.
+pub const STOPPED_IN_START: &str = "the fit was stopped during the search for starting values: the values are the best starting point found by then (evaluated once on the full data), not a fit, and their standard errors describe that point only";
+
+/// Solve from the start, and from the start search's rival valley when there is one
+/// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain
+/// ([`validate::at_kbs_edge`]), solve again from each other usable refined candidate, and
+/// keep the lowest-cost run inside the domain unless the edge run is lower by more than
+/// [`start::EDGE_MARGIN`] (then the edge run: the fit ends `degenerate` and says why).
+/// A fit that may reduce starts and stays below the rough ridge's [`solve::RIDGE_G`]
+/// ([`solve::SigmaRange`]).
 fn solve_checked(
     problem: &FitProblem,
     input: &FitInput,
     start: &start::Start,
     config: &FitConfig,
 ) -> solve::Run {
-    let first = solve::run_lm(problem, &start.p0, &config.lm);
+    let range = config
+        .reduce
+        .then(|| solve::SigmaRange::rough_ridge(problem, input))
+        .flatten();
+    let solve = |p0: &[f64]| match &range {
+        Some(r) => solve::run_lm_in(problem, &r.project(p0), &config.lm, Some(r)),
+        None => solve::run_lm(problem, p0, &config.lm),
+    };
+    let first = solve(&start.p0);
     let layout = &problem.layout;
     if !validate::at_kbs_edge(layout, input, &first.values) {
-        return first;
+        return match start.rival.as_deref().filter(|_| !stop_requested(config)) {
+            Some(p0) => {
+                let rival = solve(p0);
+                let inside = !validate::at_kbs_edge(layout, input, &rival.values);
+                let (mut kept, other) = if inside && rival.lm.cost < first.lm.cost {
+                    (rival, first)
+                } else {
+                    (first, rival)
+                };
+                kept.add_counts(&other.lm);
+                kept
+            }
+            None => first,
+        };
     }
-    let mut best: Option<solve::Run> = None;
+    let mut runs = vec![first];
     for p0 in &start.alternatives {
-        let mut run = solve::run_lm(problem, p0, &config.lm);
-        run.add_counts(&first.lm);
-        let better = best.as_ref().is_none_or(|b| run.lm.cost < b.lm.cost);
-        if !validate::at_kbs_edge(layout, input, &run.values) && better {
-            best = Some(run);
+        if stop_requested(config) {
+            break;
         }
+        runs.push(solve(p0));
     }
-    best.unwrap_or(first)
+    let lowest = |edge: bool| {
+        (0..runs.len())
+            .filter(|&i| validate::at_kbs_edge(layout, input, &runs[i].values) == edge)
+            .min_by(|&a, &b| runs[a].lm.cost.total_cmp(&runs[b].lm.cost))
+    };
+    let edge = lowest(true).unwrap_or(0);
+    let pick = match lowest(false) {
+        Some(i) if runs[i].lm.cost <= runs[edge].lm.cost * (1.0 + start::EDGE_MARGIN) => i,
+        _ => edge,
+    };
+    // The report counts the work of every run.
+    let mut chosen = runs.swap_remove(pick);
+    for other in &runs {
+        chosen.add_counts(&other.lm);
+    }
+    chosen
 }
 
 /// Largest g a forced `--mode series` fit accepts at its start: the series sums O(√g) terms

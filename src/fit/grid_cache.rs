@@ -90,21 +90,23 @@ fn cache() -> &'static Mutex<Cache> {
 
 /// The grid basis for `key`: from the cache, or computed by `compute` and cached. Two
 /// threads asking for a new key at once may both compute it (the results are identical).
-pub fn basis(key: Key, compute: impl FnOnce() -> GridBasis) -> Arc<GridBasis> {
+/// `compute` returns None when it was stopped before every point was computed: nothing is
+/// cached then (a later fit of the layout computes the whole grid), and None is returned.
+pub fn basis(key: Key, compute: impl FnOnce() -> Option<GridBasis>) -> Option<Arc<GridBasis>> {
     if let Ok(mut c) = cache().lock() {
         if let Some(pos) = c.iter().position(|(k, _)| **k == key) {
             let hit = c.remove(pos);
             let b = hit.1.clone();
             c.insert(0, hit);
-            return b;
+            return Some(b);
         }
     }
-    let b = Arc::new(compute());
+    let b = Arc::new(compute()?);
     if let Ok(mut c) = cache().lock() {
         c.insert(0, (Arc::new(key), b.clone()));
         c.truncate(CACHE_ENTRIES);
     }
-    b
+    Some(b)
 }
 
 /// The basis at full parameters `p` (the linear parameters' values are ignored: they are

@@ -75,13 +75,7 @@ pub(super) fn log_covariance(
     p: &[f64],
 ) -> DMatrix<f64> {
     let free = layout.free();
-    let f: Vec<f64> = free
-        .iter()
-        .map(|&k| {
-            let t = layout.params[k].transform;
-            t.dp_dx(t.to_x(p[k])) / p[k]
-        })
-        .collect();
+    let f = log_factors(layout, p);
     DMatrix::from_fn(free.len(), free.len(), |i, j| {
         unc.covariance[(i, j)] * f[i] * f[j]
     })
@@ -127,7 +121,8 @@ fn kbs_verdict(
         return None;
     }
     let idx: Vec<usize> = [Some(i_s), Some(i_t), i_a].into_iter().flatten().collect();
-    let Some(dir) = weakest_direction(&cov, unc, &idx, rank_deficient) else {
+    let Some(dir) = weakest_direction(&cov, unc, &log_factors(layout, p), &idx, rank_deficient)
+    else {
         return Some(Verdict::Partial);
     };
     let align = |v: &[f64]| -> f64 {
@@ -147,19 +142,34 @@ fn kbs_verdict(
     }
 }
 
+/// d ln p / dx of each free parameter at `p` (the solver's x to log space).
+fn log_factors(layout: &ParamLayout, p: &[f64]) -> Vec<f64> {
+    layout
+        .free()
+        .iter()
+        .map(|&k| {
+            let t = layout.params[k].transform;
+            t.dp_dx(t.to_x(p[k])) / p[k]
+        })
+        .collect()
+}
+
 /// The least determined direction in the (ln σ, ln T, ln s) block `idx` of the log-space
-/// covariance, normalised: the null direction when the Jacobian is rank deficient, else the
+/// covariance, normalised: the null direction when the Jacobian is rank deficient (a
+/// direction in the solver's canonical x, taken to log space with `log_factor` =
+/// d ln p/dx; see `solve::canonicalise` for the sign of an amplitude's x), else the
 /// largest-variance eigenvector of that block; None when that has no finite direction.
 /// `idx` holds the positions among the free parameters of σ, T and (when free) the scale.
 fn weakest_direction(
     cov: &DMatrix<f64>,
     unc: &stats::Uncertainty,
+    log_factor: &[f64],
     idx: &[usize],
     rank_deficient: bool,
 ) -> Option<DVector<f64>> {
     let dir: DVector<f64> = if rank_deficient {
         let v = unc.undetermined.first()?; // the caller checked it exists
-        DVector::from_iterator(idx.len(), idx.iter().map(|&i| v[i]))
+        DVector::from_iterator(idx.len(), idx.iter().map(|&i| v[i] * log_factor[i]))
     } else {
         let block = DMatrix::from_fn(idx.len(), idx.len(), |a, b| cov[(idx[a], idx[b])]);
         let eig = block.symmetric_eigen();

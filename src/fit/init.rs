@@ -5,10 +5,11 @@
 //! ([`subsample`]) of at most [`GRID_SAMPLES`] samples, so its cost does not grow with the
 //! dataset.
 
+use super::amplitudes::{self, linear_weights};
 use super::grid_cache;
-use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
+use super::lm::Stop;
+use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::stats::median;
-use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 /// Largest number of samples the coarse grid is evaluated on.
@@ -70,12 +71,20 @@ pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::Pa
 /// tolerance (the grid only ranks candidates; LM then works at the requested one). For KBS
 /// models, grid points whose median g is far into a limit use that limit's approximation
 /// (the grid's corners, σ ≫ λ or T ≫ λ, would otherwise dominate its cost).
+///
+/// Once `stop` is requested no further grid point is started: the candidates are the best
+/// of the points completed by then (every cost is that of a whole point), or the fallback
+/// start (all ones, infinite cost) when the grid's model side was not complete.
 pub fn initial_values(
     problem: &FitProblem,
     grid_model: &dyn crate::model::Model,
     input: &FitInput,
     given: &[Option<f64>],
+    stop: Option<&Stop>,
 ) -> Vec<(f64, Vec<f64>)> {
+    let stopped = || stop.is_some_and(Stop::is_requested);
+    // Where a search without any usable grid point starts.
+    let fallback = || vec![(f64::INFINITY, vec![1.0; problem.layout.len()])];
     use crate::model::{by_name, EvalMode, ModelOptions};
     let layout = &problem.layout;
     let specs = problem.model.params();
@@ -163,6 +172,9 @@ pub fn initial_values(
         let points = (0..total)
             .into_par_iter()
             .map(|flat| {
+                if stopped() {
+                    return None;
+                }
                 let (p, g) = point(flat);
                 let grid_problem = match (g, &sub_rough, &sub_smooth) {
                     (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
@@ -172,8 +184,12 @@ pub fn initial_values(
                 grid_cache::point_basis(grid_problem, &p, &linear)
             })
             .collect();
-        grid_cache::GridBasis { points }
+        // A grid cut short by a stop is incomplete: not cached, not ranked.
+        (!stopped()).then_some(grid_cache::GridBasis { points })
     });
+    let Some(basis) = basis else {
+        return fallback();
+    };
     // Residual weights of the linear solve: relative/log residuals linearised around the
     // data.
     let d = linear_weights(&sub);
@@ -181,6 +197,9 @@ pub fn initial_values(
     let mut scored: Vec<(f64, Vec<f64>, usize)> = (0..total)
         .into_par_iter()
         .filter_map(|flat| {
+            if stopped() {
+                return None;
+            }
             let (mut p, g) = point(flat);
             let band = match g {
                 Some(g) if g < SMOOTH_BAND_G => 0,
@@ -189,7 +208,7 @@ pub fn initial_values(
                 None => 0,
             };
             let b = basis.points[flat].as_ref()?;
-            solve_linear_with(&sub, b, &d, &mut p, &linear).map(|cost| (cost, p, band))
+            amplitudes::solve(&sub, b, &d, &mut p, &linear).map(|cost| (cost, p, band))
         })
         .collect();
     // The grid ranks with the limits' approximations, which can favour a wrong regime (the
@@ -217,7 +236,7 @@ pub fn initial_values(
         }
     }
     if picked.is_empty() {
-        picked.push((f64::INFINITY, vec![1.0; layout.len()]));
+        return fallback();
     }
     picked
 }
@@ -233,85 +252,12 @@ fn options_bits(model: &dyn crate::model::Model) -> Vec<u64> {
     }
 }
 
-/// Solve the linear parameters `linear` of `p` by least squares (with the other parameters
-/// held); returns the resulting cost, or None when the
-/// model gives non-finite values.
+/// Solve the linear parameters `linear` of `p` (with the other parameters held; see
+/// [`amplitudes::solve`]); returns the resulting cost, or None when the model gives
+/// non-finite values.
 pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Option<f64> {
     let basis = grid_cache::point_basis(problem, p, linear)?;
-    solve_linear_with(problem, &basis, &linear_weights(problem), p, linear)
-}
-
-/// The weights of [`solve_linear`]'s residuals: √wᵢ, divided by max(|yᵢ|, floor) for
-/// relative and log residuals (linearised around the data).
-fn linear_weights(problem: &FitProblem) -> Vec<f64> {
-    let y = problem.y();
-    problem
-        .sqrt_weight()
-        .iter()
-        .zip(y)
-        .map(|(sw, yi)| match problem.kind() {
-            ResidualKind::Absolute => *sw,
-            _ => sw / yi.abs().max(problem.floor),
-        })
-        .collect()
-}
-
-/// [`solve_linear`] from the model's values at the point, `basis` (f = rest + Σ p_k
-/// column_k), and the residual weights `d` of [`linear_weights`]: no model evaluation.
-fn solve_linear_with(
-    problem: &FitProblem,
-    basis: &grid_cache::PointBasis,
-    d: &[f64],
-    p: &mut [f64],
-    linear: &[usize],
-) -> Option<f64> {
-    let n = problem.len();
-    let rest = &basis.rest;
-    if !linear.is_empty() {
-        let y = problem.y();
-        let col = |c: usize| &basis.columns[c * n..(c + 1) * n];
-        let a = DMatrix::from_fn(n, linear.len(), |i, c| d[i] * col(c)[i]);
-        let b = DVector::from_fn(n, |i, _| d[i] * (y[i] - rest[i]));
-        if !a.iter().chain(b.iter()).all(|v| v.is_finite()) {
-            return None;
-        }
-        // Small normal equations (k ≤ 2 per channel), solved by SVD for rank safety.
-        let ata = a.tr_mul(&a);
-        let atb = a.tr_mul(&b);
-        let svd = ata.svd(true, true);
-        let coef = svd.solve(&atb, 1e-14 * svd.singular_values.max()).ok()?;
-        // Keep the amplitudes inside their domain (p ≥ 0), a little off the bound so the
-        // solver's transform has a gradient there.
-        let largest = coef.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let tiny = if largest > 0.0 { 1e-3 * largest } else { 1e-3 };
-        let clamped = coef
-            .iter()
-            .any(|v| v.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
-        for (c, &k) in linear.iter().enumerate() {
-            p[k] = if coef[c] > 0.0 { coef[c] } else { tiny };
-        }
-        if problem.kind() != ResidualKind::Log && !clamped {
-            // The linearised residual is exact for absolute and relative residuals.
-            let r = b - a * coef;
-            let cost = 0.5 * r.norm_squared();
-            return cost.is_finite().then_some(cost);
-        }
-    }
-    // f at the solved amplitudes, from the basis (f is linear in them).
-    let f: Vec<f64> = (0..n)
-        .map(|i| {
-            linear.iter().enumerate().fold(rest[i], |acc, (c, &k)| {
-                acc + p[k] * basis.columns[c * n + i]
-            })
-        })
-        .collect();
-    let r = problem.raw_residuals(&f);
-    let cost = 0.5
-        * r.iter()
-            .zip(problem.sqrt_weight())
-            .map(|(r, s)| (r * s) * (r * s))
-            .sum::<f64>();
-    cost.is_finite().then_some(cost)
+    amplitudes::solve(problem, &basis, &linear_weights(problem), p, linear)
 }
 
 /// At most `max` of `n` sample indices, spread over the whole file: the multiples of a

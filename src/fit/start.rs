@@ -7,7 +7,7 @@
 
 use super::config::FitConfig;
 use super::init;
-use super::lm::LmConfig;
+use super::lm::{LmConfig, Stop};
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::solve::run_lm;
 use crate::error::Result;
@@ -17,6 +17,18 @@ use std::time::Instant;
 
 /// Accuracy of the model on the starting-value grid (it only ranks candidates).
 pub const GRID_TOL: f64 = 1e-4;
+
+/// Relative cost by which an optimum at an edge of the physical domain (T/σ → 0, kT → 0)
+/// must lie below the best one inside it to count as the fit's result (and the fit then
+/// ends `degenerate`): below that margin, the inside optimum explains the data as well,
+/// with a lobe the surface can have. The same margin compares the full solves.
+pub const EDGE_MARGIN: f64 = 1e-3;
+
+/// Relative subsample cost within which the second-best refined candidate is solved on the
+/// full data as well: the subsample (256 samples, coarse tolerances) cannot rank two
+/// valleys closer than this (Cornell acryl_blue 460 nm: the wide lobe won on the
+/// subsample, the narrow one is 6 % lower on the full data).
+pub const RIVAL_MARGIN: f64 = 0.1;
 
 /// Model accuracy of the quick refinement on a subsample (it only has to land near the
 /// optimum; the full fit then works at the requested accuracy).
@@ -35,6 +47,10 @@ pub(super) struct Start {
     /// The other usable refined candidates, lowest cost first: where the full fit starts
     /// again when its first solve runs to an edge of the domain.
     pub alternatives: Vec<Vec<f64>>,
+    /// The best other usable refined candidate when its subsample cost is within
+    /// [`RIVAL_MARGIN`] of the winner's: a second valley the full fit also solves from,
+    /// keeping the lower cost.
+    pub rival: Option<Vec<f64>>,
 }
 
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
@@ -131,29 +147,74 @@ pub(super) fn starting_point(
         sub,
     };
     // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
-    let candidates =
-        init::initial_values(&refiners.exact, grid_model.as_ref(), &refiners.sub, given);
+    let stop = config.lm.stop.as_ref();
+    let candidates = init::initial_values(
+        &refiners.exact,
+        grid_model.as_ref(),
+        &refiners.sub,
+        given,
+        stop,
+    );
     let start_seconds = t0.elapsed().as_secs_f64();
     // A start must lie inside the models' domain on every sample, not only on the
     // subsample: a rough-valley candidate can drift to a σ where a sample outside the
     // subsample has g beyond the fit's limit. Without any refined start inside, the first
     // grid candidate inside is taken.
     let inside = |p: &[f64]| input.in_domain(model, layout, p);
-    // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
-    // worth starting from: another candidate's valley wins.
-    let usable = |p: &[f64]| inside(p) && !super::validate::at_kbs_edge(layout, input, p);
     let first_grid = candidates.iter().position(|(_, c)| inside(c)).unwrap_or(0);
     let mut grid_start = candidates[first_grid].1.clone();
     let mut p0 = grid_start.clone();
     let coarse = coarse_config(config);
     let mut alternatives = Vec::new();
-    if refiners.sub.y.len() > layout.free().len() {
-        let refined = refine_candidates(&refiners, &candidates, &coarse, &usable);
-        alternatives = other_usable(&refined, &candidates, coarse.ftol);
-        if let Some((values, start)) = lowest_refined(refined, &candidates, coarse.ftol) {
-            p0 = values;
-            grid_start = start;
+    let mut rival = None;
+    // After a stop request the grid's best point inside the domain is the start (nothing is
+    // refined: the fit then reports the full data's cost there).
+    if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
+        let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
+        // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
+        // worth starting from while another candidate's valley is about as low; when the
+        // edge is lower by more than EDGE_MARGIN, the data's best fit is the edge, and the
+        // full fit starts there (to end `degenerate`, saying why), the others as
+        // alternatives.
+        let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
+        let (edge, usable): (Vec<_>, Vec<_>) = refined
+            .iter()
+            .cloned()
+            .zip(&candidates)
+            .partition(|((_, v), _)| at_edge(v));
+        let (usable, usable_grid): (Vec<_>, Vec<_>) =
+            usable.into_iter().map(|(r, c)| (r, c.clone())).unzip();
+        let others = other_usable(&usable, &usable_grid, coarse.ftol);
+        let best_usable = usable.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+        let lowest_edge = edge
+            .iter()
+            .filter(|((c, _), _)| c.is_finite())
+            .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
+        match (
+            lowest_refined(usable, &usable_grid, coarse.ftol),
+            lowest_edge,
+        ) {
+            (winner, Some(((cost, values), grid)))
+                if winner.is_none() || *cost < best_usable * (1.0 - EDGE_MARGIN) =>
+            {
+                if let Some((w, _)) = winner {
+                    alternatives.insert(0, w);
+                }
+                p0 = values.clone();
+                grid_start = grid.1.clone();
+            }
+            (Some((values, start)), _) => {
+                p0 = values;
+                grid_start = start;
+                // A second valley about as low on the subsample is solved too.
+                rival = others
+                    .first()
+                    .filter(|(c, _)| *c <= best_usable * (1.0 + RIVAL_MARGIN))
+                    .map(|(_, v)| v.clone());
+            }
+            _ => {}
         }
+        alternatives.extend(others.into_iter().map(|(_, v)| v));
     }
     Ok(Start {
         p0,
@@ -161,6 +222,7 @@ pub(super) fn starting_point(
         start_seconds,
         init_seconds: t0.elapsed().as_secs_f64(),
         alternatives,
+        rival,
     })
 }
 
@@ -169,7 +231,9 @@ pub(super) fn starting_point(
 /// (σ → ∞ at fixed T/σ) while the truth is elsewhere. A candidate in the rough band
 /// (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation and its
 /// refined cost then taken with the exact model. Returns (cost, values) per candidate;
-/// the cost is infinite for a refined point that is not finite or not inside the domain.
+/// the cost is infinite for a refined point that is not finite or not inside the domain,
+/// or for a candidate whose refinement was not started before a stop request (the fit's
+/// `coarse.stop`; a refinement under way ends at its last complete point).
 fn refine_candidates(
     refiners: &Refiners,
     candidates: &[(f64, Vec<f64>)],
@@ -179,13 +243,16 @@ fn refine_candidates(
     candidates
         .par_iter()
         .map(|(_, start)| {
+            if stopped(coarse.stop.as_ref()) {
+                return (f64::INFINITY, start.clone());
+            }
             let rough_band = refiners.sigma_k.is_some_and(|k| {
                 super::identify::median_g(&refiners.sub, start[k]) > init::ROUGH_BAND_G
             });
             let (cost, values) = match (refiners.rough_problem(start), rough_band) {
                 (Some(rough), true) => {
                     let run = run_lm(&rough, start, coarse);
-                    slide_rough_ridge(refiners, run.values, inside)
+                    slide_rough_ridge(refiners, run.values, inside, coarse.stop.as_ref())
                 }
                 _ => {
                     let run = run_lm(&refiners.exact, start, coarse);
@@ -197,6 +264,11 @@ fn refine_candidates(
             (if usable { cost } else { f64::INFINITY }, values)
         })
         .collect()
+}
+
+/// Whether `stop` was requested (the fit's stop request; none: never).
+fn stopped(stop: Option<&Stop>) -> bool {
+    stop.is_some_and(Stop::is_requested)
 }
 
 /// Factor by which [`slide_rough_ridge`] scales σ and T per step.
@@ -216,11 +288,12 @@ pub const RIDGE_STEPS: usize = 12;
 /// 4λ, so a lobe of σ ≈ 8λ would otherwise be judged at a σ where the exact cost is 10⁵
 /// times the truth's, and lose to a smooth-looking optimum (recovery issue #17). The slide
 /// steps by [`RIDGE_STEP`] while the exact cost falls, the point stays `inside` the domain,
-/// and at most [`RIDGE_STEPS`] times.
+/// and at most [`RIDGE_STEPS`] times, and no step is started after a stop request.
 fn slide_rough_ridge(
     refiners: &Refiners,
     mut p: Vec<f64>,
     inside: &(dyn Fn(&[f64]) -> bool + Sync),
+    stop: Option<&Stop>,
 ) -> (f64, Vec<f64>) {
     let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
     let mut cost = exact_cost(&p);
@@ -233,6 +306,9 @@ fn slide_rough_ridge(
         return (cost, p);
     }
     for _ in 0..RIDGE_STEPS {
+        if stopped(stop) {
+            break;
+        }
         let mut q = p.clone();
         q[ks] *= RIDGE_STEP;
         q[kt] *= RIDGE_STEP;
@@ -264,17 +340,18 @@ fn lowest_refined(
         .map(|((_, values), (_, start))| (values, start.clone()))
 }
 
-/// The usable refined points other than the winner of [`lowest_refined`], lowest cost first.
+/// The usable refined points other than the winner of [`lowest_refined`] with their refined
+/// costs, lowest cost first.
 fn other_usable(
     refined: &[(f64, Vec<f64>)],
     candidates: &[(f64, Vec<f64>)],
     ftol: f64,
-) -> Vec<Vec<f64>> {
+) -> Vec<(f64, Vec<f64>)> {
     let winner = lowest_refined(refined.to_vec(), candidates, ftol).map(|w| w.0);
     let mut rest: Vec<&(f64, Vec<f64>)> = refined
         .iter()
         .filter(|r| r.0.is_finite() && Some(&r.1) != winner.as_ref())
         .collect();
     rest.sort_by(|a, b| a.0.total_cmp(&b.0));
-    rest.into_iter().map(|r| r.1.clone()).collect()
+    rest.into_iter().cloned().collect()
 }

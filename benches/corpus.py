@@ -1,0 +1,133 @@
+#!/usr/bin/env python3
+"""The whole real-data corpus fitted the default way, checked against the reference optima.
+
+Fits (kbs+lambert, BRDF, log residuals, the default start search, one thread):
+  CUReT:   data/curet/curet.csv --wavelength 550 --by-group (61 samples);
+  Cornell: data/cornell/{acryl_blue,cayman,garnet_red,krylon_blue}.astm --by-group (31
+           channels each).
+Each fit is classed against tests/ref/corpus_reference.csv (see tests/ref/corpus_reference.py):
+  at-best    converged, inside the domain, cost <= cost_best * (1 + TOL);
+  degenerate `degenerate` with a note, and the reference's best point is at an edge of the
+             domain or no better than TOL below the best inside it... (see class_of);
+  MISS       anything else (converged in a worse optimum, degenerate although an optimum
+             inside the domain is the best known, or stopped without converging).
+Times: the fit's own run time (JSON `seconds`, per dataset) and each file's wall time.
+
+Usage: python3 benches/corpus.py EXE [--intervals] [--repeats N] [--json OUT]
+(standard library only; run from the repository root). Prints one line per MISS or
+degenerate fit, then the counts and the times (median and worst per dataset and per file).
+"""
+import argparse
+import csv
+import json
+import math
+import statistics
+import subprocess
+import sys
+import time
+
+# Relative cost tolerance of "at the best known optimum": the reduced refit (sigma held in
+# the rough regime) and the solver's ftol leave the cost a little above the reference's
+# full --no-reduce optimum.
+TOL = 1e-3
+FILES = [
+    ("curet", "data/curet/curet.csv", ["--wavelength", "550"]),
+    ("cornell", "data/cornell/acryl_blue.astm", []),
+    ("cornell", "data/cornell/cayman.astm", []),
+    ("cornell", "data/cornell/garnet_red.astm", []),
+    ("cornell", "data/cornell/krylon_blue.astm", []),
+]
+REF = "tests/ref/corpus_reference.csv"
+
+
+def reference(path=REF):
+    with open(path) as f:
+        return {(r["file"], r["group"]): r for r in csv.DictReader(l for l in f if not l.startswith("#"))}
+
+
+def group_of(fit):
+    """The group label of a --by-group fit from its input name `FILE [GROUP]`."""
+    name = fit["input"]
+    return name[name.rindex("[") + 1:-1]
+
+
+def class_of(fit, ref):
+    """at-best / degenerate / MISS with the reason (see the module doc)."""
+    best = float(ref["cost_best"])
+    inside = float(ref["cost_inside"])
+    cost = fit["cost"]
+    term = fit["termination"]
+    if term == "degenerate":
+        if not fit["notes"]:
+            return "MISS", "degenerate without a note"
+        if ref["edge_best"] != "none" or inside > best * (1 + TOL):
+            return "degenerate", "the best known point is at an edge (" + ref["edge_best"] + ")"
+        return "degenerate", f"an optimum inside the domain is known (cost {inside:.6g})"
+    if fit["converged"] and cost is not None and cost <= best * (1 + TOL):
+        return "at-best", ""
+    if fit["converged"]:
+        return "MISS", f"converged at cost {cost:.6g}, {cost / best - 1:.2%} above the best {best:.6g}"
+    return "MISS", f"termination {term}, cost {cost}"
+
+
+def run(exe, corpus, path, extra, intervals):
+    args = [exe, "fit", "--model", "kbs+lambert", "--quantity", "brdf", "--residual", "log",
+            "--by-group", "--json", "--threads", "1", *extra]
+    if not intervals:
+        args.append("--no-intervals")
+    t0 = time.perf_counter()
+    out = subprocess.run([*args, path], capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if not out.stdout.strip():
+        sys.exit(f"{path}: no report (exit {out.returncode}): {out.stderr.strip()}")
+    return json.loads(out.stdout)["fits"], wall
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("exe")
+    ap.add_argument("--intervals", action="store_true", help="keep the profile intervals")
+    ap.add_argument("--repeats", type=int, default=1)
+    ap.add_argument("--json", help="write the per-fit classes and times here")
+    a = ap.parse_args()
+    ref = reference()
+    classes, per_fit, per_file, rows = {}, {}, {}, []
+    for _ in range(a.repeats):
+        for corpus, path, extra in FILES:
+            fits, wall = run(a.exe, corpus, path, extra, a.intervals)
+            per_file.setdefault(path, []).append(wall)
+            for f in fits:
+                key = (path.rsplit("/", 1)[1], group_of(f))
+                per_fit.setdefault(key, []).append(f["seconds"])
+                if key not in classes:
+                    c, why = class_of(f, ref[key])
+                    classes[key] = c
+                    rows.append({"file": key[0], "group": key[1], "class": c, "why": why,
+                                 "cost": f["cost"], "cost_best": float(ref[key]["cost_best"]),
+                                 "termination": f["termination"]})
+                    if c != "at-best":
+                        print(f"{c:10s} {key[0]} {key[1]}: {why}")
+    counts = {c: list(classes.values()).count(c) for c in ("at-best", "degenerate", "MISS")}
+    print(f"{len(classes)} fits: " + ", ".join(f"{v} {k}" for k, v in counts.items()))
+    fit_med = {k: statistics.median(v) for k, v in per_fit.items()}
+    cornell = [v for k, v in fit_med.items() if k[0].endswith(".astm")]
+    curet = [v for k, v in fit_med.items() if not k[0].endswith(".astm")]
+    print(f"per dataset (fit's run time, median of {a.repeats}): Cornell channel median "
+          f"{statistics.median(cornell):.4f} s, worst {max(cornell):.4f} s; CUReT sample "
+          f"median {statistics.median(curet):.4f} s, worst {max(curet):.4f} s")
+    files = {k: statistics.median(v) for k, v in per_file.items()}
+    print("per file (wall, median of %d): " % a.repeats
+          + ", ".join(f"{k.rsplit('/', 1)[1]} {v:.3f} s" for k, v in files.items())
+          + f"; median {statistics.median(files.values()):.3f} s, worst {max(files.values()):.3f} s")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump({"counts": counts, "fits": rows, "file_seconds": files,
+                       "cornell_channel_seconds": {"median": statistics.median(cornell),
+                                                   "worst": max(cornell)},
+                       "curet_sample_seconds": {"median": statistics.median(curet),
+                                                "worst": max(curet)}}, f, indent=1)
+    sys.exit(1 if counts["MISS"] else 0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,159 @@
+//! The real-data corpus against its reference optima (tests/ref/corpus_reference.csv, made
+//! by tests/ref/corpus_reference.py: 85 starts per fit with goniofit's solver, amplitudes
+//! fitted by scipy). Every default fit (kbs+lambert, BRDF, log residuals) must be either
+//! converged at the best known optimum — cost within [`TOL`] of the table's, inside the
+//! physical domain — or `degenerate` with a note when the best known point lies at an edge
+//! of the domain. CI runs a subset: the 61 CUReT samples and every channel of the Cornell
+//! krylon_blue and acryl_blue paints (about 95 fits, ~15 s of one core); the whole corpus
+//! is `python3 benches/corpus.py target/release/goniofit`.
+
+use std::collections::HashMap;
+
+mod common;
+
+/// Relative cost above the reference's best within which a fit is at the best known
+/// optimum: the reduced refit holds σ in a regime, and the solves stop off the rough and
+/// smooth ridges (`RIDGE_G`, `SMOOTH_RIDGE_G`), which costs up to ~1e-5 of the cost.
+const TOL: f64 = 1e-3;
+
+/// Fits whose default start search still ends in a worse valley (two competing lobes on
+/// the acryl blue paint, see the closing note of issue 12): they must stay converged
+/// inside the domain and within [`KNOWN_MISS_TOL`] of the best cost, and the test fails
+/// when one reaches the best (then it leaves this list).
+const KNOWN_MISSES: [(&str, &str); 5] = [
+    ("acryl_blue.astm", "430nm"),
+    ("acryl_blue.astm", "460nm"),
+    ("acryl_blue.astm", "470nm"),
+    ("acryl_blue.astm", "530nm"),
+    ("acryl_blue.astm", "540nm"),
+];
+
+/// Relative cost above the best a known miss may have.
+const KNOWN_MISS_TOL: f64 = 0.07;
+
+struct Reference {
+    cost_best: f64,
+    edge_best: String,
+}
+
+fn reference() -> HashMap<(String, String), Reference> {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ref/corpus_reference.csv");
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let (file, group, cost, edge) = (
+        col("file"),
+        col("group"),
+        col("cost_best"),
+        col("edge_best"),
+    );
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let r = Reference {
+                cost_best: f[cost].parse().unwrap(),
+                edge_best: f[edge].to_string(),
+            };
+            ((f[file].to_string(), f[group].to_string()), r)
+        })
+        .collect()
+}
+
+/// The --by-group fits of one file: (group label, report).
+fn fits(path: &str, extra: &[&str]) -> Vec<(String, serde_json::Value)> {
+    let file = common::data(path);
+    let out = common::goniofit()
+        .args([
+            "fit",
+            "--model",
+            "kbs+lambert",
+            "--quantity",
+            "brdf",
+            "--residual",
+            "log",
+            "--by-group",
+            "--no-intervals",
+            "--json",
+            "--threads",
+            "1",
+        ])
+        .args(extra)
+        .arg(&file)
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{path}: {e}: {}", String::from_utf8_lossy(&out.stderr)));
+    v["fits"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            let name = f["input"].as_str().unwrap();
+            let group = name[name.rfind('[').unwrap() + 1..name.len() - 1].to_string();
+            (group, f.clone())
+        })
+        .collect()
+}
+
+/// The physical domain of KBS as the fit states it (T/σ ≥ 0.1, 2πT/λ ≥ 0.1).
+fn inside(f: &serde_json::Value, lambda: f64) -> bool {
+    let p = |k: &str| f["params"][k]["value"].as_f64().unwrap();
+    let (sigma, t) = (p("sigma"), p("T"));
+    t / sigma >= 0.1 && 2.0 * std::f64::consts::PI * t / lambda >= 0.1 && p("scale") > 0.0
+}
+
+/// Check every fit of one file; returns the failures.
+fn check(path: &str, extra: &[&str], lambda_of: &dyn Fn(&str) -> f64) -> Vec<String> {
+    let reference = reference();
+    let file = path.rsplit('/').next().unwrap().to_string();
+    let mut bad = Vec::new();
+    let all = fits(path, extra);
+    assert!(all.len() >= 31, "{path}: {} fits", all.len());
+    for (group, f) in all {
+        let r = &reference[&(file.clone(), group.clone())];
+        let cost = f["cost"].as_f64().unwrap();
+        let excess = cost / r.cost_best - 1.0;
+        let known_miss = KNOWN_MISSES.contains(&(file.as_str(), group.as_str()));
+        let ok = match f["termination"].as_str().unwrap() {
+            "degenerate" => r.edge_best != "none" && !f["notes"].as_array().unwrap().is_empty(),
+            _ if f["converged"] != true || !inside(&f, lambda_of(&group)) => false,
+            _ if known_miss => excess > TOL && excess <= KNOWN_MISS_TOL,
+            _ => excess <= TOL,
+        };
+        if !ok {
+            bad.push(format!(
+                "{file} {group}: {} cost {cost:.7e} vs best {:.7e} ({:+.3e}), best at edge: {}{}",
+                f["termination"],
+                r.cost_best,
+                excess,
+                r.edge_best,
+                if known_miss { " (a known miss)" } else { "" }
+            ));
+        }
+    }
+    bad
+}
+
+fn nm(group: &str) -> f64 {
+    group.trim_end_matches("nm").parse().unwrap()
+}
+
+#[test]
+fn curet_fits_are_at_the_best_known_optimum_or_degenerate_at_an_edge() {
+    let bad = check("curet/curet.csv", &["--wavelength", "550"], &|_| 550.0);
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+#[test]
+fn cornell_krylon_blue_fits_are_at_the_best_known_optimum() {
+    let bad = check("cornell/krylon_blue.astm", &[], &nm);
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+#[test]
+fn cornell_acryl_blue_fits_are_at_the_best_known_optimum_but_the_known_misses() {
+    let bad = check("cornell/acryl_blue.astm", &[], &nm);
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
