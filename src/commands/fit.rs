@@ -491,7 +491,14 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         }
         if let Some(dir) = &args.plot {
             let config = fit_config(&args, &o.result.model, o.dataset.sigma_l.is_some())?;
-            let written = plot_fit(dir, &config, &o.input, &o.result.layout, &o.result.values)?;
+            let status = plot_status(&report::json::to_json(&o.result, &infos[0]));
+            let written = plot_fit(
+                dir,
+                &config,
+                &o.input,
+                (&o.result.layout, &o.result.values),
+                &status,
+            )?;
             eprintln!(
                 "goniofit: wrote {} pictures to {}",
                 written.len(),
@@ -533,12 +540,13 @@ const READING_BAR_BYTES: u64 = 4 << 20;
 fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
     let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
     let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
+    let status = plot_status(&report::json::to_json(&o.result, info));
     let written = plot_fit(
         dir.path(),
         &config,
         &o.input,
-        &o.result.layout,
-        &o.result.values,
+        (&o.result.layout, &o.result.values),
+        &status,
     )?;
     let mut pictures = Vec::new();
     for p in written
@@ -613,14 +621,62 @@ fn replay_args() -> Vec<String> {
         .collect()
 }
 
-/// Draw the pictures of a fit at parameter values `values` (layout order). For a joint fit
-/// the middle channel is drawn.
+/// The pictures' second title line, from the fit's JSON report (so that `goniofit plot`
+/// says the same as `fit --plot`): T/σ with its standard error, the parameters the data
+/// does not determine, and whether the fit converged (or why not).
+pub fn plot_status(json: &serde_json::Value) -> String {
+    use goniofit::plot::fmt_num;
+    let mut parts = Vec::new();
+    if let Some(d) = json["derived"].get("T/sigma") {
+        if let Some(v) = d["value"].as_f64() {
+            parts.push(match d["stderr"].as_f64().filter(|e| e.is_finite()) {
+                Some(e) => format!("T/σ = {} ± {}", fmt_num(v), fmt_num(e)),
+                None => format!("T/σ = {}", fmt_num(v)),
+            });
+        }
+    }
+    let mut undetermined: Vec<String> = json["params"]
+        .as_object()
+        .map(|m| {
+            m.iter()
+                .filter(|(_, p)| p["determined"] == false && p["fixed"] != true)
+                .map(|(k, _)| k.replace("sigma", "σ"))
+                .collect()
+        })
+        .unwrap_or_default();
+    // σ and T first, as in the report.
+    undetermined.sort_by_key(|k| (k != "σ", k != "T", k.clone()));
+    let verdict = match json["verdict"].as_str() {
+        Some("rough") => "rough regime: only T/σ and the amplitude are determined",
+        Some("smooth") => "smooth regime: only T and s·σ² are determined",
+        Some("partial") => "some combinations are not determined",
+        _ => "",
+    };
+    if !verdict.is_empty() {
+        parts.push(verdict.to_string());
+    }
+    if !undetermined.is_empty() {
+        parts.push(format!("not determined: {}", undetermined.join(", ")));
+    }
+    let termination = json["termination"].as_str().unwrap_or("?");
+    parts.push(if json["converged"] == true {
+        format!("converged ({termination})")
+    } else if termination == "degenerate" {
+        "degenerate: not a usable optimum (see the report's notes)".to_string()
+    } else {
+        format!("not converged ({termination}): the best point so far")
+    });
+    parts.join("; ")
+}
+
+/// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`), with `status`
+/// (see [`plot_status`]) under their titles. For a joint fit the middle channel is drawn.
 pub fn plot_fit(
     dir: &Path,
     config: &FitConfig,
     input: &FitInput,
-    layout: &goniofit::fit::problem::ParamLayout,
-    values: &[f64],
+    (layout, values): (&goniofit::fit::problem::ParamLayout, &[f64]),
+    status: &str,
 ) -> anyhow::Result<Vec<PathBuf>> {
     use goniofit::fit::problem::FitProblem;
     let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
@@ -645,15 +701,12 @@ pub fn plot_fit(
     for (spec, v) in specs.iter().zip(&params) {
         title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
     }
-    let named = |n: &str| specs.iter().position(|s| s.name == n).map(|j| params[j]);
-    if let (Some(sigma), Some(t)) = (named("sigma"), named("T")) {
-        title += &format!(" T/σ={}", goniofit::plot::fmt_num(t / sigma));
-    }
     if layout.channel_names.len() > 1 {
         title += &format!(" [{}]", layout.channel_names[c]);
     }
     let plot_input = goniofit::plot::fit::FitPlotInput {
         title,
+        subtitle: status.to_string(),
         model: model.as_ref(),
         params: &params,
         geo: &sub.geo,

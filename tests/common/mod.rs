@@ -4,6 +4,17 @@
 
 use assert_cmd::Command;
 
+/// The README's fit of the garnet paint's 550 nm channel (append the file).
+pub const GARNET_550: [&str; 7] = [
+    "fit",
+    "--model",
+    "kbs+lambert",
+    "--channel",
+    "550nm",
+    "--residual",
+    "log",
+];
+
 /// The goniofit binary.
 pub fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
