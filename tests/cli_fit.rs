@@ -271,17 +271,11 @@ fn rough_data_reports_undetermined_sigma() {
 #[test]
 fn every_cornell_channel_converges() {
     let out = goniofit()
+        .args(common::PAINT_BRDF_LOG)
         .args([
-            "fit",
-            "--model",
-            "kbs+lambert",
-            "--quantity",
-            "brdf",
             "--channel",
             "all",
             "--by-group",
-            "--residual",
-            "log",
             "data/cornell/garnet_red.astm",
             "data/cornell/krylon_blue.astm",
         ])

@@ -65,20 +65,8 @@ fn reference() -> HashMap<(String, String), Reference> {
 fn fits(path: &str, extra: &[&str]) -> Vec<(String, serde_json::Value)> {
     let file = common::data(path);
     let out = common::goniofit()
-        .args([
-            "fit",
-            "--model",
-            "kbs+lambert",
-            "--quantity",
-            "brdf",
-            "--residual",
-            "log",
-            "--by-group",
-            "--no-intervals",
-            "--json",
-            "--threads",
-            "1",
-        ])
+        .args(common::PAINT_BRDF_LOG)
+        .args(["--by-group", "--no-intervals", "--json", "--threads", "1"])
         .args(extra)
         .arg(&file)
         .output()

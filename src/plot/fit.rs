@@ -143,8 +143,8 @@ fn plane_curve_samples(theta_i: f64, n: usize) -> (Vec<f64>, Vec<Sample>) {
 
 fn quantity_desc(q: Quantity) -> &'static str {
     match q {
-        Quantity::Radiance => "radiance L (data units)",
-        Quantity::Brdf => "BRDF (data units)",
+        Quantity::Radiance => "radiance L (the file's unit)",
+        Quantity::Brdf => "BRDF (sr⁻¹)",
     }
 }
 

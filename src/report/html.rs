@@ -256,4 +256,36 @@ fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
         let _ = writeln!(s, "<li>{}</li>", escape(n));
     }
     let _ = writeln!(s, "</ul>\n<p>condition number {:.3e}</p>", r.condition);
+    validity(s, r);
+}
+
+/// The validity checks of a KBS fit (the paper's assumptions at the fitted surface) as a
+/// table: check, satisfied / violated / not determined, and what was found.
+fn validity(s: &mut String, r: &FitResult) {
+    let Some(v) = &r.validity else {
+        return;
+    };
+    s.push_str(
+        "<p>The paper's assumptions at the fitted surface (a warning, not a failure):</p>\n\
+         <table id=\"validity\">\n<tr><th>check</th><th>result</th><th>what was found</th></tr>\n",
+    );
+    for c in &v.checks {
+        let (word, class) = match c.satisfied {
+            Some(true) => ("satisfied", "yes"),
+            Some(false) => ("violated", "no"),
+            None => ("not determined", "no"),
+        };
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td class=\"{class}\">{word}</td><td>{}</td></tr>",
+            escape(c.name),
+            // The text opens with the result word, which the previous cell shows.
+            escape(
+                c.text
+                    .split_once(": ")
+                    .map_or(c.text.as_str(), |(_, found)| found)
+            )
+        );
+    }
+    s.push_str("</table>\n");
 }

@@ -15,6 +15,18 @@ pub const GARNET_550: [&str; 7] = [
     "log",
 ];
 
+/// The default fit of a real paint or CUReT file: kbs+lambert on the BRDF, log residuals
+/// (append the selection and the file).
+pub const PAINT_BRDF_LOG: [&str; 7] = [
+    "fit",
+    "--model",
+    "kbs+lambert",
+    "--quantity",
+    "brdf",
+    "--residual",
+    "log",
+];
+
 /// The goniofit binary.
 pub fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
