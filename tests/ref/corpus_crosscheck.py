@@ -3,7 +3,7 @@
 
 corpus_reference.py finds each fit's best optimum with goniofit's own Levenberg-Marquardt
 and model. Here a handful of its rows are re-fitted with none of goniofit's numerics:
-  - the KBS model in numpy (as benches/scipy_kbs_fit.py: the series of eq. 37 summed in
+  - the KBS model in numpy (benches/scipy_kbs_fit.py's: the series of eq. 37 summed in
     log space, here over the window m = g +- (10 sqrt(g) + 30) that holds all but ~1e-20
     of it), as a BRDF L / cos(theta_i), plus the Lambertian BRDF scale_d; sigma <= 10
     lambda (g <= 1.6e4) keeps the window small;
@@ -32,7 +32,8 @@ import tempfile
 import numpy as np
 from scipy.optimize import least_squares
 
-from scipy.special import gammaln
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "benches"))
+from scipy_kbs_fit import geometry, ln_kbs  # noqa: E402  (the benchmark's numpy model)
 
 # (corpus file, group): regimes from smooth paints to rough CUReT samples.
 ROWS = [
@@ -80,24 +81,17 @@ def samples(binary, file, group):
 
 
 def kbs(sigma, t, s, ti, tr, pr, lam):
-    """KBS radiance (no coherent term, A = lambda^2): s cos^2 F^2 (pi T^2/lam^2) e^-g S."""
+    """KBS radiance (no coherent term, A = lambda^2), the series over the window of terms
+    m = g +- (10 sqrt(g) + 30) around its peak."""
     k = 2 * np.pi / lam
-    ci, cr = np.cos(ti), np.cos(tr)
-    si, sr = np.sin(ti), np.sin(tr)
-    c = ci + cr
-    h = 1 + ci * cr - si * sr * np.cos(pr)
-    vxy2 = (si - sr * np.cos(pr)) ** 2 + (sr * np.sin(pr)) ** 2
+    c, h, vxy2 = geometry(ti, tr, pr)
     g = (k * sigma * c) ** 2
     a = vxy2 * (k * t) ** 2 / 4
     half = 10 * np.sqrt(g) + 30
     m0 = np.maximum(1.0, np.floor(g - half))
     width = int(np.ceil(2 * half.max())) + 1
     m = m0[None, :] + np.arange(width)[:, None]
-    lnt = m * np.log(g)[None, :] - gammaln(m + 1) - np.log(m) - a[None, :] / m
-    peak = lnt.max(axis=0)
-    ln_s = peak + np.log(np.exp(lnt - peak).sum(axis=0))
-    ln_l = np.log(s) + np.log(np.pi * (t / lam) ** 2) + 2 * np.log(h) - 2 * np.log(c) - g + ln_s
-    return np.exp(ln_l)
+    return np.exp(ln_kbs(s, t, lam, g, a, c, h, m))
 
 
 def brdf(q, ti, tr, pr, lam):
