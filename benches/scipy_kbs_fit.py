@@ -27,25 +27,36 @@ def load(path):
     return ti, tr, pr, np.asarray(data["L"], dtype=float)
 
 
-def kbs(params, ti, tr, pr, lam):
-    sigma, T, s = params
-    k = 2 * np.pi / lam
+def geometry(ti, tr, pr):
+    """(c, h, vxy2) of eq. 36: c = cos ti + cos tr, h = 1 + cos ti cos tr - sin ti sin tr cos pr
+    (cos^2 F^2 = h^2 / c^2), vxy2 = |v_xy|^2 / k^2."""
     ci, cr = np.cos(ti), np.cos(tr)
     si, sr = np.sin(ti), np.sin(tr)
     c = ci + cr
     h = 1 + ci * cr - si * sr * np.cos(pr)
     vxy2 = (si - sr * np.cos(pr)) ** 2 + (sr * np.sin(pr)) ** 2
+    return c, h, vxy2
+
+
+def ln_kbs(s, T, lam, g, a, c, h, m):
+    """ln L = ln[s cos^2(ti) F^2 (pi T^2/lam^2) e^{-g} S], S = sum over the terms m (one
+    column per sample) of g^m/(m! m) e^{-a/m}, summed in log space."""
+    lnt = m * np.log(g)[None, :] - gammaln(m + 1) - np.log(m) - a[None, :] / m
+    peak = lnt.max(axis=0)
+    ln_s = peak + np.log(np.exp(lnt - peak).sum(axis=0))
+    return np.log(s) + np.log(np.pi * (T / lam) ** 2) + 2 * np.log(h) - 2 * np.log(c) - g + ln_s
+
+
+def kbs(params, ti, tr, pr, lam):
+    sigma, T, s = params
+    k = 2 * np.pi / lam
+    c, h, vxy2 = geometry(ti, tr, pr)
     g = (k * sigma * c) ** 2
     a = vxy2 * (k * T) ** 2 / 4
     gmax = float(g.max())
     mmax = int(gmax + 12 * np.sqrt(gmax) + 30)
     m = np.arange(1, mmax + 1)[:, None]
-    lnt = m * np.log(g)[None, :] - gammaln(m + 1) - np.log(m) - a[None, :] / m
-    peak = lnt.max(axis=0)
-    ln_s = peak + np.log(np.exp(lnt - peak).sum(axis=0))
-    # L = s cos^2(ti) F^2 (pi T^2/lam^2) e^{-g} S,  cos^2 F^2 = h^2 / c^2
-    ln_l = np.log(s) + np.log(np.pi * (T / lam) ** 2) + 2 * np.log(h) - 2 * np.log(c) - g + ln_s
-    return np.exp(ln_l)
+    return np.exp(ln_kbs(s, T, lam, g, a, c, h, m))
 
 
 def main():

@@ -429,35 +429,79 @@ impl WorkPrecision {
 pub const PLOT_ERROR_FLOOR: f64 = 1e-17;
 
 /// The log-log plot of error against run time: one point per row for the model error
-/// (evaluation rows) and the parameter error (every row), each labelled by its mode.
+/// (evaluation rows, against the evaluation time) and the parameter error (every row,
+/// against the fit's solver time), each labelled by its mode.
 #[derive(Debug, Clone)]
 pub struct WorkPrecisionPlot {
     /// (label, seconds, error) for the model errors.
     pub model: Vec<(String, f64, f64)>,
-    /// (label, seconds, error) for the parameter errors.
+    /// (label, solver seconds, error) for the parameter errors.
     pub param: Vec<(String, f64, f64)>,
 }
 
 impl WorkPrecisionPlot {
     /// The points of a table (non-finite errors are left out; zeros sit at the floor).
     pub fn new(wp: &WorkPrecision) -> Self {
-        let pt = |r: &Row, e: f64| {
-            (e.is_finite() && r.seconds > 0.0)
-                .then(|| (r.mode.clone(), r.seconds, e.max(PLOT_ERROR_FLOOR)))
+        let pt = |r: &Row, s: f64, e: f64| {
+            (e.is_finite() && s > 0.0).then(|| (r.mode.clone(), s, e.max(PLOT_ERROR_FLOOR)))
         };
         WorkPrecisionPlot {
             model: wp
                 .rows
                 .iter()
                 .filter(|r| r.kind == "eval")
-                .filter_map(|r| pt(r, r.model_error))
+                .filter_map(|r| pt(r, r.seconds, r.model_error))
                 .collect(),
             param: wp
                 .rows
                 .iter()
-                .filter_map(|r| pt(r, r.param_error))
+                .filter_map(|r| pt(r, r.fit_seconds, r.param_error))
                 .collect(),
         }
+    }
+
+    /// The chart: both axes logarithmic (ticks from the data's range), every point
+    /// labelled by its mode with labels placed apart, the legend beside the chart.
+    pub fn chart(&self) -> crate::plot::xy::XyPlot {
+        use crate::plot::series_color;
+        use crate::plot::xy::{Annotation, Kind, Series, XyPlot};
+        let mut plot = XyPlot::new(
+            "goniofit work-precision: error against run time",
+            "run time (s): evaluation of 3 data sets (filled), fit's solver (open)",
+            "max relative error",
+        );
+        plot.size = (1000, 700);
+        plot.log_x = true;
+        plot.log_y = true;
+        let ((x0, x1), (y0, y1)) = self.ranges();
+        plot.x_range = (x0, x1);
+        plot.y_range = (y0, y1);
+        for (i, (name, pts, kind)) in [
+            ("model error (eval modes)", &self.model, Kind::Points(5)),
+            (
+                "parameter error (eval modes and solver settings)",
+                &self.param,
+                Kind::OpenPoints(5),
+            ),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let color = series_color(i);
+            plot.series.push(Series {
+                label: Some(name.into()),
+                color,
+                kind,
+                points: pts.iter().map(|(_, x, y)| (*x, *y)).collect(),
+            });
+            plot.annotations
+                .extend(pts.iter().map(|(l, x, y)| Annotation {
+                    at: (*x, *y),
+                    text: l.clone(),
+                    color,
+                }));
+        }
+        plot
     }
 
     fn ranges(&self) -> ((f64, f64), (f64, f64)) {
@@ -478,81 +522,14 @@ impl WorkPrecisionPlot {
 
 impl crate::plot::Picture for WorkPrecisionPlot {
     fn size(&self) -> (u32, u32) {
-        (1000, 700)
+        crate::plot::Picture::size(&self.chart())
     }
 
     fn draw<DB: plotters::prelude::DrawingBackend>(
         &self,
         root: &plotters::drawing::DrawingArea<DB, plotters::coord::Shift>,
     ) -> std::result::Result<(), crate::plot::DrawError<DB>> {
-        use crate::plot::{font, series_color};
-        use plotters::prelude::*;
-        let ((x0, x1), (y0, y1)) = self.ranges();
-        let mut chart = ChartBuilder::on(root)
-            .caption(
-                "goniofit work-precision: error against run time",
-                font(20.0),
-            )
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("run time (s)")
-            .y_desc("max relative error")
-            .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .label_style(font(14.0))
-            .axis_desc_style(font(16.0))
-            .light_line_style(RGBColor(238, 238, 238))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .draw()?;
-        for (i, (name, pts, filled)) in [
-            ("model error (eval modes)", &self.model, true),
-            (
-                "parameter error (eval modes and solver settings)",
-                &self.param,
-                false,
-            ),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let color = series_color(i);
-            let style = if filled {
-                color.filled()
-            } else {
-                color.stroke_width(2)
-            };
-            chart
-                .draw_series(pts.iter().map(|(_, x, y)| Circle::new((*x, *y), 5, style)))?
-                .label(name)
-                .legend(move |(x, y)| Circle::new((x + 10, y), 5, style));
-            // Labels beside the points: model points by eval mode; parameter points only
-            // for the solver rows (the eval rows' labels sit on their model points),
-            // staggered so that rows with equal error stay readable.
-            let labelled: Vec<&(String, f64, f64)> = if filled {
-                pts.iter().collect()
-            } else {
-                pts.iter()
-                    .filter(|(l, _, _)| l.starts_with("jac="))
-                    .collect()
-            };
-            chart.draw_series(labelled.into_iter().enumerate().map(|(k, (label, x, y))| {
-                let dy = if filled { -6 } else { 8 + 14 * (k as i32 % 3) };
-                EmptyElement::at((*x, *y))
-                    + Text::new(label.clone(), (8, dy), font(12.0).color(&color))
-            }))?;
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font(font(14.0))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(180, 180, 180))
-            .draw()?;
-        Ok(())
+        self.chart().draw_in(root)
     }
 }
 
@@ -598,6 +575,12 @@ mod tests {
         assert!(svg.contains("series 1e-4"));
         assert!(svg.contains("jac=analytic tol=default"));
         assert!(svg.contains("run time (s)"));
+        // Every point is labelled: the series row's model and parameter points both.
+        assert_eq!(svg.matches("\nseries 1e-4\n").count(), 2);
+        // The x axis (5e-4/2 … 2e-2·2) has ticks at 1-2-5 steps, not two powers of ten.
+        let chart = pic.chart();
+        let ticks = crate::plot::ticks::log_ticks(chart.x_range.0, chart.x_range.1);
+        assert!(ticks.len() >= 5, "{ticks:?}");
     }
 
     #[test]

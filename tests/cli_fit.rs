@@ -271,17 +271,11 @@ fn rough_data_reports_undetermined_sigma() {
 #[test]
 fn every_cornell_channel_converges() {
     let out = goniofit()
+        .args(common::PAINT_BRDF_LOG)
         .args([
-            "fit",
-            "--model",
-            "kbs+lambert",
-            "--quantity",
-            "brdf",
             "--channel",
             "all",
             "--by-group",
-            "--residual",
-            "log",
             "data/cornell/garnet_red.astm",
             "data/cornell/krylon_blue.astm",
         ])
@@ -456,4 +450,42 @@ fn overflowing_values_and_weights_are_refused_at_input() {
         !report.contains("NaN") && !report.contains("inf"),
         "{report}"
     );
+}
+
+/// Progress goes to a terminal only: with standard error piped (as here) a `--by-group`
+/// batch draws no bar (no carriage returns, no "datasets fitted" line) and ends with its
+/// one summary line; `--quiet` is accepted and leaves standard error empty.
+#[test]
+fn piped_stderr_has_no_progress_and_quiet_silences_the_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("groups.csv");
+    let mut text = String::from("theta_i,theta_r,phi_r,L,group\n");
+    let src = std::fs::read_to_string(data("synthetic/lambert_specular.csv")).unwrap();
+    for (k, line) in src.lines().skip(1).enumerate() {
+        text += &format!("{line},{}\n", ["a", "b", "c"][k % 3]);
+    }
+    std::fs::write(&file, text).unwrap();
+    let run = |quiet: bool| {
+        let mut cmd = goniofit();
+        cmd.args(["fit", "--model", "lambert", "--by-group", "--json"]);
+        if quiet {
+            cmd.arg("--quiet");
+        }
+        let out = cmd.arg(&file).output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "quiet {quiet}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["datasets"], 3, "quiet {quiet}");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let err = run(false);
+    assert!(
+        !err.contains('\r') && !err.contains("datasets fitted"),
+        "{err:?}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err:?}");
+    assert!(
+        err.starts_with("goniofit: fitted 3 datasets in "),
+        "{err:?}"
+    );
+    assert_eq!(run(true), "", "--quiet");
 }

@@ -5,7 +5,8 @@
 
 mod common;
 
-use common::{fit_json, goniofit};
+use common::{fit_json, goniofit, GARNET_550};
+use predicates::prelude::PredicateBooleanExt;
 use predicates::str::contains;
 use std::path::{Path, PathBuf};
 
@@ -28,17 +29,6 @@ fn f(v: &serde_json::Value) -> f64 {
 
 const HEMI: &str = "data/synthetic/kbs_hemisphere.csv";
 const GARNET: &str = "data/cornell/garnet_red.astm";
-
-/// The README's fit of the garnet paint's 550 nm channel (append the file).
-const GARNET_550: [&str; 7] = [
-    "fit",
-    "--model",
-    "kbs+lambert",
-    "--channel",
-    "550nm",
-    "--residual",
-    "log",
-];
 
 #[test]
 fn wavelength_units_scale_sigma_and_t_and_are_stated() {
@@ -564,6 +554,9 @@ fn html_report_is_one_self_contained_page() {
         "<h2>Parameters</h2>",
         "<h2>Derived quantities</h2>",
         "<h2>Identifiability and validity</h2>",
+        "<table id=\"validity\">",
+        "<td>curvature</td>",
+        "<td>shadowing</td>",
         "<h2>Pictures</h2>",
         "95 % interval",
         "--wavelength 633nm",
@@ -591,4 +584,41 @@ fn html_report_is_one_self_contained_page() {
         row.contains("<td>nm</td>") && row.matches('[').count() == 2,
         "{row}"
     );
+}
+
+#[test]
+fn small_cli_texts_say_what_they_mean() {
+    // A Lambert BRDF is a constant: the fit is the mean, R² = 0 exactly (never "−0.0000000").
+    let out = goniofit()
+        .args([
+            "fit",
+            "--model",
+            "lambert",
+            "--channel",
+            "550nm",
+            "--no-intervals",
+            GARNET,
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("R-squared       = 0.0000000\n"), "{text}");
+    assert!(!text.contains("-0.0000000"));
+    // `render` says what it wrote: size, model, parameters.
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("s.png");
+    goniofit()
+        .args([
+            "render",
+            "sphere",
+            "--model",
+            "kbs",
+            "--params",
+            "sigma=0.3,T=2,scale=1",
+            "--out",
+        ])
+        .arg(&png)
+        .assert()
+        .code(0)
+        .stderr(contains("px").and(contains("model kbs at sigma=0.3,T=2,scale=1")));
 }

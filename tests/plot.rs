@@ -1,6 +1,8 @@
 //! Pictures: what each one must show (Peters 2000, Figures 4–7), and that the files are
 //! valid PNG and SVG.
 
+mod common;
+
 use assert_cmd::Command;
 use goniofit::geometry::{Geometry, Quantity, Sample};
 use goniofit::model::{by_name, Model, ModelOptions};
@@ -253,7 +255,10 @@ fn pictures_render_to_valid_svg_and_bitmaps() {
         "axis label and legend"
     );
     let rgb = rgb_buffer(&fig6).unwrap();
-    assert_eq!(rgb.len(), 900 * 600 * 3);
+    // The legend sits in a panel right of the 900 × 600 chart.
+    let (w, h) = goniofit::plot::Picture::size(&fig6);
+    assert!(w > 900 && h == 600, "{w} × {h}");
+    assert_eq!(rgb.len(), (w * h * 3) as usize);
     assert!(rgb.iter().any(|&b| b < 128), "something is drawn");
 }
 
@@ -372,6 +377,7 @@ fn with_synthetic_input<R>(wiggle: f64, f: impl FnOnce(&FitPlotInput) -> R) -> R
         .collect();
     f(&FitPlotInput {
         title: "kbs: sigma = 0.3, T = 2, scale = 1".into(),
+        subtitle: "T/σ = 6.667; converged (xtol)".into(),
         model: m.as_ref(),
         params: &params,
         geo: &geo,
@@ -421,6 +427,7 @@ fn check_fit_plots(input: &FitPlotInput) {
     // Mismatched lengths are a usage error, not a panic.
     let short = FitPlotInput {
         title: input.title.clone(),
+        subtitle: input.subtitle.clone(),
         measured: &input.measured[..3],
         ..*input
     };
@@ -456,6 +463,7 @@ fn fit_plots_cope_with_awkward_data() {
     let res = vec![f64::NAN, 0.5, -0.5];
     let input = FitPlotInput {
         title: "lambert: scale = 0.2".into(),
+        subtitle: String::new(),
         model: m.as_ref(),
         params: &params,
         geo: &geo,
@@ -482,6 +490,7 @@ fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
     use goniofit::plot::fit::PolarPlot;
     let pic = PolarPlot {
         title: "clipped".into(),
+        subtitle: String::new(),
         theta_i: 45f64.to_radians(),
         curve: (0..=90).map(|t| (t as f64, 0.5)).collect(),
         measured: vec![(10.0, 0.5), (60.0, 3.0), (70.0, 12.5), (80.0, f64::NAN)],
@@ -502,4 +511,93 @@ fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
     assert!(!goniofit::plot::svg_string(&inside)
         .unwrap()
         .contains("beyond the rim"));
+}
+
+/// `fit --plot` on the bundled real data: the SVG of each picture, by stem.
+/// `args` start with the subcommand `fit`.
+fn real_fit_pictures(args: &[&str]) -> std::collections::HashMap<String, String> {
+    let dir = tempfile::tempdir().unwrap();
+    common::goniofit()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .args(["--no-intervals", "--quiet", "--plot"])
+        .arg(dir.path())
+        .assert()
+        .code(0);
+    [
+        "fit_linear",
+        "fit_log",
+        "residuals_theta",
+        "polar",
+        "contour",
+    ]
+    .iter()
+    .map(|s| {
+        let svg = std::fs::read_to_string(dir.path().join(format!("{s}.svg"))).unwrap();
+        assert_svg(&svg);
+        (s.to_string(), svg)
+    })
+    .collect()
+}
+
+/// The text of every SVG `<text>` element.
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let body = t.split_once('>')?.1;
+            Some(body.split_once("</text>")?.0.trim().to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn a_paint_fit_linear_is_not_crushed_by_its_grazing_points() {
+    // Garnet red at 550 nm: BRDF up to 28 sr⁻¹ at grazing angles, the lobe ≈ 0.5 sr⁻¹.
+    let pics =
+        real_fit_pictures(&[&common::GARNET_550[..], &["data/cornell/garnet_red.astm"]].concat());
+    let lin = svg_texts(&pics["fit_linear"]);
+    assert!(
+        lin.iter()
+            .any(|t| t.starts_with("4 measured above the top (up to 28.1")),
+        "{lin:?}"
+    );
+    // The y ticks stop below 2 sr⁻¹ (they used to run to 30).
+    let ticks: Vec<f64> = lin.iter().filter_map(|t| t.parse().ok()).collect();
+    assert!(ticks.contains(&1.5) && !ticks.contains(&25.0), "{ticks:?}");
+    // Every picture states T/σ, what is not determined and that the fit converged.
+    for (stem, svg) in &pics {
+        assert!(
+            svg_texts(svg).iter().any(|t| t.starts_with("T/σ = 7.449 ±")
+                && t.contains("not determined: σ, T, scale")
+                && t.ends_with("converged (ftol)")),
+            "{stem}"
+        );
+    }
+}
+
+#[test]
+fn ptfe_pictures_have_log_ticks_and_a_colour_bar() {
+    // All four wavelengths: 24 (θi, λ) series, more than the 10 colours.
+    let pics = real_fit_pictures(&[
+        "fit",
+        "--model",
+        "kbs+lambert",
+        "--residual",
+        "log",
+        "data/nist-ptfe/PTFE.data.csv",
+    ]);
+    let log = svg_texts(&pics["fit_log"]);
+    // The BRDF spans 0.27–0.5 sr⁻¹, under a decade: labelled ticks all the same.
+    for tick in ["0.3", "0.35", "0.4", "0.45", "0.5"] {
+        assert!(log.iter().any(|t| t == tick), "{tick}: {log:?}");
+    }
+    assert!(log.iter().any(|t| t == "colour: θi (degrees)"));
+    for wl in ["0.351", "0.532", "0.633", "1.064"] {
+        assert!(log.iter().any(|t| *t == format!("λ = {wl} fitted")), "{wl}");
+    }
+    // No per-series legend lines (24 of them would repeat colours).
+    assert!(!log.iter().any(|t| t.starts_with("θi = ")), "{log:?}");
+    let res = svg_texts(&pics["residuals_theta"]);
+    assert!(res.iter().any(|t| t == "colour: θi (degrees)"));
 }

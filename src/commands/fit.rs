@@ -4,7 +4,7 @@ use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
-use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult};
+use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
 use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
@@ -344,38 +344,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         io::check_distinct(&inputs, &[("--residuals", r)])?;
     }
     // Every input is read (and checked) before any fit starts.
-    let mut jobs: Vec<(String, Dataset)> = Vec::new();
-    let mut files: Vec<(PathBuf, report::setting::InputInfo)> = Vec::new();
-    for file in &args.file {
-        // The raw rows are kept only for the residuals file (which passes them through).
-        let bar = reading_bar(file, args.show_progress());
-        let ds = io::read_dataset_with(file, &opts, args.residuals.is_some(), &|done| {
-            bar.set_position(done)
-        })?;
-        bar.finish_and_clear();
-        goniofit::fit::dataset::check_magnitudes(&ds)?;
-        files.push((file.clone(), input_info(file)?));
-        if args.by_group {
-            let groups = ds.channel_groups();
-            if groups.is_empty() {
-                return Err(Error::Usage(format!(
-                    "{}: --by-group needs groups: ASTM channels, a group column, or a wavelength column",
-                    io::shown(file)
-                ))
-                .into());
-            }
-            for (name, idx) in groups {
-                let mut sub = ds.subset(&idx);
-                sub.channel = None;
-                jobs.push((
-                    format!("{} [{}]", io::shown(file), io::shown_text(&name)),
-                    sub,
-                ));
-            }
-        } else {
-            jobs.push((io::shown(file), ds));
-        }
-    }
+    let (jobs, files) = read_jobs(&args, &opts)?;
     let single = jobs.len() == 1;
     if !single && (args.residuals.is_some() || args.plot.is_some() || args.html.is_some()) {
         return Err(Error::Usage(
@@ -388,64 +357,193 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // and exit 3) instead of ending the process; `--timeout` bounds the whole command.
     let stop = Stop::new(args.timeout.map(std::time::Duration::from_secs_f64), None);
     let t0 = std::time::Instant::now();
-    let threads = args.threads.unwrap_or(0);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
+        .num_threads(args.threads.unwrap_or(0))
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let outcomes: Vec<anyhow::Result<Outcome>> = if single {
-        let (label, ds) = jobs.pop().expect("one job");
-        vec![pool.install(|| fit_one(&args, label, ds, true, &stop))]
-    } else {
-        use rayon::prelude::*;
-        let bar = if args.show_progress() {
-            super::recover::progress_bar(jobs.len() as u64, "datasets fitted")
-        } else {
-            indicatif::ProgressBar::hidden()
-        };
-        let done = pool.install(|| {
-            jobs.into_par_iter()
-                .map(|(label, ds)| {
-                    // After a stop request no further dataset is started.
-                    if stop.is_requested() {
-                        return Err(not_fitted(&label, &stop));
-                    }
-                    let outcome = fit_one(&args, label, ds, false, &stop);
-                    bar.inc(1);
-                    outcome
-                })
-                .collect()
-        });
-        bar.finish_and_clear();
-        done
-    };
+    let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, &pool)?;
     let wall = t0.elapsed().as_secs_f64();
-    let (outcomes, skipped) = fitted_and_stopped(outcomes, single)?;
-    let info_for = |o: &Outcome| {
-        let file = files
-            .iter()
-            .find(|(p, _)| *p == o.dataset.path)
-            .map(|(_, i)| i.clone())
-            .unwrap_or_default();
-        RunInfo {
-            input: o.label.clone(),
-            command: command_line(),
-            version: env!("CARGO_PKG_VERSION").to_string(),
-            setting: setting_of(&args, &o.dataset, &o.input, &file),
-            intervals: o.intervals.clone(),
-            interval_seconds: o.interval_seconds,
+    let infos: Vec<RunInfo> = outcomes
+        .iter()
+        .map(|o| run_info(&args, o, &files))
+        .collect();
+    print_reports(
+        &args,
+        &outcomes,
+        &infos,
+        &skipped,
+        wall,
+        pool.current_num_threads(),
+    )?;
+    if single {
+        write_single_outputs(&args, &outcomes[0], &infos[0])?;
+    }
+    // A signal that came after the fits (while the outputs were written) still says the
+    // run was interrupted: every output is complete, and the exit code is 3.
+    let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
+    Ok(
+        if outcomes.iter().all(|o| o.result.converged()) && !interrupted && skipped.is_empty() {
+            0
+        } else {
+            3
+        },
+    )
+}
+
+/// Read every input file into the datasets to fit (one per file, or one per group with
+/// `--by-group`), with each file's checksum and size.
+#[allow(clippy::type_complexity)]
+fn read_jobs(
+    args: &FitArgs,
+    opts: &ReadOptions,
+) -> anyhow::Result<(
+    Vec<(String, Dataset)>,
+    Vec<(PathBuf, report::setting::InputInfo)>,
+)> {
+    let mut jobs: Vec<(String, Dataset)> = Vec::new();
+    let mut files = Vec::new();
+    for file in &args.file {
+        // The raw rows are kept only for the residuals file (which passes them through).
+        let bar = reading_bar(file, args.show_progress());
+        let ds = io::read_dataset_with(file, opts, args.residuals.is_some(), &|done| {
+            bar.set_position(done)
+        })?;
+        bar.finish_and_clear();
+        goniofit::fit::dataset::check_magnitudes(&ds)?;
+        files.push((file.clone(), input_info(file)?));
+        if !args.by_group {
+            jobs.push((io::shown(file), ds));
+            continue;
         }
+        let groups = ds.channel_groups();
+        if groups.is_empty() {
+            return Err(Error::Usage(format!(
+                "{}: --by-group needs groups: ASTM channels, a group column, or a wavelength column",
+                io::shown(file)
+            ))
+            .into());
+        }
+        for (name, idx) in groups {
+            let mut sub = ds.subset(&idx);
+            sub.channel = None;
+            jobs.push((
+                format!("{} [{}]", io::shown(file), io::shown_text(&name)),
+                sub,
+            ));
+        }
+    }
+    Ok((jobs, files))
+}
+
+/// Fit every job in `pool` (one job: on the calling thread's pool with the fit's own
+/// progress; several: in parallel, with a bar of datasets fitted), all sharing `stop`.
+/// Returns the fits and the labels of the datasets a stop request kept from a result.
+fn fit_jobs(
+    args: &FitArgs,
+    mut jobs: Vec<(String, Dataset)>,
+    stop: &Stop,
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
+    if jobs.len() == 1 {
+        let (label, ds) = jobs.pop().expect("one job");
+        let one = pool.install(|| fit_one(args, label, ds, true, stop))?;
+        return Ok((vec![one], Vec::new()));
+    }
+    use rayon::prelude::*;
+    let bar = if args.show_progress() {
+        super::recover::progress_bar(jobs.len() as u64, "datasets fitted")
+    } else {
+        indicatif::ProgressBar::hidden()
     };
-    let infos: Vec<RunInfo> = outcomes.iter().map(info_for).collect();
+    let done: Vec<anyhow::Result<Outcome>> = pool.install(|| {
+        jobs.into_par_iter()
+            .map(|(label, ds)| {
+                // After a stop request no further dataset is started.
+                if stop.is_requested() {
+                    return Err(not_fitted(&label, stop));
+                }
+                let outcome = fit_one(args, label, ds, false, stop);
+                bar.inc(1);
+                outcome
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    fitted_and_stopped(done)
+}
+
+/// The error of a dataset `label` a stop request kept from being fitted.
+fn not_fitted(label: &str, stop: &Stop) -> anyhow::Error {
+    let why = stop.requested().map_or("stopped", |t| t.describe());
+    anyhow::Error::new(Error::Stopped(format!(
+        "{label}: {why} before its fit started"
+    )))
+}
+
+/// The fits of a batch, and the labels of the datasets a stop request kept from a result
+/// ([`Error::Stopped`]: not started, or stopped before the first evaluation on the whole
+/// data finished). Any other error ends the command.
+fn fitted_and_stopped(
+    outcomes: Vec<anyhow::Result<Outcome>>,
+) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
+    let mut fitted = Vec::new();
+    let mut skipped = Vec::new();
+    for o in outcomes {
+        match o {
+            Ok(o) => fitted.push(o),
+            Err(e) if e.chain().any(is_stopped) => skipped.push(format!("{e:#}")),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok((fitted, skipped))
+}
+
+/// Whether an error in a chain is [`Error::Stopped`].
+fn is_stopped(c: &(dyn std::error::Error + 'static)) -> bool {
+    matches!(c.downcast_ref::<Error>(), Some(Error::Stopped(_)))
+}
+
+/// What a report says about the run besides the fit: input, command, setting, intervals.
+fn run_info(
+    args: &FitArgs,
+    o: &Outcome,
+    files: &[(PathBuf, report::setting::InputInfo)],
+) -> RunInfo {
+    let file = files
+        .iter()
+        .find(|(p, _)| *p == o.dataset.path)
+        .map(|(_, i)| i.clone())
+        .unwrap_or_default();
+    RunInfo {
+        input: o.label.clone(),
+        command: command_line(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        setting: setting_of(args, &o.dataset, &o.input, &file),
+        intervals: o.intervals.clone(),
+        interval_seconds: o.interval_seconds,
+    }
+}
+
+/// Print the reports (JSON or text, with the summary table after several fits or a joint
+/// one), write `--summary`, and say on standard error how long several fits took.
+fn print_reports(
+    args: &FitArgs,
+    outcomes: &[Outcome],
+    infos: &[RunInfo],
+    skipped: &[String],
+    wall: f64,
+    threads: usize,
+) -> anyhow::Result<()> {
+    let single = outcomes.len() == 1;
     let rows: Vec<report::summary::Row> = outcomes
         .iter()
-        .zip(&infos)
+        .zip(infos)
         .map(|(o, i)| report::summary::row(&o.label, &o.result, &i.setting.units))
         .collect();
     if args.json {
         let values: Vec<serde_json::Value> = outcomes
             .iter()
-            .zip(&infos)
+            .zip(infos)
             .map(|(o, i)| report::outcome::to_json(o, i, &replay_args()))
             .collect();
         let v = if single {
@@ -456,7 +554,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
                 "datasets": outcomes.len(),
                 "not_fitted": skipped,
                 "seconds": wall,
-                "threads": pool.current_num_threads(),
+                "threads": threads,
                 "summary": summary_json(&rows),
             })
         };
@@ -464,7 +562,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     } else {
         let mut text: String = outcomes
             .iter()
-            .zip(&infos)
+            .zip(infos)
             .map(|(o, i)| report::outcome::to_text(o, i))
             .collect();
         let joint = outcomes.iter().any(|o| o.input.channel_names.len() > 1);
@@ -491,70 +589,37 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             outcomes.len(),
             wall,
             outcomes.len() as f64 / wall,
-            pool.current_num_threads()
+            threads
         );
     }
-    if single {
-        let o = &outcomes[0];
-        if let Some(path) = &args.residuals {
-            write_residuals(path, &o.dataset, &o.result)?;
-        }
-        if let Some(path) = &args.html {
-            write_html(&args, path, o, &infos[0])?;
-        }
-        if let Some(dir) = &args.plot {
-            let config = fit_config(&args, &o.result.model, o.dataset.sigma_l.is_some())?;
-            let written = plot_fit(dir, &config, &o.input, &o.result.layout, &o.result.values)?;
-            eprintln!(
-                "goniofit: wrote {} pictures to {}",
-                written.len(),
-                goniofit::io::shown(dir)
-            );
-        }
+    Ok(())
+}
+
+/// The outputs of a single fit: `--residuals`, `--html`, `--plot`.
+fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
+    if let Some(path) = &args.residuals {
+        write_residuals(path, &o.dataset, &o.result)?;
     }
-    // A signal that came after the fits (while the outputs were written) still says the
-    // run was interrupted: every output is complete, and the exit code is 3.
-    let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
-    Ok(
-        if outcomes.iter().all(|o| o.result.converged()) && !interrupted && skipped.is_empty() {
-            0
-        } else {
-            3
-        },
-    )
-}
-
-/// The error of a dataset `label` a stop request kept from being fitted.
-fn not_fitted(label: &str, stop: &Stop) -> anyhow::Error {
-    let why = stop.requested().map_or("stopped", |t| t.describe());
-    anyhow::Error::new(Error::Stopped(format!(
-        "{label}: {why} before its fit started"
-    )))
-}
-
-/// The fits of a batch, and the labels of the datasets a stop request kept from a result
-/// ([`Error::Stopped`]: not started, or stopped before the first evaluation on the whole
-/// data finished). Any other error ends the command; so does a stopped single dataset
-/// (nothing to report: exit 3 with the message).
-fn fitted_and_stopped(
-    outcomes: Vec<anyhow::Result<Outcome>>,
-    single: bool,
-) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
-    let mut fitted = Vec::new();
-    let mut skipped = Vec::new();
-    for o in outcomes {
-        match o {
-            Ok(o) => fitted.push(o),
-            Err(e) if !single && e.chain().any(is_stopped) => skipped.push(format!("{e:#}")),
-            Err(e) => return Err(e),
-        }
+    if let Some(path) = &args.html {
+        write_html(args, path, o, info)?;
     }
-    Ok((fitted, skipped))
-}
-
-/// Whether an error in a chain is [`Error::Stopped`].
-fn is_stopped(c: &(dyn std::error::Error + 'static)) -> bool {
-    matches!(c.downcast_ref::<Error>(), Some(Error::Stopped(_)))
+    if let Some(dir) = &args.plot {
+        let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+        let status = plot_status(&report::json::to_json(&o.result, info));
+        let written = plot_fit(
+            dir,
+            &config,
+            &o.input,
+            (&o.result.layout, &o.result.values),
+            &status,
+        )?;
+        eprintln!(
+            "goniofit: wrote {} pictures to {}",
+            written.len(),
+            goniofit::io::shown(dir)
+        );
+    }
+    Ok(())
 }
 
 /// A bar of bytes read from `file` on standard error (hidden unless `show`).
@@ -579,12 +644,13 @@ const READING_BAR_BYTES: u64 = 4 << 20;
 fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
     let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
     let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
+    let status = plot_status(&report::json::to_json(&o.result, info));
     let written = plot_fit(
         dir.path(),
         &config,
         &o.input,
-        &o.result.layout,
-        &o.result.values,
+        (&o.result.layout, &o.result.values),
+        &status,
     )?;
     let mut pictures = Vec::new();
     for p in written
@@ -659,14 +725,59 @@ fn replay_args() -> Vec<String> {
         .collect()
 }
 
-/// Draw the pictures of a fit at parameter values `values` (layout order). For a joint fit
-/// the middle channel is drawn.
+/// The pictures' second title line, from the fit's JSON report (so that `goniofit plot`
+/// says the same as `fit --plot`): T/σ with its standard error, the parameters the data
+/// does not determine, and whether the fit converged (or why not).
+pub fn plot_status(json: &serde_json::Value) -> String {
+    use goniofit::plot::fmt_num;
+    let mut parts = Vec::new();
+    if let Some(d) = json["derived"].get("T/sigma") {
+        if let Some(v) = d["value"].as_f64() {
+            parts.push(match d["stderr"].as_f64().filter(|e| e.is_finite()) {
+                Some(e) => format!("T/σ = {} ± {}", fmt_num(v), fmt_num(e)),
+                None => format!("T/σ = {}", fmt_num(v)),
+            });
+        }
+    }
+    let mut undetermined: Vec<String> = json["params"]
+        .as_object()
+        .map(|m| {
+            m.iter()
+                .filter(|(_, p)| p["determined"] == false && p["fixed"] != true)
+                .map(|(k, _)| k.replace("sigma", "σ"))
+                .collect()
+        })
+        .unwrap_or_default();
+    // σ and T first, as in the report.
+    undetermined.sort_by_key(|k| (k != "σ", k != "T", k.clone()));
+    // The text report's words for a verdict that leaves something undetermined (σ drawn
+    // as the glyph the pictures can show).
+    let verdict = json["verdict"].as_str().and_then(Verdict::from_name);
+    if let Some(v) = verdict.filter(|v| *v != Verdict::Full) {
+        parts.push(report::text::verdict_text(v).replace("sigma", "σ"));
+    }
+    if !undetermined.is_empty() {
+        parts.push(format!("not determined: {}", undetermined.join(", ")));
+    }
+    let termination = json["termination"].as_str().unwrap_or("?");
+    parts.push(if json["converged"] == true {
+        format!("converged ({termination})")
+    } else if termination == "degenerate" {
+        "degenerate: not a usable optimum (see the report's notes)".to_string()
+    } else {
+        format!("not converged ({termination}): the best point so far")
+    });
+    parts.join("; ")
+}
+
+/// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`), with `status`
+/// (see [`plot_status`]) under their titles. For a joint fit the middle channel is drawn.
 pub fn plot_fit(
     dir: &Path,
     config: &FitConfig,
     input: &FitInput,
-    layout: &goniofit::fit::problem::ParamLayout,
-    values: &[f64],
+    (layout, values): (&goniofit::fit::problem::ParamLayout, &[f64]),
+    status: &str,
 ) -> anyhow::Result<Vec<PathBuf>> {
     use goniofit::fit::problem::FitProblem;
     let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
@@ -691,15 +802,12 @@ pub fn plot_fit(
     for (spec, v) in specs.iter().zip(&params) {
         title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
     }
-    let named = |n: &str| specs.iter().position(|s| s.name == n).map(|j| params[j]);
-    if let (Some(sigma), Some(t)) = (named("sigma"), named("T")) {
-        title += &format!(" T/σ={}", goniofit::plot::fmt_num(t / sigma));
-    }
     if layout.channel_names.len() > 1 {
         title += &format!(" [{}]", layout.channel_names[c]);
     }
     let plot_input = goniofit::plot::fit::FitPlotInput {
         title,
+        subtitle: status.to_string(),
         model: model.as_ref(),
         params: &params,
         geo: &sub.geo,

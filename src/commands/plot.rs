@@ -73,7 +73,8 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     if layout.len() != values.len() {
         return Err(bad("parameter count does not match the model").into());
     }
-    let written = plot_fit(&args.out, &config, &input, &layout, &values)?;
+    let status = super::fit::plot_status(&json);
+    let written = plot_fit(&args.out, &config, &input, (&layout, &values), &status)?;
     eprintln!(
         "goniofit: wrote {} pictures to {}",
         written.len(),

@@ -29,61 +29,118 @@ pub const SVD_MAX_ITERS: usize = 1000;
 /// Relative cost reduction below which the log-residual refinement stops.
 pub const LOG_FTOL: f64 = 1e-6;
 
+/// What the amplitude solves need of a problem's data besides the problem itself, computed
+/// once per problem (the grid solves at every one of its points): the weights of the
+/// linearised residuals and, for log residuals, ln max(yᵢ, floor).
+pub struct Prepared {
+    /// √wᵢ, divided by max(|yᵢ|, floor) for relative and log residuals (linearised around
+    /// the data).
+    d: Vec<f64>,
+    /// ln max(yᵢ, floor) for log residuals (empty otherwise).
+    log_y: Vec<f64>,
+}
+
+impl Prepared {
+    pub fn new(problem: &FitProblem) -> Self {
+        let (y, floor, kind) = (problem.y(), problem.floor, problem.kind());
+        let d = problem
+            .sqrt_weight()
+            .iter()
+            .zip(y)
+            .map(|(sw, yi)| match kind {
+                ResidualKind::Absolute => *sw,
+                _ => sw / yi.abs().max(floor),
+            })
+            .collect();
+        let log_y = match kind {
+            ResidualKind::Log => y.iter().map(|v| v.max(floor).ln()).collect(),
+            _ => Vec::new(),
+        };
+        Prepared { d, log_y }
+    }
+}
+
 /// Solve the linear parameters `linear` of `p` at the model values `basis` (f = rest +
-/// Σ p_k column_k) for the problem's data and residual kind, with the residual weights `d`
-/// of [`linear_weights`]. Sets `p[k]` (every amplitude > 0: one at its bound 0 is set to
-/// 10⁻³ of the largest, so the solver's transform has a gradient there) and returns the
-/// cost ½Σwr² there; None when the model or the solve is not finite.
+/// Σ p_k column_k) for the problem's data and residual kind (`prep` from
+/// [`Prepared::new`] of the same problem). Sets `p[k]` (every amplitude > 0: one at its
+/// bound 0 is set to 10⁻³ of the largest, so the solver's transform has a gradient there)
+/// and returns the cost ½Σwr² there; None when the model or the solve is not finite.
 pub fn solve(
     problem: &FitProblem,
     basis: &PointBasis,
-    d: &[f64],
+    prep: &Prepared,
     p: &mut [f64],
     linear: &[usize],
 ) -> Option<f64> {
     if linear.is_empty() {
         return exact_cost(problem, basis, p, linear);
     }
-    let coef = linearised(problem, basis, d)?;
+    let coef = linearised(problem, basis, &prep.d)?;
     set(p, linear, &coef);
     if problem.kind() != ResidualKind::Log {
         return exact_cost(problem, basis, p, linear);
     }
     // Log residuals: refine the linearised solve on the log residual itself.
-    let ly: Vec<f64> = problem
-        .y()
-        .iter()
-        .map(|v| v.max(problem.floor).ln())
-        .collect();
-    refine_log(problem, basis, &ly, p, linear)
+    refine_log(problem, basis, &prep.log_y, p, linear)
 }
 
-/// The weights of the linearised residuals: √wᵢ, divided by max(|yᵢ|, floor) for relative
-/// and log residuals (linearised around the data).
-pub fn linear_weights(problem: &FitProblem) -> Vec<f64> {
-    let y = problem.y();
-    problem
-        .sqrt_weight()
-        .iter()
-        .zip(y)
-        .map(|(sw, yi)| match problem.kind() {
-            ResidualKind::Absolute => *sw,
-            _ => sw / yi.abs().max(problem.floor),
-        })
-        .collect()
+/// Normal equations AᵀA x = Aᵀb of a few unknowns, accumulated one row of A at a time.
+struct Normal {
+    ata: DMatrix<f64>,
+    atb: DVector<f64>,
 }
 
-/// The non-negative least-squares amplitudes of the residuals dᵢ(yᵢ − fᵢ).
+impl Normal {
+    fn new(k: usize) -> Self {
+        Normal {
+            ata: DMatrix::zeros(k, k),
+            atb: DVector::zeros(k),
+        }
+    }
+
+    /// Add the row `row` of A with right-hand side `b` (lower triangle of AᵀA only).
+    fn add(&mut self, row: &[f64], b: f64) {
+        for a in 0..row.len() {
+            self.atb[a] += row[a] * b;
+            for c in 0..=a {
+                self.ata[(a, c)] += row[a] * row[c];
+            }
+        }
+    }
+
+    /// The finished (symmetric) AᵀA and Aᵀb.
+    fn finish(mut self) -> (DMatrix<f64>, DVector<f64>) {
+        let k = self.atb.len();
+        for a in 0..k {
+            for c in 0..a {
+                self.ata[(c, a)] = self.ata[(a, c)];
+            }
+        }
+        (self.ata, self.atb)
+    }
+}
+
+/// The non-negative least-squares amplitudes of the residuals dᵢ(yᵢ − fᵢ), from the normal
+/// equations accumulated in one pass over the samples (no n × k matrix is formed: the grid
+/// solves this at every one of its points).
 fn linearised(problem: &FitProblem, basis: &PointBasis, d: &[f64]) -> Option<Vec<f64>> {
     let n = problem.len();
     let k = basis.columns.len() / n.max(1);
     let y = problem.y();
-    let a = DMatrix::from_fn(n, k, |i, c| d[i] * basis.columns[c * n + i]);
-    let b = DVector::from_fn(n, |i, _| d[i] * (y[i] - basis.rest[i]));
-    if !a.iter().chain(b.iter()).all(|v| v.is_finite()) {
-        return None;
+    let mut normal = Normal::new(k);
+    let mut row = vec![0.0; k];
+    for i in 0..n {
+        let b = d[i] * (y[i] - basis.rest[i]);
+        for (c, r) in row.iter_mut().enumerate() {
+            *r = d[i] * basis.columns[c * n + i];
+        }
+        if !(b.is_finite() && row.iter().all(|v| v.is_finite())) {
+            return None;
+        }
+        normal.add(&row, b);
     }
-    nnls(&a.tr_mul(&a), &a.tr_mul(&b))
+    let (ata, atb) = normal.finish();
+    nnls(&ata, &atb)
 }
 
 /// Non-negative least squares from the normal equations (AᵀA, Aᵀb) of a few unknowns, by
@@ -99,6 +156,12 @@ pub fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
         return None;
     }
     let k = atb.len();
+    if k == 1 {
+        // One unknown: x = Aᵀb / AᵀA when AᵀA > 0 (what the SVD solve gives), else 0.
+        let a = ata[(0, 0)];
+        let x = if a > 0.0 { atb[0] / a } else { 0.0 };
+        return x.is_finite().then_some(vec![x.max(0.0)]);
+    }
     let mut free: Vec<usize> = (0..k).collect();
     let mut coef = vec![0.0; k];
     while !free.is_empty() {
@@ -138,33 +201,40 @@ fn set(p: &mut [f64], linear: &[usize], coef: &[f64]) {
     }
 }
 
+/// The model value of sample `i` at `p` from the basis.
+#[inline]
+fn value_at(basis: &PointBasis, p: &[f64], linear: &[usize], i: usize) -> f64 {
+    let n = basis.rest.len();
+    linear
+        .iter()
+        .enumerate()
+        .fold(basis.rest[i], |acc, (c, &k)| {
+            acc + p[k] * basis.columns[c * n + i]
+        })
+}
+
 /// The model values at `p` from the basis.
 fn values(basis: &PointBasis, p: &[f64], linear: &[usize]) -> Vec<f64> {
-    let n = basis.rest.len();
-    (0..n)
-        .map(|i| {
-            linear
-                .iter()
-                .enumerate()
-                .fold(basis.rest[i], |acc, (c, &k)| {
-                    acc + p[k] * basis.columns[c * n + i]
-                })
-        })
+    (0..basis.rest.len())
+        .map(|i| value_at(basis, p, linear, i))
         .collect()
 }
 
-/// ½Σwr² at `p` with the problem's own residuals; None when not finite.
+/// ½Σwr² at `p` with the problem's own residuals, in one pass over the samples (no
+/// vectors: the grid takes this at every point); None when not finite.
 fn exact_cost(
     problem: &FitProblem,
     basis: &PointBasis,
     p: &[f64],
     linear: &[usize],
 ) -> Option<f64> {
-    let r = problem.raw_residuals(&values(basis, p, linear));
+    let sw = problem.sqrt_weight();
     let cost = 0.5
-        * r.iter()
-            .zip(problem.sqrt_weight())
-            .map(|(r, s)| (r * s) * (r * s))
+        * (0..basis.rest.len())
+            .map(|i| {
+                let r = problem.residual(i, value_at(basis, p, linear, i)) * sw[i];
+                r * r
+            })
             .sum::<f64>();
     cost.is_finite().then_some(cost)
 }
@@ -202,25 +272,15 @@ fn refine_log(
     let mut mu = 1e-3;
     for _ in 0..LOG_ITERS {
         // JᵀJ and Jᵀr, J_ic = √wᵢ p_c column_ic / fᵢ where fᵢ is above the floor (0 below).
-        let mut jtj = DMatrix::<f64>::zeros(k, k);
-        let mut g = DVector::<f64>::zeros(k);
+        let mut normal = Normal::new(k);
         let mut row = vec![0.0; k];
         for i in (0..n).filter(|&i| f[i] > floor) {
             for (c, &kk) in linear.iter().enumerate() {
                 row[c] = sw[i] * p[kk] * basis.columns[c * n + i] / f[i];
             }
-            for a in 0..k {
-                g[a] += row[a] * r[i];
-                for b in 0..=a {
-                    jtj[(a, b)] += row[a] * row[b];
-                }
-            }
+            normal.add(&row, r[i]);
         }
-        for a in 0..k {
-            for b in 0..a {
-                jtj[(b, a)] = jtj[(a, b)];
-            }
-        }
+        let (jtj, g) = normal.finish();
         let mut improved = false;
         while mu < 1e12 {
             let mut m = jtj.clone();

@@ -5,7 +5,7 @@
 //! ([`subsample`]) of at most [`GRID_SAMPLES`] samples, so its cost does not grow with the
 //! dataset.
 
-use super::amplitudes::{self, linear_weights};
+use super::amplitudes::{self, Prepared};
 use super::grid_cache;
 use super::lm::Stop;
 use super::problem::{FitInput, FitProblem, ParamLayout};
@@ -85,136 +85,213 @@ pub fn initial_values(
     let stopped = || stop.is_some_and(Stop::is_requested);
     // Where a search without any usable grid point starts.
     let fallback = || vec![(f64::INFINITY, vec![1.0; problem.layout.len()])];
-    use crate::model::{by_name, EvalMode, ModelOptions};
     let layout = &problem.layout;
     let specs = problem.model.params();
-    let n = problem.len();
     // Evenly spaced subsample.
-    let idx = subsample(n, GRID_SAMPLES);
-    let sub_input = input.subset(&idx);
-    fn make<'m>(
-        m: &'m dyn crate::model::Model,
-        p: &FitProblem,
-        input: &FitInput,
-    ) -> FitProblem<'m> {
-        FitProblem::new(m, p.layout.clone(), input, p.kind(), p.floor)
-            .expect("subsample is consistent")
-    }
-    let sub = make(grid_model, problem, &sub_input);
-    let limit = |mode: EvalMode| {
-        by_name(
-            grid_model.name(),
-            &ModelOptions {
-                mode,
-                ..ModelOptions::default()
-            },
-        )
-        .ok()
-    };
+    let sub_input = input.subset(&subsample(problem.len(), GRID_SAMPLES));
+    let sub = on_subsample(grid_model, problem, &sub_input);
     let is_kbs = specs.iter().any(|s| s.name == "sigma");
-    // Median of (c/λ)² over the subsample: g ≈ (2πσ)² × that.
-    let c2_lambda = median(
-        &(0..sub_input.geo.len())
-            .map(|i| (sub_input.geo.c[i] / sub_input.geo.wavelength[i]).powi(2))
-            .collect::<Vec<_>>(),
-    );
-    let sigma_k = layout
-        .params
-        .iter()
-        .position(|fp| specs[fp.spec].name == "sigma");
-    let lambda = median(&input.geo.wavelength);
-
-    // The nonlinear parameters to search over and their candidate values.
-    let nonlinear: Vec<usize> = (0..layout.len())
-        .filter(|&k| !is_linear(layout, k, specs))
-        .collect();
-    let axes: Vec<Vec<f64>> = nonlinear
-        .iter()
-        .map(|&k| match given[k] {
-            Some(v) => vec![v],
-            None => grid_for(specs[layout.params[k].spec].name, lambda),
-        })
-        .collect();
-    let linear: Vec<usize> = (0..layout.len())
-        .filter(|&k| is_linear(layout, k, specs) && given[k].is_none())
-        .collect();
-
-    // The grid point of a flat index, and its median g (KBS).
-    let total: usize = axes.iter().map(Vec::len).product();
-    let point = |flat: usize| -> (Vec<f64>, Option<f64>) {
-        let mut p: Vec<f64> = (0..layout.len()).map(|k| given[k].unwrap_or(1.0)).collect();
-        let mut rem = flat;
-        for (axis, &k) in axes.iter().zip(&nonlinear) {
-            p[k] = axis[rem % axis.len()];
-            rem /= axis.len();
-        }
-        let g = sigma_k.map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * c2_lambda);
-        (p, g)
-    };
+    let grid = Grid::new(layout, specs, given, input, &sub_input);
     // The model side of every grid point depends only on the layout (angles, model, axes),
     // not on the data: computed once per layout and shared by every fit of it.
-    let mut key =
-        grid_cache::Key::new(grid_model.name(), &sub_input.geo, &sub_input.channel, &axes);
+    let mut key = grid_cache::Key::new(
+        grid_model.name(),
+        &sub_input.geo,
+        &sub_input.channel,
+        &grid.axes,
+    );
     key.push(given.iter().map(|g| g.map_or(u64::MAX, f64::to_bits)));
-    key.push(linear.iter().chain(&nonlinear).map(|&k| k as u64));
+    key.push(grid.linear.iter().chain(&grid.nonlinear).map(|&k| k as u64));
     key.push([layout.len() as u64, problem.layout.index.len() as u64]);
     key.push(options_bits(grid_model));
     let basis = grid_cache::basis(key, || {
-        let (rough_model, smooth_model) = if is_kbs {
-            (limit(EvalMode::Rough), limit(EvalMode::Smooth))
-        } else {
-            (None, None)
-        };
-        let sub_rough = rough_model.as_deref().map(|m| make(m, problem, &sub_input));
-        let sub_smooth = smooth_model
-            .as_deref()
-            .map(|m| make(m, problem, &sub_input));
-        let points = (0..total)
-            .into_par_iter()
-            .map(|flat| {
-                if stopped() {
-                    return None;
-                }
-                let (p, g) = point(flat);
-                let grid_problem = match (g, &sub_rough, &sub_smooth) {
-                    (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
-                    (Some(g), _, Some(s)) if g <= GRID_ROUGH_G => s,
-                    _ => &sub,
-                };
-                grid_cache::point_basis(grid_problem, &p, &linear)
-            })
-            .collect();
-        // A grid cut short by a stop is incomplete: not cached, not ranked.
-        (!stopped()).then_some(grid_cache::GridBasis { points })
+        model_side(&grid, grid_model, problem, &sub, &sub_input, is_kbs, stop)
     });
     let Some(basis) = basis else {
         return fallback();
     };
-    // Residual weights of the linear solve: relative/log residuals linearised around the
-    // data.
-    let d = linear_weights(&sub);
+    // The data side of the amplitude solves, once for every grid point.
+    let prep = Prepared::new(&sub);
     // (cost, parameters, regime band of the point's median g), grid points in parallel.
-    let mut scored: Vec<(f64, Vec<f64>, usize)> = (0..total)
+    let scored: Vec<(f64, Vec<f64>, usize)> = (0..grid.total)
         .into_par_iter()
         .filter_map(|flat| {
             if stopped() {
                 return None;
             }
-            let (mut p, g) = point(flat);
-            let band = match g {
-                Some(g) if g < SMOOTH_BAND_G => 0,
-                Some(g) if g <= ROUGH_BAND_G => 1,
-                Some(_) => 2,
-                None => 0,
-            };
+            let (mut p, g) = grid.point(flat);
             let b = basis.points[flat].as_ref()?;
-            amplitudes::solve(&sub, b, &d, &mut p, &linear).map(|cost| (cost, p, band))
+            amplitudes::solve(&sub, b, &prep, &mut p, &grid.linear).map(|c| (c, p, band_of(g)))
         })
         .collect();
-    // The grid ranks with the limits' approximations, which can favour a wrong regime (the
-    // rough asymptote σ → ∞ at fixed T/σ is a valley of its own): for KBS keep the best
-    // point of each regime band (smooth, intermediate, rough); otherwise the best points at
-    // least a factor e^{0.7} ≈ 2 apart in some nonlinear parameter.
+    let picked = pick_distinct(scored, is_kbs, &grid.nonlinear);
+    if picked.is_empty() {
+        return fallback();
+    }
+    picked
+}
+
+/// `problem`'s layout, residual kind and floor on `input` (a subsample of its data) with
+/// model `m`.
+fn on_subsample<'m>(
+    m: &'m dyn crate::model::Model,
+    problem: &FitProblem,
+    input: &FitInput,
+) -> FitProblem<'m> {
+    FitProblem::new(
+        m,
+        problem.layout.clone(),
+        input,
+        problem.kind(),
+        problem.floor,
+    )
+    .expect("subsample is consistent")
+}
+
+/// The model side of every point of `grid` on the subsample (`sub` with the grid's model;
+/// for KBS, points far into a limit use that limit's approximation), or None when `stop`
+/// was requested before every point was computed (an incomplete grid is neither cached nor
+/// ranked).
+fn model_side(
+    grid: &Grid,
+    grid_model: &dyn crate::model::Model,
+    problem: &FitProblem,
+    sub: &FitProblem,
+    sub_input: &FitInput,
+    is_kbs: bool,
+    stop: Option<&Stop>,
+) -> Option<grid_cache::GridBasis> {
+    use crate::model::{by_name, EvalMode, ModelOptions};
+    let stopped = || stop.is_some_and(Stop::is_requested);
+    let limit = |mode: EvalMode| {
+        let opts = ModelOptions {
+            mode,
+            ..ModelOptions::default()
+        };
+        is_kbs
+            .then(|| by_name(grid_model.name(), &opts).ok())
+            .flatten()
+    };
+    let (rough_model, smooth_model) = (limit(EvalMode::Rough), limit(EvalMode::Smooth));
+    let sub_rough = rough_model
+        .as_deref()
+        .map(|m| on_subsample(m, problem, sub_input));
+    let sub_smooth = smooth_model
+        .as_deref()
+        .map(|m| on_subsample(m, problem, sub_input));
+    let points = (0..grid.total)
+        .into_par_iter()
+        .map(|flat| {
+            if stopped() {
+                return None;
+            }
+            let (p, g) = grid.point(flat);
+            let grid_problem = match (g, &sub_rough, &sub_smooth) {
+                (Some(g), Some(r), _) if g > GRID_ROUGH_G => r,
+                (Some(g), _, Some(s)) if g <= GRID_ROUGH_G => s,
+                _ => sub,
+            };
+            grid_cache::point_basis(grid_problem, &p, &grid.linear)
+        })
+        .collect();
+    (!stopped()).then_some(grid_cache::GridBasis { points })
+}
+
+/// The search grid of a layout: the nonlinear parameters' candidate values (a given value
+/// alone), the linear parameters solved at each point, and how a flat index maps to a point.
+struct Grid {
+    /// Candidate values of each searched (nonlinear) parameter.
+    axes: Vec<Vec<f64>>,
+    /// Layout indices of the nonlinear parameters, in the order of `axes`.
+    nonlinear: Vec<usize>,
+    /// Layout indices of the free linear parameters (amplitudes).
+    linear: Vec<usize>,
+    /// Every parameter at its given value, else 1.
+    base: Vec<f64>,
+    /// Layout index of σ (KBS) and the median of (c/λ)² over the subsample: g ≈ (2πσ)²
+    /// times that.
+    sigma_k: Option<usize>,
+    c2_lambda: f64,
+    /// Number of grid points.
+    total: usize,
+}
+
+impl Grid {
+    fn new(
+        layout: &ParamLayout,
+        specs: &[crate::model::ParamSpec],
+        given: &[Option<f64>],
+        input: &FitInput,
+        sub_input: &FitInput,
+    ) -> Self {
+        let lambda = median(&input.geo.wavelength);
+        let c2_lambda = median(
+            &(0..sub_input.geo.len())
+                .map(|i| (sub_input.geo.c[i] / sub_input.geo.wavelength[i]).powi(2))
+                .collect::<Vec<_>>(),
+        );
+        let nonlinear: Vec<usize> = (0..layout.len())
+            .filter(|&k| !is_linear(layout, k, specs))
+            .collect();
+        let axes: Vec<Vec<f64>> = nonlinear
+            .iter()
+            .map(|&k| match given[k] {
+                Some(v) => vec![v],
+                None => grid_for(specs[layout.params[k].spec].name, lambda),
+            })
+            .collect();
+        let linear = (0..layout.len())
+            .filter(|&k| is_linear(layout, k, specs) && given[k].is_none())
+            .collect();
+        Grid {
+            total: axes.iter().map(Vec::len).product(),
+            axes,
+            nonlinear,
+            linear,
+            base: given.iter().map(|g| g.unwrap_or(1.0)).collect(),
+            sigma_k: layout
+                .params
+                .iter()
+                .position(|fp| specs[fp.spec].name == "sigma"),
+            c2_lambda,
+        }
+    }
+
+    /// The grid point of a flat index, and its median g (KBS).
+    fn point(&self, flat: usize) -> (Vec<f64>, Option<f64>) {
+        let mut p = self.base.clone();
+        let mut rem = flat;
+        for (axis, &k) in self.axes.iter().zip(&self.nonlinear) {
+            p[k] = axis[rem % axis.len()];
+            rem /= axis.len();
+        }
+        let g = self
+            .sigma_k
+            .map(|k| (2.0 * std::f64::consts::PI * p[k]).powi(2) * self.c2_lambda);
+        (p, g)
+    }
+}
+
+/// The regime band of a grid point's median g: 0 smooth (or no g), 1 intermediate, 2 rough.
+fn band_of(g: Option<f64>) -> usize {
+    match g {
+        Some(g) if g < SMOOTH_BAND_G => 0,
+        Some(g) if g <= ROUGH_BAND_G => 1,
+        Some(_) => 2,
+        None => 0,
+    }
+}
+
+/// The candidates from the scored grid points (cost, values, band): the grid ranks with
+/// the limits' approximations, which can favour a wrong regime (the rough asymptote σ → ∞
+/// at fixed T/σ is a valley of its own), so for KBS the best point of each regime band
+/// (smooth, intermediate, rough) is kept; otherwise the best points at least a factor
+/// e^{0.7} ≈ 2 apart in some nonlinear parameter. At most [`CANDIDATES`], best first.
+fn pick_distinct(
+    mut scored: Vec<(f64, Vec<f64>, usize)>,
+    is_kbs: bool,
+    nonlinear: &[usize],
+) -> Vec<(f64, Vec<f64>)> {
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut picked: Vec<(f64, Vec<f64>)> = Vec::new();
     let mut bands_taken = [false; 3];
@@ -235,9 +312,6 @@ pub fn initial_values(
             }
         }
     }
-    if picked.is_empty() {
-        return fallback();
-    }
     picked
 }
 
@@ -257,7 +331,7 @@ fn options_bits(model: &dyn crate::model::Model) -> Vec<u64> {
 /// non-finite values.
 pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Option<f64> {
     let basis = grid_cache::point_basis(problem, p, linear)?;
-    amplitudes::solve(problem, &basis, &linear_weights(problem), p, linear)
+    amplitudes::solve(problem, &basis, &Prepared::new(problem), p, linear)
 }
 
 /// At most `max` of `n` sample indices, spread over the whole file: the multiples of a

@@ -481,7 +481,7 @@ impl<'a> FitProblem<'a> {
 
     /// The unweighted residual of sample i for model value fi.
     #[inline]
-    fn residual(&self, i: usize, fi: f64) -> f64 {
+    pub(super) fn residual(&self, i: usize, fi: f64) -> f64 {
         let yi = self.y[i];
         match self.kind {
             ResidualKind::Absolute => fi - yi,

@@ -164,18 +164,12 @@ fn marginal_uncertainty(
     if !cov.iter().all(|v| v.is_finite()) || cov.nrows() != conditional.covariance.nrows() {
         return conditional;
     }
-    let se: Vec<f64> = (0..cov.nrows())
-        .map(|i| cov[(i, i)].max(0.0).sqrt())
-        .collect();
-    conditional.correlation = DMatrix::from_fn(cov.nrows(), cov.ncols(), |i, j| {
-        let s = se[i] * se[j];
-        if s > 0.0 {
-            cov[(i, j)] / s
-        } else {
-            f64::NAN
-        }
-    });
-    conditional.stderr = nalgebra::DVector::from_vec(se);
+    let se = nalgebra::DVector::from_iterator(
+        cov.nrows(),
+        (0..cov.nrows()).map(|i| cov[(i, i)].max(0.0).sqrt()),
+    );
+    conditional.correlation = stats::correlation(&cov, &se);
+    conditional.stderr = se;
     conditional.covariance = cov;
     conditional.residual_variance = unc.residual_variance;
     conditional

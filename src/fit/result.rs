@@ -55,6 +55,18 @@ impl Verdict {
             Verdict::Partial => "partial",
         }
     }
+
+    /// The verdict of a [`Self::name`] (as read back from a JSON report).
+    pub fn from_name(name: &str) -> Option<Verdict> {
+        [
+            Verdict::Full,
+            Verdict::Rough,
+            Verdict::Smooth,
+            Verdict::Partial,
+        ]
+        .into_iter()
+        .find(|v| v.name() == name)
+    }
 }
 
 /// A finished fit (converged or not).

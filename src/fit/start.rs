@@ -175,50 +175,14 @@ pub(super) fn starting_point(
     let stopped_early = stopped(stop);
     if refiners.sub.y.len() > layout.free().len() && !stopped_early {
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
-        // A refined start at an edge of the physical domain (T/σ → 0, T → 0) is no optimum
-        // worth starting from while another candidate's valley is about as low; when the
-        // edge is lower by more than EDGE_MARGIN, the data's best fit is the edge, and the
-        // full fit starts there (to end `degenerate`, saying why), the others as
-        // alternatives.
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
-        let (edge, usable): (Vec<_>, Vec<_>) = refined
-            .iter()
-            .cloned()
-            .zip(&candidates)
-            .partition(|((_, v), _)| at_edge(v));
-        let (usable, usable_grid): (Vec<_>, Vec<_>) =
-            usable.into_iter().map(|(r, c)| (r, c.clone())).unzip();
-        let others = other_usable(&usable, &usable_grid, coarse.ftol);
-        let best_usable = usable.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
-        let lowest_edge = edge
-            .iter()
-            .filter(|((c, _), _)| c.is_finite())
-            .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
-        match (
-            lowest_refined(usable, &usable_grid, coarse.ftol),
-            lowest_edge,
-        ) {
-            (winner, Some(((cost, values), grid)))
-                if winner.is_none() || *cost < best_usable * (1.0 - EDGE_MARGIN) =>
-            {
-                if let Some((w, _)) = winner {
-                    alternatives.insert(0, w);
-                }
-                p0 = values.clone();
-                grid_start = grid.1.clone();
-            }
-            (Some((values, start)), _) => {
-                p0 = values;
-                grid_start = start;
-                // A second valley about as low on the subsample is solved too.
-                rival = others
-                    .first()
-                    .filter(|(c, _)| *c <= best_usable * (1.0 + RIVAL_MARGIN))
-                    .map(|(_, v)| v.clone());
-            }
-            _ => {}
+        let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol);
+        if let Some((values, start)) = chosen.start {
+            p0 = values;
+            grid_start = start;
         }
-        alternatives.extend(others.into_iter().map(|(_, v)| v));
+        alternatives = chosen.alternatives;
+        rival = chosen.rival;
     }
     Ok(Start {
         p0,
@@ -269,6 +233,70 @@ fn refine_candidates(
             (if usable { cost } else { f64::INFINITY }, values)
         })
         .collect()
+}
+
+/// What the refined candidates give the full fit: its start (refined values, the grid
+/// point they came from), the other starts in the order to try them, and a rival valley.
+struct Chosen {
+    start: Option<(Vec<f64>, Vec<f64>)>,
+    alternatives: Vec<Vec<f64>>,
+    rival: Option<Vec<f64>>,
+}
+
+/// Choose among the refined candidates (`refined[i]` from `candidates[i]`). A refined start
+/// at an edge of the physical domain (T/σ → 0, T → 0: `at_edge`) is no optimum worth
+/// starting from while another candidate's valley is about as low; when the edge is lower
+/// by more than [`EDGE_MARGIN`], the data's best fit is the edge, and the full fit starts
+/// there (to end `degenerate`, saying why), the others as alternatives. Otherwise the
+/// lowest usable one starts (ties within `ftol` to the better-ranked grid point), and the
+/// next usable one is the rival when its cost is within [`RIVAL_MARGIN`].
+fn choose_refined(
+    refined: &[(f64, Vec<f64>)],
+    candidates: &[(f64, Vec<f64>)],
+    at_edge: &dyn Fn(&[f64]) -> bool,
+    ftol: f64,
+) -> Chosen {
+    let (edge, usable): (Vec<_>, Vec<_>) = refined
+        .iter()
+        .cloned()
+        .zip(candidates)
+        .partition(|((_, v), _)| at_edge(v));
+    let (usable, usable_grid): (Vec<_>, Vec<_>) =
+        usable.into_iter().map(|(r, c)| (r, c.clone())).unzip();
+    let others = other_usable(&usable, &usable_grid, ftol);
+    let best_usable = usable.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+    let lowest_edge = edge
+        .iter()
+        .filter(|((c, _), _)| c.is_finite())
+        .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
+    let mut chosen = Chosen {
+        start: None,
+        alternatives: Vec::new(),
+        rival: None,
+    };
+    match (lowest_refined(usable, &usable_grid, ftol), lowest_edge) {
+        (winner, Some(((cost, values), grid)))
+            if winner.is_none() || *cost < best_usable * (1.0 - EDGE_MARGIN) =>
+        {
+            if let Some((w, _)) = winner {
+                chosen.alternatives.push(w);
+            }
+            chosen.start = Some((values.clone(), grid.1.clone()));
+        }
+        (Some(winner), _) => {
+            chosen.start = Some(winner);
+            // A second valley about as low on the subsample is solved too.
+            chosen.rival = others
+                .first()
+                .filter(|(c, _)| *c <= best_usable * (1.0 + RIVAL_MARGIN))
+                .map(|(_, v)| v.clone());
+        }
+        _ => {}
+    }
+    chosen
+        .alternatives
+        .extend(others.into_iter().map(|(_, v)| v));
+    chosen
 }
 
 /// Whether `stop` was requested (the fit's stop request; none: never).

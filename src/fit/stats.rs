@@ -74,37 +74,76 @@ pub fn uncertainty(
         f64::NAN
     };
     if p == 0 {
-        return Uncertainty {
-            covariance: DMatrix::zeros(0, 0),
-            stderr: DVector::zeros(0),
-            correlation: DMatrix::zeros(0, 0),
-            singular_values: DVector::zeros(0),
-            condition: 1.0,
-            undetermined: Vec::new(),
-            rank: 0,
-            residual_variance: s2,
-        };
+        return Uncertainty::filled(0, 0.0, 1.0, s2);
     }
     let mut j = jacobian.clone();
     if j.nrows() < p {
         j = j.resize_vertically(p, 0.0);
     }
-    let finite = j.iter().all(|v| v.is_finite());
-    if !finite {
-        let nan = DMatrix::from_element(p, p, f64::NAN);
-        return Uncertainty {
-            covariance: nan.clone(),
-            stderr: DVector::from_element(p, f64::NAN),
-            correlation: nan,
-            singular_values: DVector::from_element(p, f64::NAN),
-            condition: f64::NAN,
+    if !j.iter().all(|v| v.is_finite()) {
+        return Uncertainty::filled(p, f64::NAN, f64::NAN, s2);
+    }
+    let norms = unit_columns(&mut j);
+    let svd = j.svd(false, true);
+    let v_t = svd.v_t.expect("SVD computed with V");
+    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
+    order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
+    let sv = DVector::from_iterator(p, order.iter().map(|&k| svd.singular_values[k]));
+    let (smax, smin) = (sv[0], sv[p - 1]);
+    let cut = rel * smax;
+    let mut cov = DMatrix::zeros(p, p);
+    let mut undetermined = Vec::new();
+    let mut rank = 0;
+    for &k in &order {
+        let s = svd.singular_values[k];
+        let v = v_t.row(k).transpose();
+        if s > cut && s > 0.0 {
+            rank += 1;
+            cov += (&v * v.transpose()) * (s2 / (s * s));
+        } else {
+            undetermined.push(unscaled_direction(v, &norms));
+        }
+    }
+    let cov = DMatrix::from_fn(p, p, |a, b| cov[(a, b)] / (norms[a] * norms[b]));
+    let stderr = DVector::from_iterator(p, (0..p).map(|i| cov[(i, i)].max(0.0).sqrt()));
+    Uncertainty {
+        correlation: correlation(&cov, &stderr),
+        covariance: cov,
+        stderr,
+        singular_values: sv,
+        condition: if smin > 0.0 {
+            smax / smin
+        } else {
+            f64::INFINITY
+        },
+        undetermined,
+        rank,
+        residual_variance: s2,
+    }
+}
+
+impl Uncertainty {
+    /// The uncertainty of `p` parameters with every matrix and vector entry `value`, no
+    /// undetermined direction and rank 0 (no parameters, or a Jacobian that is not finite).
+    fn filled(p: usize, value: f64, condition: f64, s2: f64) -> Self {
+        let m = DMatrix::from_element(p, p, value);
+        Uncertainty {
+            covariance: m.clone(),
+            stderr: DVector::from_element(p, value),
+            correlation: m,
+            singular_values: DVector::from_element(p, value),
+            condition,
             undetermined: Vec::new(),
             rank: 0,
             residual_variance: s2,
-        };
+        }
     }
-    // Unit-norm columns (a zero column keeps its zeros and a unit factor).
-    let norms: Vec<f64> = (0..p)
+}
+
+/// Scale the columns of `j` to unit norm in place and return their norms (a zero or
+/// non-finite column keeps its entries and a factor 1).
+fn unit_columns(j: &mut DMatrix<f64>) -> Vec<f64> {
+    let norms: Vec<f64> = (0..j.ncols())
         .map(|k| {
             let d = j.column(k).norm();
             if d > 0.0 && d.is_finite() {
@@ -117,58 +156,32 @@ pub fn uncertainty(
     for (k, d) in norms.iter().enumerate() {
         j.column_mut(k).unscale_mut(*d);
     }
-    let svd = j.svd(false, true);
-    let v_t = svd.v_t.expect("SVD computed with V");
-    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
-    order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
-    let sv = DVector::from_iterator(p, order.iter().map(|&k| svd.singular_values[k]));
-    let smax = sv[0];
-    let cut = rel * smax;
-    let mut cov = DMatrix::zeros(p, p);
-    let mut undetermined = Vec::new();
-    let mut rank = 0;
-    for &k in &order {
-        let s = svd.singular_values[k];
-        let v = v_t.row(k).transpose();
-        if s > cut && s > 0.0 {
-            rank += 1;
-            cov += (&v * v.transpose()) * (s2 / (s * s));
-        } else {
-            let x = DVector::from_iterator(p, v.iter().zip(&norms).map(|(a, d)| a / d));
-            let len = x.norm();
-            undetermined.push(if len > 0.0 && len.is_finite() {
-                x / len
-            } else {
-                v
-            });
-        }
+    norms
+}
+
+/// A null direction `v` of the unit-column Jacobian taken back to the parameters,
+/// `D⁻¹ v` normalised (`v` itself when that has no finite length).
+fn unscaled_direction(v: DVector<f64>, norms: &[f64]) -> DVector<f64> {
+    let x = DVector::from_iterator(v.len(), v.iter().zip(norms).map(|(a, d)| a / d));
+    let len = x.norm();
+    if len > 0.0 && len.is_finite() {
+        x / len
+    } else {
+        v
     }
-    let cov = DMatrix::from_fn(p, p, |a, b| cov[(a, b)] / (norms[a] * norms[b]));
-    let stderr = DVector::from_iterator(p, (0..p).map(|i| cov[(i, i)].max(0.0).sqrt()));
-    let correlation = DMatrix::from_fn(p, p, |a, b| {
+}
+
+/// Correlations `Cᵢⱼ / (sᵢ sⱼ)` of covariance `cov` with standard errors `stderr` (NaN
+/// where a standard error is 0).
+pub fn correlation(cov: &DMatrix<f64>, stderr: &DVector<f64>) -> DMatrix<f64> {
+    DMatrix::from_fn(cov.nrows(), cov.ncols(), |a, b| {
         let d = stderr[a] * stderr[b];
         if d > 0.0 {
             cov[(a, b)] / d
         } else {
             f64::NAN
         }
-    });
-    let smin = sv[p - 1];
-    let condition = if smin > 0.0 {
-        smax / smin
-    } else {
-        f64::INFINITY
-    };
-    Uncertainty {
-        covariance: cov,
-        stderr,
-        correlation,
-        singular_values: sv,
-        condition,
-        undetermined,
-        rank,
-        residual_variance: s2,
-    }
+    })
 }
 
 #[cfg(test)]

@@ -12,8 +12,9 @@
 //! [`figure6_curves`], [`figure7_grid`]) so tests can hold them to the paper's facts.
 
 use super::contour::{draw_colorbar, draw_contours, draw_heatmap, linspace, Grid};
+use super::legend::{self, Entry, Glyph, Marker};
 use super::sphere::{draw_caption, draw_sphere, sphere_radiance, SphereImage};
-use super::xy::{Kind, LegendAt, Series, XyPlot};
+use super::xy::{draw_titles, Kind, Series, XyPlot};
 use super::{font, series_color, write_png_svg, DrawError, Picture};
 use crate::error::Result;
 use crate::geometry::{Geometry, Quantity, Sample};
@@ -340,7 +341,6 @@ pub fn figure5() -> Result<XyPlot> {
     );
     plot.x_range = (-90.0, 90.0);
     plot.y_range = (0.0, 1.08);
-    plot.legend_at = LegendAt::UpperRight;
     for (k, c) in curves.into_iter().enumerate() {
         let lambert = c.param.is_nan();
         plot.series.push(Series {
@@ -391,6 +391,8 @@ pub type Marks = (String, Vec<(f64, f64)>, RGBColor);
 #[derive(Debug, Clone)]
 pub struct ContourPlot {
     pub title: String,
+    /// A second title line; empty for none.
+    pub subtitle: String,
     pub x_desc: String,
     pub y_desc: String,
     pub z_desc: String,
@@ -404,6 +406,29 @@ pub struct ContourPlot {
     pub marks: Vec<Marks>,
 }
 
+impl ContourPlot {
+    /// The legend's lines: the contour levels and each set of marks.
+    pub fn legend_entries(&self) -> Vec<Entry> {
+        let mut out = vec![Entry {
+            glyph: Glyph::Line {
+                color: BLACK,
+                width: 2,
+                dash: None,
+            },
+            label: self.levels_label.clone(),
+        }];
+        out.extend(self.marks.iter().map(|(label, _, color)| Entry {
+            glyph: Glyph::Point {
+                color: *color,
+                marker: Marker::Filled,
+                r: 5,
+            },
+            label: label.clone(),
+        }));
+        out
+    }
+}
+
 impl Picture for ContourPlot {
     fn size(&self) -> (u32, u32) {
         self.size
@@ -413,11 +438,13 @@ impl Picture for ContourPlot {
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
-        let root = root.titled(
-            &self.title,
-            font(super::xy::title_font_size(&self.title, self.size.0)),
-        )?;
+        let root = draw_titles(root, &self.title, &self.subtitle)?;
+        // The legend in rows above the map, never over it.
         let (w, _) = root.dim_in_pixel();
+        let entries = self.legend_entries();
+        let rows = legend::rows(&entries, w.saturating_sub(40)).len() as u32;
+        let (top, root) = root.split_vertically(rows * legend::LINE_H + 4);
+        legend::draw_rows(&top, &entries)?;
         let (main, bar) = root.split_horizontally(w.saturating_sub(160));
         let (x0, x1) = (self.grid.xs[0], *self.grid.xs.last().unwrap_or(&1.0));
         let (y0, y1) = (self.grid.ys[0], *self.grid.ys.last().unwrap_or(&1.0));
@@ -442,30 +469,14 @@ impl Picture for ContourPlot {
             .axis_desc_style(font(18.0))
             .draw()?;
         draw_contours(&mut chart, &self.grid, &self.levels, BLACK.stroke_width(1))?;
-        chart
-            .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())?
-            .label(self.levels_label.as_str())
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], BLACK.stroke_width(2)));
-        for (label, pts, color) in &self.marks {
+        for (_, pts, color) in &self.marks {
             let color = *color;
-            chart
-                .draw_series(pts.iter().map(move |&p| {
-                    EmptyElement::at(p)
-                        + Circle::new((0, 0), 5, color.filled())
-                        + Circle::new((0, 0), 5, BLACK.stroke_width(1))
-                }))?
-                .label(label.as_str())
-                .legend(move |(x, y)| Circle::new((x + 12, y), 5, color.filled()));
+            chart.draw_series(pts.iter().map(move |&p| {
+                EmptyElement::at(p)
+                    + Circle::new((0, 0), 5, color.filled())
+                    + Circle::new((0, 0), 5, BLACK.stroke_width(1))
+            }))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .margin(12)
-            .legend_area_size(32)
-            .label_font(font(15.0))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(120, 120, 120))
-            .draw()?;
         draw_colorbar(&bar, (lo, hi), &self.levels, &self.z_desc)
     }
 }
@@ -476,6 +487,7 @@ pub fn figure7() -> Result<ContourPlot> {
     Ok(ContourPlot {
         title: "Figure 7: KBS rough approximation, θi = 45°, T/σ = 5: contours of L over (θr, φr)"
             .into(),
+        subtitle: String::new(),
         x_desc: "θr, view angle from the surface normal (degrees)".into(),
         y_desc: "φr, azimuth from the plane of incidence (degrees)".into(),
         z_desc: "L / L_max".into(),

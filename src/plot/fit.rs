@@ -9,11 +9,14 @@
 
 use super::contour::{linspace, Grid};
 use super::figures::{ContourPlot, LEVELS};
-use super::xy::{Kind, LegendAt, Series, XyPlot};
+use super::legend::{ColorKey, Entry, Glyph};
+use super::marks::Beyond;
+use super::xy::{Kind, Series, XyPlot};
 use super::{fmt_num, font, series_color, write_png_svg, DrawError, Picture};
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Quantity, Sample};
 use crate::model::Model;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::f64::consts::PI;
@@ -23,6 +26,9 @@ use std::path::{Path, PathBuf};
 pub struct FitPlotInput<'a> {
     /// Model name and fitted parameters.
     pub title: String,
+    /// The fit's status under the title: T/σ, the verdict, converged or why not; empty for
+    /// none.
+    pub subtitle: String,
     pub model: &'a dyn Model,
     pub params: &'a [f64],
     /// Sample geometry (radians), quantity, wavelength.
@@ -137,8 +143,8 @@ fn plane_curve_samples(theta_i: f64, n: usize) -> (Vec<f64>, Vec<Sample>) {
 
 fn quantity_desc(q: Quantity) -> &'static str {
     match q {
-        Quantity::Radiance => "radiance L (data units)",
-        Quantity::Brdf => "BRDF (data units)",
+        Quantity::Radiance => "radiance L (the file's unit)",
+        Quantity::Brdf => "BRDF (sr⁻¹)",
     }
 }
 
@@ -177,8 +183,111 @@ fn checked_groups(input: &FitPlotInput) -> Result<Vec<Group>> {
     Ok(groups(input.geo))
 }
 
+/// How the groups of a chart are told apart. Up to [`super::PALETTE`] groups: a palette
+/// colour each, named in the legend. More: colour by θi on a continuous scale (a colour bar
+/// in the legend) and, when there are several wavelengths, the wavelength by line style
+/// and marker (named in the legend; the four styles repeat beyond four wavelengths).
+pub struct GroupStyles {
+    pub colors: Vec<RGBColor>,
+    /// Index into [`Kind::LINES`] / [`Kind::POINTS`] per group.
+    pub style: Vec<usize>,
+    /// The colour scale, when colour shows θi.
+    pub key: Option<ColorKey>,
+    /// The distinct wavelengths with their style index, when style shows the wavelength.
+    pub wavelengths: Vec<(f64, usize)>,
+}
+
+/// The styles of `gs` (see [`GroupStyles`]).
+pub fn group_styles(gs: &[Group]) -> GroupStyles {
+    if gs.len() <= super::PALETTE {
+        return GroupStyles {
+            colors: (0..gs.len()).map(series_color).collect(),
+            style: vec![0; gs.len()],
+            key: None,
+            wavelengths: Vec::new(),
+        };
+    }
+    let mut wls: Vec<f64> = gs.iter().map(|g| g.wavelength).collect();
+    wls.sort_by(f64::total_cmp);
+    wls.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * b.abs());
+    let mut thetas: Vec<f64> = gs.iter().map(|g| g.theta_i.to_degrees()).collect();
+    thetas.dedup_by(|a, b| (*a - *b).abs() < 1e-4);
+    let range = (thetas[0], *thetas.last().unwrap_or(&thetas[0]));
+    let key = ColorKey {
+        label: "θi (degrees)".into(),
+        range,
+        values: thetas,
+    };
+    let style_of = |wl: f64| {
+        wls.iter()
+            .position(|w| (w - wl).abs() <= 1e-9 * w.abs())
+            .unwrap_or(0)
+            % Kind::LINES.len()
+    };
+    GroupStyles {
+        colors: gs
+            .iter()
+            .map(|g| key.color(g.theta_i.to_degrees()))
+            .collect(),
+        style: gs.iter().map(|g| style_of(g.wavelength)).collect(),
+        wavelengths: if wls.len() > 1 {
+            wls.iter().map(|&w| (w, style_of(w))).collect()
+        } else {
+            Vec::new()
+        },
+        key: Some(key),
+    }
+}
+
+impl GroupStyles {
+    /// A group's legend label, or `None` when colour and style name it instead.
+    fn label(&self, g: &Group, multi_wavelength: bool) -> Option<String> {
+        self.key.is_none().then(|| group_label(g, multi_wavelength))
+    }
+
+    /// The legend lines of the wavelength styles (`lines`: the line style, else the
+    /// marker; `what` follows the wavelength: " fitted", " measured", "").
+    fn wavelength_entries(&self, lines: bool, what: &str) -> Vec<Entry> {
+        let grey = RGBColor(60, 60, 60);
+        self.wavelengths
+            .iter()
+            .map(|&(w, k)| Entry {
+                glyph: if lines {
+                    Kind::LINES[k](2).glyph(grey)
+                } else {
+                    Kind::POINTS[k](4).glyph(grey)
+                },
+                label: format!("λ = {}{what}", fmt_num(w)),
+            })
+            .collect()
+    }
+}
+
+/// The top of a linear chart of `data` under fitted curves reaching `curve_max`: the
+/// data's top, unless a few points far above the curves would crush the rest (Cornell
+/// paints at grazing angles, 50× the lobe): then 1.15 × the larger of the curves' top and
+/// the data's 95th percentile, and the points above are drawn as arrows at the top.
+pub fn linear_top(curve_max: f64, data: &[f64]) -> f64 {
+    let mut d: Vec<f64> = data.iter().copied().filter(|v| v.is_finite()).collect();
+    d.sort_by(f64::total_cmp);
+    let Some(&max) = d.last() else {
+        return curve_max;
+    };
+    let q95 = d[((d.len() - 1) as f64 * 0.95).round() as usize];
+    let robust = if curve_max.is_finite() {
+        curve_max.max(q95)
+    } else {
+        q95
+    };
+    if max <= 1.5 * robust {
+        max.max(robust)
+    } else {
+        1.15 * robust
+    }
+}
+
 /// Measured vs fitted over signed θr for each θi (in-plane samples). `log_y` for the
-/// logarithmic version.
+/// logarithmic version; the linear one chooses its top with [`linear_top`].
 pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
     let gs = checked_groups(input)?;
     let geo = input.geo;
@@ -192,13 +301,14 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
         "signed θr (degrees; θr < 0: φr = 180°, the source side)",
         quantity_desc(geo.quantity),
     );
+    plot.subtitle = input.subtitle.clone();
     plot.x_range = (-90.0, 90.0);
     plot.log_y = log_y;
-    plot.legend_at = LegendAt::UpperLeft;
+    let styles = group_styles(&gs);
     let mut any_near = false;
-    let mut yvals = Vec::new();
+    let (mut data, mut curves) = (Vec::new(), Vec::new());
     for (c, g) in gs.iter().enumerate() {
-        let color = series_color(c);
+        let color = styles.colors[c];
         let (idx, in_plane) = plane_samples(geo, g);
         any_near |= !in_plane;
         // (signed θr in degrees, value) along the plane, in order of angle.
@@ -212,7 +322,7 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
         };
         let meas = along(input.measured);
         let fit_pts = along(input.fitted);
-        yvals.extend(meas.iter().chain(&fit_pts).map(|p| p.1));
+        data.extend(meas.iter().map(|p| p.1));
         // A smooth model curve along the plane when the samples are in it and the model
         // reproduces the fitted values there; otherwise the fitted values joined.
         let curve = if in_plane {
@@ -220,58 +330,87 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
         } else {
             None
         };
+        let line = curve.unwrap_or(fit_pts);
+        curves.extend(line.iter().map(|p| p.1));
         plot.series.push(Series {
-            label: Some(group_label(g, multi)),
+            label: styles.label(g, multi),
             color,
-            kind: Kind::Line(2),
-            points: curve.unwrap_or(fit_pts),
+            kind: Kind::LINES[styles.style[c]](2),
+            points: line,
         });
         plot.series.push(Series {
             label: None,
             color,
-            kind: Kind::Points(4),
+            kind: Kind::POINTS[styles.style[c]](4),
             points: meas,
         });
     }
-    plot.series.push(Series {
-        label: Some("measured (points)".into()),
-        color: BLACK,
-        kind: Kind::Points(4),
-        points: vec![],
+    plot.legend_extra.push(Entry {
+        glyph: Kind::Points(4).glyph(BLACK),
+        label: "measured (points)".into(),
     });
-    plot.series.push(Series {
-        label: Some(if any_near {
+    plot.legend_extra.push(Entry {
+        glyph: Kind::Line(2).glyph(BLACK),
+        label: if any_near {
             "fitted (lines; nearest-to-plane samples)".into()
         } else {
             "fitted model (lines)".into()
-        }),
-        color: BLACK,
-        kind: Kind::Line(2),
-        points: vec![],
+        },
     });
-    // The y range covers the data, not the model's far tails.
-    let keep = |y: &f64| y.is_finite() && (!log_y || *y > 0.0);
-    let ys: Vec<f64> = yvals.into_iter().filter(keep).collect();
-    let lo = ys.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = ys.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    if lo.is_finite() && hi.is_finite() {
-        if log_y {
-            let (lo, hi) = if hi > lo {
-                (lo, hi)
-            } else {
-                (lo / 2.0, hi * 2.0)
-            };
-            let pad = (hi / lo).powf(0.08);
-            plot.y_range = (lo / pad, hi * pad.powi(2));
-        } else {
-            let lo = lo.min(0.0);
-            let span = if hi > lo { hi - lo } else { 1.0 };
-            plot.y_range = (lo, hi + 0.1 * span);
-        }
-    } else if log_y {
-        plot.y_range = (1e-3, 1.0);
-    }
+    plot.legend_extra
+        .extend(styles.wavelength_entries(true, " fitted"));
+    plot.legend_extra
+        .extend(styles.wavelength_entries(false, " measured"));
+    plot.color_key = styles.key;
+    plot.y_range = fit_y_range(&data, &curves, log_y);
     Ok(plot)
+}
+
+/// The y range of a fit chart: on a log axis every positive measured and fitted value
+/// (the model's far tails left out) with a margin; on a linear one from 0 (or the lowest
+/// value) to [`linear_top`].
+fn fit_y_range(data: &[f64], curves: &[f64], log_y: bool) -> (f64, f64) {
+    let keep = |y: &&f64| y.is_finite() && (!log_y || **y > 0.0);
+    let lo = data
+        .iter()
+        .filter(keep)
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let data_hi = data
+        .iter()
+        .filter(keep)
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let curve_hi = curves
+        .iter()
+        .filter(keep)
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    if log_y {
+        let (lo, hi) = (lo, data_hi.max(curve_hi.min(data_hi * 10.0)));
+        if !(lo.is_finite() && hi.is_finite()) {
+            return (1e-3, 1.0);
+        }
+        let (lo, hi) = if hi > lo {
+            (lo, hi)
+        } else {
+            (lo / 2.0, hi * 2.0)
+        };
+        let pad = (hi / lo).powf(0.08);
+        return (lo / pad, hi * pad.powi(2));
+    }
+    let curve_lo = curves
+        .iter()
+        .filter(keep)
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let lo = lo.min(curve_lo).min(0.0);
+    let hi = linear_top(curve_hi, data);
+    if !hi.is_finite() {
+        return (0.0, 1.0);
+    }
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    (lo, hi + 0.08 * span)
 }
 
 fn dense_plane_curve(
@@ -329,11 +468,13 @@ pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
         },
         "standardized residual (fitted − measured) / u",
     );
+    plot.subtitle = input.subtitle.clone();
     plot.x_range = if over_phi {
         (-180.0, 180.0)
     } else {
         (0.0, 90.0)
     };
+    let styles = group_styles(&gs);
     for (c, g) in gs.iter().enumerate() {
         let pts = g
             .idx
@@ -348,21 +489,22 @@ pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
             })
             .collect();
         plot.series.push(Series {
-            label: Some(group_label(g, multi)),
-            color: series_color(c),
-            kind: Kind::Points(4),
+            label: styles.label(g, multi),
+            color: styles.colors[c],
+            kind: Kind::POINTS[styles.style[c]](4),
             points: pts,
         });
     }
+    plot.legend_extra
+        .extend(styles.wavelength_entries(false, ""));
+    plot.color_key = styles.key;
     plot.hlines = vec![-2.0, 0.0, 2.0];
     plot.fit_y_range();
     let m = plot.y_range.0.abs().max(plot.y_range.1.abs()).max(3.0);
-    plot.y_range = (-m, m * 1.35);
-    plot.series.push(Series {
-        label: Some("±2 and 0 (grey lines)".into()),
-        color: RGBColor(150, 150, 150),
-        kind: Kind::Line(1),
-        points: vec![],
+    plot.y_range = (-m, m);
+    plot.legend_extra.push(Entry {
+        glyph: Kind::Line(1).glyph(RGBColor(150, 150, 150)),
+        label: "±2 and 0 (grey lines)".into(),
     });
     Ok(plot)
 }
@@ -383,6 +525,8 @@ fn busiest(gs: &[Group]) -> &Group {
 #[derive(Debug, Clone)]
 pub struct PolarPlot {
     pub title: String,
+    /// A second title line; empty for none.
+    pub subtitle: String,
     pub theta_i: f64,
     /// (signed θr in degrees, L / L_max) of the fitted model.
     pub curve: Vec<(f64, f64)>,
@@ -396,13 +540,55 @@ pub struct PolarPlot {
 /// arrows pointing outwards, counted in the legend.
 pub const POLAR_RIM: f64 = 1.15;
 
+const POLAR_SOURCE: RGBColor = RGBColor(200, 120, 0);
+const POLAR_MIRROR: RGBColor = RGBColor(120, 120, 120);
+
 impl PolarPlot {
     /// The measured points beyond [`POLAR_RIM`]: (how many, the largest L / L_max).
     pub fn clipped(&self) -> (usize, f64) {
-        self.measured
-            .iter()
-            .filter(|p| p.1.is_finite() && p.1 > POLAR_RIM)
-            .fold((0, 0.0f64), |(n, m), p| (n + 1, m.max(p.1)))
+        let b = Beyond::above(self.measured.iter().map(|p| p.1), POLAR_RIM);
+        (b.count, b.worst)
+    }
+
+    /// The legend's lines (drawn in rows above the plot).
+    pub fn legend_entries(&self) -> Vec<Entry> {
+        let line = |color, dash| Glyph::Line {
+            color,
+            width: 2,
+            dash,
+        };
+        let ti = fmt_num(self.theta_i.to_degrees());
+        let mut out = vec![
+            Entry {
+                glyph: line(POLAR_SOURCE, Some((8, 5))),
+                label: format!("source direction (−{ti}°)"),
+            },
+            Entry {
+                glyph: line(POLAR_MIRROR, Some((8, 5))),
+                label: format!("mirror direction ({ti}°)"),
+            },
+            Entry {
+                glyph: line(series_color(0), None),
+                label: format!("fitted model (L_max = {})", fmt_num(self.l_max)),
+            },
+            Entry {
+                glyph: Kind::Points(4).glyph(series_color(3)),
+                label: "measured (in-plane samples)".into(),
+            },
+        ];
+        let b = Beyond::above(self.measured.iter().map(|p| p.1), POLAR_RIM);
+        if b.count > 0 {
+            out.push(Entry {
+                glyph: Glyph::Arrow {
+                    color: series_color(3),
+                },
+                label: format!(
+                    "{}, drawn at {POLAR_RIM}",
+                    b.label("beyond the rim", "× L_max")
+                ),
+            });
+        }
+        out
     }
 }
 
@@ -441,6 +627,7 @@ pub fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
             input.title,
             fmt_num(g.theta_i.to_degrees())
         ),
+        subtitle: input.subtitle.clone(),
         theta_i: g.theta_i,
         curve: xs.into_iter().zip(ys.iter().map(|v| v * norm)).collect(),
         measured,
@@ -455,15 +642,19 @@ fn polar_xy(theta_deg: f64, r: f64) -> (f64, f64) {
 
 impl Picture for PolarPlot {
     fn size(&self) -> (u32, u32) {
-        (900, 580)
+        (900, 620)
     }
 
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
-        let title_size = super::xy::title_font_size(&self.title, self.size().0);
-        let root = root.titled(&self.title, font(title_size))?;
+        let root = super::xy::draw_titles(root, &self.title, &self.subtitle)?;
+        let (w0, _) = root.dim_in_pixel();
+        let entries = self.legend_entries();
+        let rows = super::legend::rows(&entries, w0.saturating_sub(40)).len() as u32;
+        let (top, root) = root.split_vertically(rows * super::legend::LINE_H + 4);
+        super::legend::draw_rows(&top, &entries)?;
         let (w, h) = root.dim_in_pixel();
         // Equal scales on both axes: the plotting area is (w − 2·16 − 70) × (h − 2·16 − 55).
         let (pw, ph) = (w as f64 - 102.0, h as f64 - 87.0);
@@ -485,6 +676,55 @@ impl Picture for PolarPlot {
             .label_style(font(14.0))
             .axis_desc_style(font(16.0))
             .draw()?;
+        self.draw_grid(&mut chart)?;
+        let ti = self.theta_i.to_degrees();
+        for (angle, color) in [(-ti, POLAR_SOURCE), (ti, POLAR_MIRROR)] {
+            chart.draw_series(DashedLineSeries::new(
+                vec![(0.0, 0.0), polar_xy(angle, 1.0)],
+                8,
+                5,
+                color.stroke_width(2),
+            ))?;
+        }
+        chart.draw_series(LineSeries::new(
+            self.curve
+                .iter()
+                .filter(|p| p.1.is_finite())
+                .map(|&(t, r)| polar_xy(t, r.clamp(0.0, POLAR_RIM))),
+            series_color(0).stroke_width(2),
+        ))?;
+        let red = series_color(3);
+        chart.draw_series(
+            self.measured
+                .iter()
+                .filter(|p| p.1.is_finite() && p.1 <= POLAR_RIM)
+                .map(|&(t, r)| Circle::new(polar_xy(t, r.max(0.0)), 4, red.filled())),
+        )?;
+        // Each point beyond the rim: a radial arrow ending at the rim (equal scales, so the
+        // radial direction on screen is (sin θ, −cos θ)).
+        chart.draw_series(
+            self.measured
+                .iter()
+                .filter(|p| p.1.is_finite() && p.1 > POLAR_RIM)
+                .map(|&(t, _)| {
+                    let a = t.to_radians();
+                    EmptyElement::at(polar_xy(t, POLAR_RIM))
+                        + PathElement::new(
+                            super::marks::arrow((a.sin(), -a.cos()), 30.0, 9.0),
+                            red.stroke_width(2),
+                        )
+                }),
+        )?;
+        Ok(())
+    }
+}
+
+impl PolarPlot {
+    /// The rings at L / L_max = 0.25 … 1 and the spokes every 15° (labelled every 30°).
+    fn draw_grid<DB: DrawingBackend>(
+        &self,
+        chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    ) -> std::result::Result<(), DrawError<DB>> {
         let grey = RGBColor(200, 200, 200);
         for r in [0.25, 0.5, 0.75, 1.0] {
             let arc: Vec<(f64, f64)> = (0..=180).map(|d| polar_xy(d as f64 - 90.0, r)).collect();
@@ -509,95 +749,6 @@ impl Picture for PolarPlot {
                 )))?;
             }
         }
-        let ti = self.theta_i.to_degrees();
-        let src = RGBColor(200, 120, 0);
-        let mir = RGBColor(120, 120, 120);
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(0.0, 0.0), polar_xy(-ti, 1.0)],
-                8,
-                5,
-                src.stroke_width(2),
-            ))?
-            .label(format!("source direction (−{}°)", fmt_num(ti)))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], src.stroke_width(2)));
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(0.0, 0.0), polar_xy(ti, 1.0)],
-                8,
-                5,
-                mir.stroke_width(2),
-            ))?
-            .label(format!("mirror direction ({}°)", fmt_num(ti)))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], mir.stroke_width(2)));
-        let blue = series_color(0);
-        chart
-            .draw_series(LineSeries::new(
-                self.curve
-                    .iter()
-                    .filter(|p| p.1.is_finite())
-                    .map(|&(t, r)| polar_xy(t, r.clamp(0.0, POLAR_RIM))),
-                blue.stroke_width(2),
-            ))?
-            .label(format!("fitted model (L_max = {})", fmt_num(self.l_max)))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 24, y)], blue.stroke_width(2))
-            });
-        let red = series_color(3);
-        let inside = |p: &&(f64, f64)| p.1.is_finite() && p.1 <= POLAR_RIM;
-        chart
-            .draw_series(
-                self.measured
-                    .iter()
-                    .filter(inside)
-                    .map(|&(t, r)| Circle::new(polar_xy(t, r.max(0.0)), 4, red.filled())),
-            )?
-            .label("measured (in-plane samples)")
-            .legend(move |(x, y)| Circle::new((x + 12, y), 4, red.filled()));
-        let (n_out, worst) = self.clipped();
-        if n_out > 0 {
-            // Each clipped point: a radial arrow from inside the rim to the rim.
-            let arrows = self
-                .measured
-                .iter()
-                .filter(|p| p.1.is_finite() && p.1 > POLAR_RIM)
-                .map(|&(t, _)| {
-                    let tip = polar_xy(t, POLAR_RIM);
-                    let tail = polar_xy(t, POLAR_RIM - 0.12);
-                    let side = |d: f64| polar_xy(t + d, POLAR_RIM - 0.05);
-                    PathElement::new(
-                        vec![tail, tip, side(2.5), tip, side(-2.5)],
-                        red.stroke_width(2),
-                    )
-                });
-            chart
-                .draw_series(arrows)?
-                .label(format!(
-                    "{n_out} measured beyond the rim (up to {}× L_max), drawn at {POLAR_RIM}",
-                    fmt_num(worst)
-                ))
-                .legend(move |(x, y)| {
-                    PathElement::new(
-                        vec![
-                            (x, y),
-                            (x + 22, y),
-                            (x + 16, y - 4),
-                            (x + 22, y),
-                            (x + 16, y + 4),
-                        ],
-                        red.stroke_width(2),
-                    )
-                });
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .margin(10)
-            .legend_area_size(32)
-            .label_font(font(14.0))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(120, 120, 120))
-            .draw()?;
         Ok(())
     }
 }
@@ -637,6 +788,7 @@ pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
             input.title,
             fmt_num(g.theta_i.to_degrees())
         ),
+        subtitle: input.subtitle.clone(),
         x_desc: "θr, view angle from the surface normal (degrees)".into(),
         y_desc: "φr, azimuth from the plane of incidence (degrees)".into(),
         z_desc: format!("fitted {}", quantity_desc(geo.quantity)),
@@ -695,6 +847,50 @@ mod tests {
         assert!(plane_distance(PI - 0.001) < PLANE_TOL);
         assert!(plane_distance(-PI + 0.001) < PLANE_TOL);
         assert!(plane_distance(0.5 * PI) > 1.0);
+    }
+
+    #[test]
+    fn linear_top_ignores_a_few_points_far_above_the_curves() {
+        // 100 values under 1, three grazing spikes up to 28 (the garnet 550 nm case).
+        let mut data: Vec<f64> = (0..100).map(|k| 0.01 * k as f64).collect();
+        data.extend([6.4, 7.5, 28.0]);
+        let top = linear_top(0.5, &data);
+        // The 95th percentile of the 103 values is the 98th smallest, 0.97.
+        assert!((top - 1.15 * 0.97).abs() < 1e-12, "{top}");
+        // Data a little above the curves, or the curves above the data: all shown.
+        assert_eq!(linear_top(0.5, &[0.1, 0.6, 0.7]), 0.7);
+        assert_eq!(linear_top(2.0, &[0.1, 0.6, 0.7]), 2.0);
+        assert_eq!(linear_top(1.0, &[]), 1.0);
+    }
+
+    #[test]
+    fn more_groups_than_colours_are_coloured_by_theta_i() {
+        let group = |ti: f64, wl: f64| Group {
+            theta_i: ti.to_radians(),
+            wavelength: wl,
+            idx: vec![0],
+        };
+        let few: Vec<Group> = (0..10).map(|k| group(5.0 * k as f64, 1.0)).collect();
+        let s = group_styles(&few);
+        assert!(s.key.is_none() && s.wavelengths.is_empty());
+        assert_eq!(s.colors[9], series_color(9));
+        // The PTFE file: 6 incidence angles × 4 wavelengths.
+        let mut many = Vec::new();
+        for ti in [0.0, 15.0, 30.0, 45.0, 60.0, 75.0] {
+            for wl in [0.351, 0.532, 0.633, 1.064] {
+                many.push(group(ti, wl));
+            }
+        }
+        let s = group_styles(&many);
+        let key = s.key.as_ref().expect("a colour bar");
+        assert_eq!(key.range, (0.0, 75.0));
+        assert_eq!(key.values.len(), 6);
+        assert_eq!(s.wavelengths.len(), 4);
+        // Same θi, same colour; same λ, same style; the four λ get four styles.
+        assert_eq!(s.colors[0], s.colors[3]);
+        assert_ne!(s.colors[0], s.colors[4]);
+        assert_eq!(s.style[1], s.style[5]);
+        assert_eq!(&s.style[..4], &[0, 1, 2, 3]);
     }
 
     #[test]

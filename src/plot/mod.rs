@@ -11,7 +11,10 @@
 pub mod contour;
 pub mod figures;
 pub mod fit;
+pub mod legend;
+pub mod marks;
 pub mod sphere;
+pub mod ticks;
 pub mod xy;
 
 use crate::error::{Error, Result};
@@ -174,6 +177,9 @@ pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     }
     Ok(buf)
 }
+
+/// How many colours [`series_color`] has before it repeats.
+pub const PALETTE: usize = 10;
 
 /// The i-th of ten well-separated line colours (matplotlib's "tab10"), cycling.
 pub fn series_color(i: usize) -> RGBColor {

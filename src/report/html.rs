@@ -25,7 +25,7 @@ fn inline_svg(svg: &str) -> &str {
 const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\
 table{border-collapse:collapse;margin:0.5em 0 1em}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}\
 th{background:#eee}td.num{font-family:monospace;text-align:right;white-space:nowrap}pre{background:#f6f6f6;padding:0.5em;overflow-x:auto}\
-figure{display:inline-block;margin:0.5em;vertical-align:top}figure svg{max-width:520px;height:auto}\
+figure{margin:1em 0}figure svg{width:100%;max-width:1100px;height:auto}\
 .no{color:#a00}.yes{color:#060}";
 
 /// A two-column table of (key, value) rows.
@@ -155,8 +155,11 @@ pub fn fragment(r: &FitResult, info: &RunInfo) -> String {
     s
 }
 
-/// Whether the fit converged, and its termination in words.
+/// Whether the fit converged, and its termination in words (said once: "Converged:
+/// relative reduction of the cost below ftol").
 fn status(s: &mut String, r: &FitResult) {
+    let words = r.termination.describe();
+    let words = words.strip_prefix("converged: ").unwrap_or(words);
     let _ = writeln!(
         s,
         "<p class={}>{}: {}</p>",
@@ -166,7 +169,7 @@ fn status(s: &mut String, r: &FitResult) {
         } else {
             "Did not converge"
         },
-        escape(r.termination.describe())
+        escape(words)
     );
 }
 
@@ -253,4 +256,36 @@ fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
         let _ = writeln!(s, "<li>{}</li>", escape(n));
     }
     let _ = writeln!(s, "</ul>\n<p>condition number {:.3e}</p>", r.condition);
+    validity(s, r);
+}
+
+/// The validity checks of a KBS fit (the paper's assumptions at the fitted surface) as a
+/// table: check, satisfied / violated / not determined, and what was found.
+fn validity(s: &mut String, r: &FitResult) {
+    let Some(v) = &r.validity else {
+        return;
+    };
+    s.push_str(
+        "<p>The paper's assumptions at the fitted surface (a warning, not a failure):</p>\n\
+         <table id=\"validity\">\n<tr><th>check</th><th>result</th><th>what was found</th></tr>\n",
+    );
+    for c in &v.checks {
+        let (word, class) = match c.satisfied {
+            Some(true) => ("satisfied", "yes"),
+            Some(false) => ("violated", "no"),
+            None => ("not determined", "no"),
+        };
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td class=\"{class}\">{word}</td><td>{}</td></tr>",
+            escape(c.name),
+            // The text opens with the result word, which the previous cell shows.
+            escape(
+                c.text
+                    .split_once(": ")
+                    .map_or(c.text.as_str(), |(_, found)| found)
+            )
+        );
+    }
+    s.push_str("</table>\n");
 }

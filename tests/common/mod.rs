@@ -4,6 +4,29 @@
 
 use assert_cmd::Command;
 
+/// The README's fit of the garnet paint's 550 nm channel (append the file).
+pub const GARNET_550: [&str; 7] = [
+    "fit",
+    "--model",
+    "kbs+lambert",
+    "--channel",
+    "550nm",
+    "--residual",
+    "log",
+];
+
+/// The default fit of a real paint or CUReT file: kbs+lambert on the BRDF, log residuals
+/// (append the selection and the file).
+pub const PAINT_BRDF_LOG: [&str; 7] = [
+    "fit",
+    "--model",
+    "kbs+lambert",
+    "--quantity",
+    "brdf",
+    "--residual",
+    "log",
+];
+
 /// The goniofit binary.
 pub fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
