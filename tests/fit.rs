@@ -383,7 +383,7 @@ fn an_evaluation_stopped_before_it_starts_gives_no_number() {
     let mut config = config("kbs");
     config.lm.stop = Some(stop);
     match fit(&input, &config) {
-        Err(goniofit::Error::Stopped(m)) => assert!(m.contains("nothing was fitted"), "{m}"),
+        Err(goniofit::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
         other => panic!("expected Error::Stopped, got {:?}", other.map(|r| r.cost)),
     }
 }

@@ -491,16 +491,11 @@ fn fitted_and_stopped(
     for o in outcomes {
         match o {
             Ok(o) => fitted.push(o),
-            Err(e) if e.chain().any(is_stopped) => skipped.push(format!("{e:#}")),
+            Err(e) if super::is_stopped(&e) => skipped.push(format!("{e:#}")),
             Err(e) => return Err(e),
         }
     }
     Ok((fitted, skipped))
-}
-
-/// Whether an error in a chain is [`Error::Stopped`].
-fn is_stopped(c: &(dyn std::error::Error + 'static)) -> bool {
-    matches!(c.downcast_ref::<Error>(), Some(Error::Stopped(_)))
 }
 
 /// What a report says about the run besides the fit: input, command, setting, intervals.

@@ -60,9 +60,6 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         identified.verdict = Verdict::Rough;
     }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
-    if start.stopped {
-        solved.notes.push(STOPPED_IN_START.to_string());
-    }
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     Ok(assemble::assemble(
@@ -70,17 +67,20 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     ))
 }
 
-/// The error of a fit whose stop request (`why`) cut its first evaluation on the whole data
-/// (`n` samples): no point of the fit was evaluated, so there is nothing to report.
+/// The error of a fit whose stop request (`why`) came before its first evaluation on the
+/// whole data (`n` samples) had finished — while the starting values were searched for, or
+/// in that evaluation: no point of the fit has a cost on the data, so there is nothing to
+/// report (the CLI prints this message and exits 3).
 fn stopped_before_first_evaluation(why: super::lm::Termination, n: usize) -> Error {
+    let hint = match why {
+        super::lm::Termination::Timeout => " (a larger --timeout lets one evaluation finish)",
+        _ => "",
+    };
     Error::Stopped(format!(
-        "{} before the first evaluation of the model on the {n} samples had finished; nothing was fitted (a larger --timeout lets one evaluation finish)",
+        "{} before the first model evaluation on the whole data ({n} samples) finished: nothing fitted{hint}",
         why.describe()
     ))
 }
-
-/// The note of a fit stopped while its starting values were searched for.
-pub const STOPPED_IN_START: &str = "the fit was stopped during the search for starting values: the values are the best starting point found by then (evaluated once on the full data), not a fit, and their standard errors describe that point only";
 
 /// Solve from the start, and from the start search's rival valley when there is one
 /// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain

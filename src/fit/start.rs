@@ -51,9 +51,6 @@ pub(super) struct Start {
     /// [`RIVAL_MARGIN`] of the winner's: a second valley the full fit also solves from,
     /// keeping the lower cost.
     pub rival: Option<Vec<f64>>,
-    /// Whether the stop request came before the grid's candidates were refined (the start
-    /// is then the grid's best point found by then).
-    pub stopped: bool,
 }
 
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
@@ -170,10 +167,9 @@ pub(super) fn starting_point(
     let coarse = coarse_config(config);
     let mut alternatives = Vec::new();
     let mut rival = None;
-    // After a stop request the grid's best point inside the domain is the start (nothing is
-    // refined: the fit then reports the full data's cost there).
-    let stopped_early = stopped(stop);
-    if refiners.sub.y.len() > layout.free().len() && !stopped_early {
+    // After a stop request nothing is refined (the fit's first evaluation on the whole data
+    // is then cut too, and the fit ends with nothing fitted).
+    if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
         let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol);
@@ -191,7 +187,6 @@ pub(super) fn starting_point(
         init_seconds: t0.elapsed().as_secs_f64(),
         alternatives,
         rival,
-        stopped: stopped_early,
     })
 }
 
