@@ -54,6 +54,11 @@ const REFINE_STEPS: usize = 12;
 /// the estimate.
 pub const CROSS_TOL: f64 = 1e-3;
 
+/// Problems of at most this many samples profile the two sides of an interval on two
+/// threads; larger ones (whose evaluations are parallel over sample blocks) one side at a
+/// time, which halves the memory the intervals hold at once.
+const SIDES_IN_PARALLEL_MAX_ROWS: usize = 16_384;
+
 /// One end of an interval.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Bound {
@@ -488,7 +493,10 @@ impl<'a, 'p> Profiler<'a, 'p> {
             0.05 * span.min(2.0 * LOG_RANGE)
         };
         let slope = self.path_slope(target, held);
-        // The two sides are independent searches: on two threads when there are two.
+        // The two sides are independent searches: on two threads for a small problem. A
+        // large one's model evaluation is already parallel over sample blocks, and two
+        // concurrent solves would hold two sets of residuals and Jacobians (the peak memory
+        // of a big fit), so its sides run one after the other.
         let side = |dir: f64, lim: Limit| {
             let mut walk = Walk {
                 target,
@@ -503,7 +511,11 @@ impl<'a, 'p> Profiler<'a, 'p> {
             };
             self.side(&mut walk, first, lim, &thr)
         };
-        let (lo, hi) = rayon::join(|| side(-1.0, lo_lim), || side(1.0, hi_lim));
+        let (lo, hi) = if self.problem.len() <= SIDES_IN_PARALLEL_MAX_ROWS {
+            rayon::join(|| side(-1.0, lo_lim), || side(1.0, hi_lim))
+        } else {
+            (side(-1.0, lo_lim), side(1.0, hi_lim))
+        };
         let sides = [lo, hi];
         let value_of = |t: f64| self.value_of(target, t);
         let map = |b: Bound| match b {

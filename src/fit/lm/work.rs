@@ -156,19 +156,12 @@ impl Work {
         }
     }
 
-    /// Put `Jᵀr` (`Jᵀf̃` with step residuals) and the (unpadded) `J` into the argmin state.
+    /// Put `Jᵀr` (`Jᵀf̃` with step residuals) into the argmin state. `J` itself stays in
+    /// the work only ([`super::LevenbergMarquardt::take_jacobian`]): a copy in the state
+    /// would hold one more `m × n` matrix for the whole run (a big fit's peak memory).
     fn publish_jacobian(&self, state: LmState) -> LmState {
-        let n = self.x.len();
         let grad = self.jac.tr_mul(self.step_r.as_ref().unwrap_or(&self.r));
-        // The state's Jacobian: the previous one's storage is reused (a fresh matrix of
-        // this size is fresh memory from the system on every iteration).
-        let mut state = state;
-        let mut state_jac = state
-            .take_jacobian()
-            .filter(|j| j.shape() == (self.m, n))
-            .unwrap_or_else(|| DMatrix::zeros(self.m, n));
-        state_jac.copy_from(&self.jac.rows(0, self.m));
-        state.gradient(grad).jacobian(state_jac)
+        state.gradient(grad)
     }
 }
 
