@@ -4,6 +4,8 @@
 //! (stair steps); the SVG gets the same vertices to 0.01 px.
 
 use goniofit::plot::figures::{figure5, figure6};
+use goniofit::plot::marks::Rect;
+use goniofit::plot::smooth::PixelMap;
 use goniofit::plot::xy::{Kind, Series, XyPlot};
 use goniofit::plot::{rgb_buffer, svg_string, Picture};
 use plotters::prelude::*;
@@ -65,12 +67,40 @@ fn straight_line() -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// The straight-line chart, its picture size and its plotting area.
+struct Setup {
+    pts: Vec<(f64, f64)>,
+    plot: XyPlot,
+    size: (u32, u32),
+    rect: Rect,
+    map: PixelMap,
+}
+
+impl Setup {
+    fn straight() -> Setup {
+        let pts = straight_line();
+        let plot = chart(&pts);
+        let size = plot.size();
+        let (rect, map) = plot.plotting_area();
+        Setup {
+            pts,
+            plot,
+            size,
+            rect,
+            map,
+        }
+    }
+}
+
 #[test]
 fn a_straight_line_is_centred_on_the_exact_line_in_every_column() {
-    let pts = straight_line();
-    let plot = chart(&pts);
-    let (w, h) = plot.size();
-    let (rect, map) = plot.plotting_area();
+    let Setup {
+        pts,
+        plot,
+        size: (w, h),
+        rect,
+        map,
+    } = Setup::straight();
     let alpha = black_alpha(
         &rgb_buffer(&plot).unwrap(),
         &rgb_buffer(&chart(&[])).unwrap(),
@@ -120,10 +150,8 @@ fn a_straight_line_is_centred_on_the_exact_line_in_every_column() {
 fn the_same_line_at_whole_pixels_fails_that_measure() {
     // The measure above is sharp: the line drawn through plotters' own integer pixel
     // coordinates (what the charts did before) is more than 0.1 px off in some column.
-    let pts = straight_line();
-    let plot = chart(&pts);
-    let (w, h) = plot.size();
-    let (rect, map) = plot.plotting_area();
+    let setup = Setup::straight();
+    let (pts, (w, h), rect, map) = (setup.pts, setup.size, setup.rect, setup.map);
     let px: Vec<(f64, f64)> = pts
         .iter()
         .map(|&p| {

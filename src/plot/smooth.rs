@@ -232,10 +232,14 @@ impl DrawingBackend for SvgCanvas<'_> {
 }
 
 /// The pixels a stroke of `width` along `pts` covers inside `clip`, each with its coverage
-/// in (0, 1] (see the module's doc), in row-major order. Points that are not finite break
-/// nothing here: callers pass finite pixel positions.
+/// in (0, 1] (see the module's doc), in row-major order. Points that are not finite are
+/// skipped (joining their neighbours).
 pub fn coverage(pts: &[(f64, f64)], width: f64, clip: Rect) -> Vec<(BackendCoord, f64)> {
-    let r = if width.is_finite() { 0.5 * width.max(0.0) } else { 0.0 };
+    let r = if width.is_finite() {
+        0.5 * width.max(0.0)
+    } else {
+        0.0
+    };
     let reach = r + 0.5;
     let finite: Vec<(f64, f64)> = pts
         .iter()
