@@ -226,17 +226,16 @@ impl Restricted<'_, '_> {
                 DMatrix::from_element(m, n - 1, f64::NAN),
             );
         };
-        let (r, jx) = self.base.residuals_and_jacobian(&x);
-        let mut jz = DMatrix::zeros(m, n - 1);
-        let others = grad.iter().enumerate().filter(|&(i, _)| i != self.held);
-        for (col, (i, &gi)) in others.enumerate() {
-            let mut c = jx.column(i).into_owned();
-            if gi != 0.0 {
-                c += jx.column(self.held) * gi;
+        // ∂r/∂z_j = ∂r/∂x_j + ∂r/∂x_held · ∂x_held/∂z_j, formed in J_x's own storage (no
+        // second m × n matrix for a big fit), then the held column removed.
+        let (r, mut jx) = self.base.residuals_and_jacobian(&x);
+        let held = jx.column(self.held).into_owned();
+        for (i, &gi) in grad.iter().enumerate() {
+            if i != self.held && gi != 0.0 {
+                jx.column_mut(i).axpy(gi, &held, 1.0);
             }
-            jz.set_column(col, &c);
         }
-        (r, jz)
+        (r, jx.remove_column(self.held))
     }
 }
 

@@ -300,11 +300,15 @@ impl LevenbergMarquardt {
             .map(|w| (&w.x, w.r.rows(0, w.m).into_owned()))
     }
 
-    /// The Jacobian at the current point (unpadded), if it has been evaluated there, moved
-    /// out of the solver (no copy of an `m × n` matrix at the end of a big fit); the solver
-    /// then needs a new Jacobian before its next step.
+    /// The Jacobian at the current point (unpadded), if it has been evaluated there and
+    /// kept (a large one is not: ask the problem), moved out of the solver (no copy of an
+    /// `m × n` matrix at the end of a big fit); the solver then needs a new Jacobian before
+    /// its next step.
     pub fn take_jacobian(&mut self) -> Option<DMatrix<f64>> {
-        let w = self.work.as_mut().filter(|w| !w.need_jac)?;
+        let w = self
+            .work
+            .as_mut()
+            .filter(|w| !w.need_jac && w.jac.nrows() > 0)?;
         w.need_jac = true;
         let jac = std::mem::replace(&mut w.jac, DMatrix::zeros(0, 0));
         Some(if jac.nrows() == w.m {
