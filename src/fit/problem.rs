@@ -29,6 +29,9 @@ pub const PER_CHANNEL: [&str; 2] = ["scale", "scale_d"];
 /// Samples per evaluation block: large enough to amortise scheduling, small enough to
 /// spread a 10k-sample fit over both cores.
 const BLOCK: usize = 1024;
+/// Blocks evaluated in parallel before their results are gathered (64k samples): enough
+/// work for every thread, few enough that the per-block results stay small.
+const PARALLEL_GROUP: usize = 64;
 
 /// What a residual measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -394,7 +397,10 @@ impl<'a> FitProblem<'a> {
 
     /// Every block's model values and, on request, its model Jacobian (column-major,
     /// block rows × model parameters), evaluated in parallel; `finish(block, f, jac)` runs
-    /// on each block's result in the same task.
+    /// on each block's result in the same task, then `sink(block, f, jac)` on the calling
+    /// thread, block by block in order. Blocks are evaluated [`PARALLEL_GROUP`] at a time,
+    /// so the per-block results held at once stay bounded (not a second copy of a big
+    /// fit's residuals and Jacobian).
     ///
     /// With `stop`, a block that starts after the stop was requested is not evaluated: its
     /// values (and Jacobian) are NaN, so the evaluation ends within one block's time
@@ -405,7 +411,8 @@ impl<'a> FitProblem<'a> {
         want_jac: bool,
         stop: Option<&Stop>,
         finish: impl Fn(&Block, &mut [f64], &mut [f64]) + Sync,
-    ) -> Vec<(Vec<f64>, Vec<f64>)> {
+        mut sink: impl FnMut(&Block, &[f64], &[f64]),
+    ) {
         let n_spec = self.model.params().len();
         let run = |b: &Block| {
             let m = b.geo.len();
@@ -422,33 +429,44 @@ impl<'a> FitProblem<'a> {
             (f, jac)
         };
         // One block (a small fit) runs on the calling thread: no task to schedule.
-        if self.blocks.len() == 1 {
-            self.blocks.iter().map(run).collect()
-        } else {
-            self.blocks.par_iter().map(run).collect()
+        if let [b] = &self.blocks[..] {
+            let (f, jac) = run(b);
+            sink(b, &f, &jac);
+            return;
+        }
+        for group in self.blocks.chunks(PARALLEL_GROUP) {
+            let parts: Vec<_> = group.par_iter().map(run).collect();
+            for (b, (f, jac)) in group.iter().zip(parts) {
+                sink(b, &f, &jac);
+            }
         }
     }
 
     /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
     pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
         let n_spec = self.model.params().len();
-        let parts = self.eval_blocks(p, want_jac, None, |_, _, _| {});
         let mut f = vec![0.0; self.n];
         let mut jac = want_jac.then(|| DMatrix::zeros(self.n, self.layout.len()));
-        for (b, (out, bj)) in self.blocks.iter().zip(parts) {
-            let m = b.idx.len();
-            for (r, &i) in b.idx.iter().enumerate() {
-                f[i] = out[r];
-            }
-            if let Some(j) = jac.as_mut() {
-                for s in 0..n_spec {
-                    let col = self.layout.index[b.channel][s];
-                    for (r, &i) in b.idx.iter().enumerate() {
-                        j[(i, col)] = bj[s * m + r];
+        self.eval_blocks(
+            p,
+            want_jac,
+            None,
+            |_, _, _| {},
+            |b, out, bj| {
+                let m = b.idx.len();
+                for (r, &i) in b.idx.iter().enumerate() {
+                    f[i] = out[r];
+                }
+                if let Some(j) = jac.as_mut() {
+                    for s in 0..n_spec {
+                        let col = self.layout.index[b.channel][s];
+                        for (r, &i) in b.idx.iter().enumerate() {
+                            j[(i, col)] = bj[s * m + r];
+                        }
                     }
                 }
-            }
-        }
+            },
+        );
         (f, jac)
     }
 
@@ -665,7 +683,9 @@ impl FitProblem<'_> {
         let n_spec = self.model.params().len();
         // Residuals in place of f; the model Jacobian scaled in place by √w ∂r/∂f (the
         // chain factor dp/dx is applied when scattering).
-        let parts = self.eval_blocks(&p, true, stop, |b, f, jac| {
+        let mut rw = DVector::zeros(self.n);
+        let mut out = DMatrix::zeros(self.n, free.len());
+        let finish = |b: &Block, f: &mut [f64], jac: &mut [f64]| {
             let m = f.len();
             for (r, &i) in b.idx.iter().enumerate() {
                 let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
@@ -674,10 +694,8 @@ impl FitProblem<'_> {
                 }
                 f[r] = self.sqrt_w[i] * self.residual(i, f[r]);
             }
-        });
-        let mut rw = DVector::zeros(self.n);
-        let mut out = DMatrix::zeros(self.n, free.len());
-        for (b, (r, bj)) in self.blocks.iter().zip(parts) {
+        };
+        self.eval_blocks(&p, true, stop, finish, |b, r, bj| {
             let m = b.idx.len();
             for (row, &i) in b.idx.iter().enumerate() {
                 rw[i] = r[row];
@@ -689,7 +707,7 @@ impl FitProblem<'_> {
                     }
                 }
             }
-        }
+        });
         (rw, out)
     }
 }

@@ -54,6 +54,11 @@ const REFINE_STEPS: usize = 12;
 /// the estimate.
 pub const CROSS_TOL: f64 = 1e-3;
 
+/// Problems of at most this many samples profile the two sides of an interval on two
+/// threads; larger ones (whose evaluations are parallel over sample blocks) one side at a
+/// time, which halves the memory the intervals hold at once.
+const SIDES_IN_PARALLEL_MAX_ROWS: usize = 16_384;
+
 /// One end of an interval.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Bound {
@@ -221,17 +226,16 @@ impl Restricted<'_, '_> {
                 DMatrix::from_element(m, n - 1, f64::NAN),
             );
         };
-        let (r, jx) = self.base.residuals_and_jacobian(&x);
-        let mut jz = DMatrix::zeros(m, n - 1);
-        let others = grad.iter().enumerate().filter(|&(i, _)| i != self.held);
-        for (col, (i, &gi)) in others.enumerate() {
-            let mut c = jx.column(i).into_owned();
-            if gi != 0.0 {
-                c += jx.column(self.held) * gi;
+        // ∂r/∂z_j = ∂r/∂x_j + ∂r/∂x_held · ∂x_held/∂z_j, formed in J_x's own storage (no
+        // second m × n matrix for a big fit), then the held column removed.
+        let (r, mut jx) = self.base.residuals_and_jacobian(&x);
+        let held = jx.column(self.held).into_owned();
+        for (i, &gi) in grad.iter().enumerate() {
+            if i != self.held && gi != 0.0 {
+                jx.column_mut(i).axpy(gi, &held, 1.0);
             }
-            jz.set_column(col, &c);
         }
-        (r, jz)
+        (r, jx.remove_column(self.held))
     }
 }
 
@@ -488,7 +492,10 @@ impl<'a, 'p> Profiler<'a, 'p> {
             0.05 * span.min(2.0 * LOG_RANGE)
         };
         let slope = self.path_slope(target, held);
-        // The two sides are independent searches: on two threads when there are two.
+        // The two sides are independent searches: on two threads for a small problem. A
+        // large one's model evaluation is already parallel over sample blocks, and two
+        // concurrent solves would hold two sets of residuals and Jacobians (the peak memory
+        // of a big fit), so its sides run one after the other.
         let side = |dir: f64, lim: Limit| {
             let mut walk = Walk {
                 target,
@@ -503,7 +510,11 @@ impl<'a, 'p> Profiler<'a, 'p> {
             };
             self.side(&mut walk, first, lim, &thr)
         };
-        let (lo, hi) = rayon::join(|| side(-1.0, lo_lim), || side(1.0, hi_lim));
+        let (lo, hi) = if self.problem.len() <= SIDES_IN_PARALLEL_MAX_ROWS {
+            rayon::join(|| side(-1.0, lo_lim), || side(1.0, hi_lim))
+        } else {
+            (side(-1.0, lo_lim), side(1.0, hi_lim))
+        };
         let sides = [lo, hi];
         let value_of = |t: f64| self.value_of(target, t);
         let map = |b: Bound| match b {

@@ -180,8 +180,8 @@ pub(super) fn starting_point(
     let coarse = coarse_config(config);
     let mut alternatives = Vec::new();
     let mut rival = None;
-    // After a stop request the grid's best point inside the domain is the start (nothing is
-    // refined: the fit then reports the full data's cost there).
+    // After a stop request nothing is refined (the fit's first evaluation on the whole data
+    // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);

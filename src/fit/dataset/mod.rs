@@ -274,7 +274,11 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         }
         let mut config = spec.config_for(m, uncertainties);
         config.lm.stop = Some(stop.clone());
-        results.push(driver::fit(&input, &config)?);
+        match driver::fit(&input, &config) {
+            // A candidate whose first evaluation a stop cut has no result.
+            Err(Error::Stopped(_)) if !results.is_empty() => not_fitted.push(m.as_str()),
+            r => results.push(r?),
+        }
     }
     let (best, skipped) = lowest_bic_usable(&results);
     let mut result = results[best].clone();
@@ -401,7 +405,10 @@ fn joint_narrowing(
     let mut config = spec.config_for(&joint.model, ds.sigma_l.is_some());
     config.lm.progress = false;
     config.lm.stop = Some(stop.clone());
-    let alone = driver::fit(&input, &config)?;
+    let alone = match driver::fit(&input, &config) {
+        Err(Error::Stopped(_)) => return Ok(None),
+        r => r?,
+    };
     if stop.is_requested() {
         // The single-channel fit was cut short: its errors say nothing.
         return Ok(None);

@@ -300,12 +300,22 @@ impl LevenbergMarquardt {
             .map(|w| (&w.x, w.r.rows(0, w.m).into_owned()))
     }
 
-    /// The Jacobian at the current point, if it has been evaluated there.
-    pub fn current_jacobian(&self) -> Option<DMatrix<f64>> {
-        self.work
-            .as_ref()
-            .filter(|w| !w.need_jac)
-            .map(|w| w.jac.rows(0, w.m).into_owned())
+    /// The Jacobian at the current point (unpadded), if it has been evaluated there and
+    /// kept (a large one is not: ask the problem), moved out of the solver (no copy of an
+    /// `m × n` matrix at the end of a big fit); the solver then needs a new Jacobian before
+    /// its next step.
+    pub fn take_jacobian(&mut self) -> Option<DMatrix<f64>> {
+        let w = self
+            .work
+            .as_mut()
+            .filter(|w| !w.need_jac && w.jac.nrows() > 0)?;
+        w.need_jac = true;
+        let jac = std::mem::replace(&mut w.jac, DMatrix::zeros(0, 0));
+        Some(if jac.nrows() == w.m {
+            jac
+        } else {
+            jac.rows(0, w.m).into_owned()
+        })
     }
 
     /// Stop the run (after the current step) when `stop` is requested: a signal, its flag, or

@@ -30,15 +30,16 @@ pub(super) fn jp_norm(qr: &QrState, step: &DVector<f64>) -> f64 {
     enorm(jp.as_slice())
 }
 
-/// Householder QR with column pivoting (MINPACK `qrfac` with `pivot = true`), applied to a
-/// copy of `a` (`m × n`, `m ≥ n`). Returns `R` (`n × n`, upper), the pivots, the column norms
-/// of `a`, and `Qᵀ f` (first `n` components). The norms of the remaining partial columns
-/// that drive the pivoting are down-dated as in MINPACK and recomputed whenever the
-/// down-dating has lost more than half the digits.
-pub(super) fn qrfac(a: &DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<f64>) {
+/// Householder QR with column pivoting (MINPACK `qrfac` with `pivot = true`) of `a`
+/// (`m × n`, `m ≥ n`), factored in its own storage (the caller passes a copy if it needs
+/// `a` again). Returns `R` (`n × n`, upper), the pivots, the column norms of `a`, and `Qᵀ f`
+/// (first `n` components). The norms of the remaining partial columns that drive the
+/// pivoting are down-dated as in MINPACK and recomputed whenever the down-dating has lost
+/// more than half the digits.
+pub(super) fn qrfac(mut a: DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<f64>) {
     let (m, n) = a.shape();
-    // Column-major working copy: column k is cols[k*m .. (k+1)*m].
-    let mut cols: Vec<f64> = a.as_slice().to_vec();
+    // Column-major: column k is cols[k*m .. (k+1)*m].
+    let cols: &mut [f64] = a.as_mut_slice();
     let mut qtf: Vec<f64> = f.as_slice().to_vec();
     let acnorm = DVector::from_iterator(n, (0..n).map(|j| enorm(&cols[j * m..(j + 1) * m])));
     let mut rdiag: Vec<f64> = acnorm.iter().copied().collect();

@@ -190,7 +190,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         exec = exec.add_observer(ProgressObserver::new(), ObserverMode::Always);
     }
     match exec.run() {
-        Ok(result) => report_of(problem, &x0, &result, start),
+        Ok(result) => report_of(problem, &x0, result, start),
         // Unreachable with this adapter (it never fails) and the Executor's handler off.
         Err(_) => report_at_start(problem, &x0, Termination::NoProgress, start),
     }
@@ -225,14 +225,14 @@ fn solver_for(config: &LmConfig) -> LevenbergMarquardt {
 fn report_of<P, O>(
     problem: &P,
     x0: &DVector<f64>,
-    result: &OptimizationResult<O, LevenbergMarquardt, LmState>,
+    result: OptimizationResult<O, LevenbergMarquardt, LmState>,
     start: Instant,
 ) -> LmReport
 where
     P: LeastSquaresProblem + ?Sized,
 {
     let state = &result.state;
-    let solver = &result.solver;
+    let mut solver = result.solver;
     let termination = solver
         .termination
         .unwrap_or(match state.get_termination_reason() {
@@ -246,7 +246,7 @@ where
     };
     let x = x.clone();
     let mut jacobian_evaluations = solver.jacobian_evaluations();
-    let jacobian = match solver.current_jacobian() {
+    let jacobian = match solver.take_jacobian() {
         Some(j) => j,
         None => {
             jacobian_evaluations += 1;

@@ -409,7 +409,8 @@ fn runs_as_an_argmin_solver_through_the_executor() {
     );
     // The gradient slot holds Jᵀr (at the last Jacobian evaluation).
     assert!(res.state.get_gradient().unwrap().norm() < 1e-6);
-    assert_eq!(res.state.get_jacobian().unwrap().shape(), (2, 2));
+    let mut solver = res.solver;
+    assert_eq!(solver.take_jacobian().unwrap().shape(), (2, 2));
 }
 
 #[test]

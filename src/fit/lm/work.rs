@@ -9,6 +9,10 @@ use super::qr::{qrfac, QrState};
 use super::run::StepResiduals;
 use super::{LmState, Termination, EPSMCH};
 
+/// Jacobians of at most this many entries (1M: 8 MB) stay in the work after they are
+/// factored; larger ones are factored in their own storage and dropped.
+const KEEP_JACOBIAN_MAX: usize = 1 << 20;
+
 /// Everything the iteration carries between trial steps.
 #[derive(Debug, Clone)]
 pub(super) struct Work {
@@ -18,7 +22,9 @@ pub(super) struct Work {
     /// Residuals at `x`, padded with zeros to `max(m, n)`.
     pub(super) r: DVector<f64>,
     pub(super) fnorm: f64,
-    /// Jacobian at `x` (padded), valid when `!need_jac`.
+    /// Jacobian at `x` (padded), valid when `!need_jac` and it is small enough to keep
+    /// ([`KEEP_JACOBIAN_MAX`]; empty otherwise). The gradient `Jᵀr` (`Jᵀf̃` with step
+    /// residuals) goes into the argmin state.
     pub(super) jac: DMatrix<f64>,
     /// Step residuals at `x` (padded) when the problem supplies them (a robust loss; see
     /// [`super::LeastSquaresProblem::step_residuals`]), valid when `!need_jac`.
@@ -119,9 +125,19 @@ impl Work {
             return Ok((state, Some(Termination::NonFiniteJacobian)));
         }
         self.step_r = step_r.map(|f| pad_vec(f, self.r.len()));
-        self.jac = pad_mat(jac, self.r.len());
+        let jac = pad_mat(jac, self.r.len());
         let rs = self.step_r.as_ref().unwrap_or(&self.r);
-        let (qr, acnorm) = qrfac(&self.jac, rs);
+        let grad = jac.tr_mul(rs);
+        // The step needs only the factors. A small J is kept for the caller at the end; a
+        // large one is factored in place (one m × n matrix less for the whole run) and
+        // asked for again at the end (see [`super::LevenbergMarquardt::take_jacobian`]).
+        let (qr, acnorm) = if jac.len() <= KEEP_JACOBIAN_MAX {
+            self.jac = jac;
+            qrfac(self.jac.clone(), rs)
+        } else {
+            self.jac = DMatrix::zeros(0, 0);
+            qrfac(jac, rs)
+        };
         if self.first {
             self.initial_scaling(&acnorm, stepbound);
         }
@@ -135,7 +151,7 @@ impl Work {
         }
         self.qr = Some(qr);
         self.need_jac = false;
-        let state = self.publish_jacobian(state);
+        let state = state.gradient(grad);
         // (While polishing, the polishing rules decide; they also end at a zero step.)
         if self.polish.is_none() && (gnorm <= gtol || gnorm <= EPSMCH) {
             return Ok((state, Some(Termination::Gtol)));
@@ -154,21 +170,6 @@ impl Work {
         if self.delta == 0.0 {
             self.delta = stepbound;
         }
-    }
-
-    /// Put `Jᵀr` (`Jᵀf̃` with step residuals) and the (unpadded) `J` into the argmin state.
-    fn publish_jacobian(&self, state: LmState) -> LmState {
-        let n = self.x.len();
-        let grad = self.jac.tr_mul(self.step_r.as_ref().unwrap_or(&self.r));
-        // The state's Jacobian: the previous one's storage is reused (a fresh matrix of
-        // this size is fresh memory from the system on every iteration).
-        let mut state = state;
-        let mut state_jac = state
-            .take_jacobian()
-            .filter(|j| j.shape() == (self.m, n))
-            .unwrap_or_else(|| DMatrix::zeros(self.m, n));
-        state_jac.copy_from(&self.jac.rows(0, self.m));
-        state.gradient(grad).jacobian(state_jac)
     }
 }
 
