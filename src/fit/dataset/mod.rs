@@ -354,8 +354,9 @@ fn finish_result(
 
 /// The candidate with the lowest BIC among the converged fits (among all when none
 /// converged), and a note for each candidate with a lower BIC that was skipped because its
-/// fit is not a usable optimum (degenerate, or stopped without converging). `results` is
-/// not empty.
+/// fit is not a usable optimum (degenerate, or stopped without converging), quoting why:
+/// the degeneracy itself ([`FitResult::unusable`]: one reason, whatever other notes the
+/// point also earns), else the fit's last note. `results` is not empty.
 fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
     let any_converged = results.iter().any(|r| r.converged());
     let best = results
@@ -372,9 +373,9 @@ fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
                 "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
                 r.model,
                 r.bic,
-                r.notes
-                    .last()
-                    .map(String::as_str)
+                r.unusable
+                    .as_deref()
+                    .or(r.notes.last().map(String::as_str))
                     .unwrap_or(r.termination.describe())
             )
         })
