@@ -58,6 +58,10 @@ pub enum Error {
     /// A picture could not be drawn or written.
     #[error("{}: drawing failed: {message}", crate::io::shown(path))]
     Plot { path: PathBuf, message: String },
+    /// A stop request (Ctrl-C, SIGTERM, SIGHUP, a time limit) came before any point of the
+    /// fit was evaluated on the whole data: there is no fit to report (CLI exit code 3).
+    #[error("{0}")]
+    Stopped(String),
     /// A numerical failure inside the library (a bug, or a domain violation that slipped through).
     #[error("numerical failure: {0}")]
     Numerical(String),
@@ -96,7 +100,7 @@ impl Error {
     pub fn is_user_error(&self) -> bool {
         !matches!(
             self,
-            Error::Numerical(_) | Error::Plot { .. } | Error::Write { .. }
+            Error::Numerical(_) | Error::Plot { .. } | Error::Write { .. } | Error::Stopped(_)
         )
     }
 }

@@ -1,6 +1,6 @@
 //! The goniofit command line: parse arguments, run, map the outcome to an exit code.
 //! Exit codes: 0 success, 1 internal failure, 2 bad usage or bad input, 3 a fit that ran
-//! but did not converge (its report is still printed).
+//! but did not converge or was stopped (its report is printed when it has a point).
 
 mod cli;
 mod commands;
@@ -24,7 +24,13 @@ fn main() -> ExitCode {
     match commands::run(cli) {
         Ok(code) => ExitCode::from(code),
         Err(e) => {
-            eprintln!("goniofit: error: {}", error_chain(&e));
+            // A stop with nothing to report is no error: it says what was stopped (exit 3).
+            let kind = if commands::is_stopped(&e) {
+                ""
+            } else {
+                "error: "
+            };
+            eprintln!("goniofit: {kind}{}", error_chain(&e));
             ExitCode::from(commands::exit_code_of(&e))
         }
     }

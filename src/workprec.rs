@@ -525,7 +525,7 @@ impl crate::plot::Picture for WorkPrecisionPlot {
         crate::plot::Picture::size(&self.chart())
     }
 
-    fn draw<DB: plotters::prelude::DrawingBackend>(
+    fn draw<DB: crate::plot::smooth::Canvas>(
         &self,
         root: &plotters::drawing::DrawingArea<DB, plotters::coord::Shift>,
     ) -> std::result::Result<(), crate::plot::DrawError<DB>> {

@@ -346,3 +346,44 @@ fn an_overflowing_fit_is_never_reported_converged() {
     let r = fit(&input, &c).unwrap();
     assert!(r.converged() && r.is_finite());
 }
+
+#[test]
+fn an_evaluation_stopped_before_it_starts_gives_no_number() {
+    // A stop requested before an evaluation: every block is skipped, so no residual and no
+    // Jacobian entry is a number (the solver rejects such a point), and a whole fit stopped
+    // before its first evaluation on the data ends with Error::Stopped instead of a report.
+    // Without the request the same evaluation is finite everywhere.
+    use goniofit::fit::lm::Stop;
+    use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    let input = synthetic(
+        "kbs",
+        &[0.3, 2.0, 1.0],
+        Layout::hemisphere().with_grid(4, 30, 40).unwrap(),
+        0.01,
+        3,
+        1.0,
+    );
+    assert!(input.geo.len() > 2 * 1024, "several evaluation blocks");
+    let model = by_name("kbs", &ModelOptions::default()).unwrap();
+    let layout = ParamLayout::new(model.as_ref(), &input.channel_names);
+    let x = layout.to_x(&[0.3, 2.0, 1.0]);
+    let problem =
+        FitProblem::new(model.as_ref(), layout, &input, ResidualKind::Absolute, 1e-9).unwrap();
+    let flag = Arc::new(AtomicBool::new(false));
+    let stop = Stop::without_handler(None, Some(flag.clone()));
+    let open = problem.evaluate(&x, Some(&stop));
+    assert!(open.residuals.iter().all(|v| v.is_finite()));
+    assert!(open.jacobian.iter().all(|v| v.is_finite()));
+    flag.store(true, std::sync::atomic::Ordering::SeqCst);
+    let cut = problem.evaluate(&x, Some(&stop));
+    assert!(cut.residuals.iter().all(|v| v.is_nan()));
+    assert!(cut.jacobian.iter().all(|v| v.is_nan()));
+    let mut config = config("kbs");
+    config.lm.stop = Some(stop);
+    match fit(&input, &config) {
+        Err(goniofit::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
+        other => panic!("expected Error::Stopped, got {:?}", other.map(|r| r.cost)),
+    }
+}

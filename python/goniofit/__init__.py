@@ -187,6 +187,10 @@ def fit(
         or inconsistent options.
     KeyboardInterrupt
         Ctrl-C (a notebook's interrupt) while fitting: the fit stops after its current step.
+    TimeoutError
+        ``timeout`` passed before the first model evaluation on the whole data finished
+        (nothing was fitted); a later time limit returns the result with ``termination``
+        ``"timeout"``.
     """
     ti = _f64("theta_i", theta_i)
     opts = _options(

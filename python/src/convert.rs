@@ -1,7 +1,9 @@
 //! Library values → Python: errors as exceptions, JSON values as Python objects.
 
 use goniofit::Error;
-use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyOSError, PyRuntimeError, PyTimeoutError, PyValueError,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -19,6 +21,8 @@ pub fn to_py_err_in(context: Option<&str>, e: Error) -> PyErr {
             PyFileNotFoundError::new_err(msg)
         }
         Error::Io { .. } => PyOSError::new_err(msg),
+        // The time limit came before the first model evaluation finished: nothing fitted.
+        Error::Stopped(_) => PyTimeoutError::new_err(msg),
         _ if e.is_user_error() => PyValueError::new_err(msg),
         _ => PyRuntimeError::new_err(msg),
     }

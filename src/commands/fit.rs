@@ -361,13 +361,20 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let outcomes = fit_jobs(&args, jobs, &stop, &pool)?;
+    let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, &pool)?;
     let wall = t0.elapsed().as_secs_f64();
     let infos: Vec<RunInfo> = outcomes
         .iter()
         .map(|o| run_info(&args, o, &files))
         .collect();
-    print_reports(&args, &outcomes, &infos, wall, pool.current_num_threads())?;
+    print_reports(
+        &args,
+        &outcomes,
+        &infos,
+        &skipped,
+        wall,
+        pool.current_num_threads(),
+    )?;
     if single {
         write_single_outputs(&args, &outcomes[0], &infos[0])?;
     }
@@ -375,7 +382,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // run was interrupted: every output is complete, and the exit code is 3.
     let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
     Ok(
-        if outcomes.iter().all(|o| o.result.converged()) && !interrupted {
+        if outcomes.iter().all(|o| o.result.converged()) && !interrupted && skipped.is_empty() {
             0
         } else {
             3
@@ -430,15 +437,17 @@ fn read_jobs(
 
 /// Fit every job in `pool` (one job: on the calling thread's pool with the fit's own
 /// progress; several: in parallel, with a bar of datasets fitted), all sharing `stop`.
+/// Returns the fits and the labels of the datasets a stop request kept from a result.
 fn fit_jobs(
     args: &FitArgs,
     mut jobs: Vec<(String, Dataset)>,
     stop: &Stop,
     pool: &rayon::ThreadPool,
-) -> anyhow::Result<Vec<Outcome>> {
+) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
     if jobs.len() == 1 {
         let (label, ds) = jobs.pop().expect("one job");
-        return Ok(vec![pool.install(|| fit_one(args, label, ds, true, stop))?]);
+        let one = pool.install(|| fit_one(args, label, ds, true, stop))?;
+        return Ok((vec![one], Vec::new()));
     }
     use rayon::prelude::*;
     let bar = if args.show_progress() {
@@ -449,6 +458,10 @@ fn fit_jobs(
     let done: Vec<anyhow::Result<Outcome>> = pool.install(|| {
         jobs.into_par_iter()
             .map(|(label, ds)| {
+                // After a stop request no further dataset is started.
+                if stop.is_requested() {
+                    return Err(not_fitted(&label, stop));
+                }
                 let outcome = fit_one(args, label, ds, false, stop);
                 bar.inc(1);
                 outcome
@@ -456,7 +469,33 @@ fn fit_jobs(
             .collect()
     });
     bar.finish_and_clear();
-    done.into_iter().collect()
+    fitted_and_stopped(done)
+}
+
+/// The error of a dataset `label` a stop request kept from being fitted.
+fn not_fitted(label: &str, stop: &Stop) -> anyhow::Error {
+    let why = stop.requested().map_or("stopped", |t| t.describe());
+    anyhow::Error::new(Error::Stopped(format!(
+        "{label}: {why} before its fit started"
+    )))
+}
+
+/// The fits of a batch, and the labels of the datasets a stop request kept from a result
+/// ([`Error::Stopped`]: not started, or stopped before the first evaluation on the whole
+/// data finished). Any other error ends the command.
+fn fitted_and_stopped(
+    outcomes: Vec<anyhow::Result<Outcome>>,
+) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
+    let mut fitted = Vec::new();
+    let mut skipped = Vec::new();
+    for o in outcomes {
+        match o {
+            Ok(o) => fitted.push(o),
+            Err(e) if super::is_stopped(&e) => skipped.push(format!("{e:#}")),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok((fitted, skipped))
 }
 
 /// What a report says about the run besides the fit: input, command, setting, intervals.
@@ -486,6 +525,7 @@ fn print_reports(
     args: &FitArgs,
     outcomes: &[Outcome],
     infos: &[RunInfo],
+    skipped: &[String],
     wall: f64,
     threads: usize,
 ) -> anyhow::Result<()> {
@@ -507,6 +547,7 @@ fn print_reports(
             serde_json::json!({
                 "fits": values,
                 "datasets": outcomes.len(),
+                "not_fitted": skipped,
                 "seconds": wall,
                 "threads": threads,
                 "summary": summary_json(&rows),
@@ -528,6 +569,14 @@ fn print_reports(
     if let Some(path) = &args.summary {
         let headers: Vec<String> = report::summary::CSV_HEADER.map(String::from).to_vec();
         io::write_csv(path, &headers, &report::summary::csv_rows(&rows))?;
+    }
+    if !skipped.is_empty() {
+        eprintln!(
+            "goniofit: {} of {} datasets not fitted:\n  {}",
+            skipped.len(),
+            skipped.len() + outcomes.len(),
+            skipped.join("\n  ")
+        );
     }
     if !single && !args.quiet {
         eprintln!(

@@ -26,8 +26,23 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
     }
 }
 
-/// Exit code for an error: 2 for the user's input or usage, 1 for internal failures.
+/// Whether `e` is a stop request that came before anything could be reported
+/// ([`goniofit::Error::Stopped`] anywhere in its chain).
+pub fn is_stopped(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<goniofit::Error>(),
+            Some(goniofit::Error::Stopped(_))
+        )
+    })
+}
+
+/// Exit code for an error: 3 for a stop with nothing to report ([`is_stopped`]), 2 for the
+/// user's input or usage, 1 for internal failures.
 pub fn exit_code_of(e: &anyhow::Error) -> u8 {
+    if is_stopped(e) {
+        return 3;
+    }
     match e.downcast_ref::<goniofit::Error>() {
         Some(ge) if !ge.is_user_error() => 1,
         Some(_) => 2,

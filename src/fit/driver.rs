@@ -48,18 +48,18 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
     let (problem, start) = (problem?, start?);
-    // A stop during the start search leaves an unrefined start (see start::starting_point).
-    let stopped_in_start = stop_requested(config);
     check_series_cost(config, input, &problem.layout, &start.p0)?;
     let run = solve_checked(&problem, input, &start, config);
+    if !run.lm.cost.is_finite() {
+        if let Some(why) = config.lm.stop.as_ref().and_then(Stop::requested) {
+            return Err(stopped_before_first_evaluation(why, input.geo.len()));
+        }
+    }
     let mut identified = identify::identify(input, &problem, &run, config.reduce);
     if validate::rough_by_construction(model, config) {
         identified.verdict = Verdict::Rough;
     }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
-    if stopped_in_start {
-        solved.notes.push(STOPPED_IN_START.to_string());
-    }
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     Ok(assemble::assemble(
@@ -67,8 +67,20 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     ))
 }
 
-/// The note of a fit stopped while its starting values were searched for.
-pub const STOPPED_IN_START: &str = "the fit was stopped during the search for starting values: the values are the best starting point found by then (evaluated once on the full data), not a fit, and their standard errors describe that point only";
+/// The error of a fit whose stop request (`why`) came before its first evaluation on the
+/// whole data (`n` samples) had finished — while the starting values were searched for, or
+/// in that evaluation: no point of the fit has a cost on the data, so there is nothing to
+/// report (the CLI prints this message and exits 3).
+fn stopped_before_first_evaluation(why: super::lm::Termination, n: usize) -> Error {
+    let hint = match why {
+        super::lm::Termination::Timeout => " (a larger --timeout lets one evaluation finish)",
+        _ => "",
+    };
+    Error::Stopped(format!(
+        "{} before the first model evaluation on the whole data ({n} samples) finished: nothing fitted{hint}",
+        why.describe()
+    ))
+}
 
 /// Solve from the start, and from the start search's rival valley when there is one
 /// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain

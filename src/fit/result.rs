@@ -82,6 +82,9 @@ pub struct FitResult {
     pub condition: f64,
     pub verdict: Verdict,
     pub notes: Vec<String>,
+    /// Why the fit's point is not a usable optimum when it is degenerate (an edge of the
+    /// domain, a lobe the sampling does not resolve, a lost rank; also among `notes`).
+    pub unusable: Option<String>,
     /// Whether the fitted surface satisfies the paper's assumptions (KBS models; a warning,
     /// not a failure): [`super::validity`].
     pub validity: Option<super::validity::Validity>,

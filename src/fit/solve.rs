@@ -137,8 +137,9 @@ impl Run {
 
 /// A fit problem whose trial evaluations end within one block of samples once `stop` is
 /// requested, and whose trial points outside `range` are rejected unevaluated (NaN
-/// residuals: a failed step). The first evaluation (the solver's start) is never cut, so
-/// every run has a finite point to report.
+/// residuals: a failed step). The first evaluation (the solver's start) is cut as well: a
+/// run whose start was cut has no point to report (a non-finite cost; the fit then ends
+/// with [`crate::Error::Stopped`]), never a number from a partial evaluation.
 struct Guarded<'p, 'm> {
     problem: &'p FitProblem<'m>,
     stop: Option<&'p Stop>,
@@ -173,8 +174,7 @@ impl LeastSquaresProblem for Guarded<'_, '_> {
         {
             return DVector::from_element(self.problem.len(), f64::NAN);
         }
-        let stop = if first { None } else { self.stop };
-        self.problem.residuals_until(x, stop)
+        self.problem.residuals_until(x, self.stop)
     }
 
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {

@@ -232,19 +232,18 @@ pub fn draw_heatmap<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Draw the iso-lines of `grid` at `levels` in `style`.
-pub fn draw_contours<DB: DrawingBackend>(
+/// Draw the iso-lines of `grid` at `levels` with `pen`, at sub-pixel positions.
+pub fn draw_contours<DB: super::smooth::Canvas>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     grid: &Grid,
     levels: &[f64],
-    style: ShapeStyle,
+    pen: super::smooth::Pen,
 ) -> Result<(), DrawError<DB>> {
+    let map = super::smooth::PixelMap::of_linear(chart);
     for &level in levels {
-        chart.draw_series(
-            grid.contour_lines(level)
-                .into_iter()
-                .map(|line| PathElement::new(line, style)),
-        )?;
+        for line in grid.contour_lines(level) {
+            super::smooth::draw_data_polyline(chart.plotting_area(), &map, &line, pen)?;
+        }
     }
     Ok(())
 }

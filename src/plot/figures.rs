@@ -266,7 +266,7 @@ impl Picture for Figure4 {
         (3 * FIG4_PANEL.0, FIG4_TOP + 2 * FIG4_PANEL.1 + FIG4_BOTTOM)
     }
 
-    fn draw<DB: DrawingBackend>(
+    fn draw<DB: super::smooth::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
@@ -434,7 +434,7 @@ impl Picture for ContourPlot {
         self.size
     }
 
-    fn draw<DB: DrawingBackend>(
+    fn draw<DB: super::smooth::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
@@ -468,7 +468,12 @@ impl Picture for ContourPlot {
             .label_style(font(15.0))
             .axis_desc_style(font(18.0))
             .draw()?;
-        draw_contours(&mut chart, &self.grid, &self.levels, BLACK.stroke_width(1))?;
+        draw_contours(
+            &mut chart,
+            &self.grid,
+            &self.levels,
+            super::smooth::Pen::solid(BLACK, 1.0),
+        )?;
         for (_, pts, color) in &self.marks {
             let color = *color;
             chart.draw_series(pts.iter().map(move |&p| {

@@ -11,6 +11,7 @@ use super::contour::{linspace, Grid};
 use super::figures::{ContourPlot, LEVELS};
 use super::legend::{ColorKey, Entry, Glyph};
 use super::marks::Beyond;
+use super::smooth::{draw_data_polyline, Pen, PixelMap};
 use super::xy::{Kind, Series, XyPlot};
 use super::{fmt_num, font, series_color, write_png_svg, DrawError, Picture};
 use crate::error::{Error, Result};
@@ -645,7 +646,7 @@ impl Picture for PolarPlot {
         (900, 620)
     }
 
-    fn draw<DB: DrawingBackend>(
+    fn draw<DB: super::smooth::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
@@ -677,22 +678,29 @@ impl Picture for PolarPlot {
             .axis_desc_style(font(16.0))
             .draw()?;
         self.draw_grid(&mut chart)?;
+        let map = PixelMap::of_linear(&chart);
         let ti = self.theta_i.to_degrees();
         for (angle, color) in [(-ti, POLAR_SOURCE), (ti, POLAR_MIRROR)] {
-            chart.draw_series(DashedLineSeries::new(
-                vec![(0.0, 0.0), polar_xy(angle, 1.0)],
-                8,
-                5,
-                color.stroke_width(2),
-            ))?;
+            let ray = [(0.0, 0.0), polar_xy(angle, 1.0)];
+            draw_data_polyline(
+                chart.plotting_area(),
+                &map,
+                &ray,
+                Pen::dashed(color, 2.0, 8.0, 5.0),
+            )?;
         }
-        chart.draw_series(LineSeries::new(
-            self.curve
-                .iter()
-                .filter(|p| p.1.is_finite())
-                .map(|&(t, r)| polar_xy(t, r.clamp(0.0, POLAR_RIM))),
-            series_color(0).stroke_width(2),
-        ))?;
+        let curve: Vec<(f64, f64)> = self
+            .curve
+            .iter()
+            .filter(|p| p.1.is_finite())
+            .map(|&(t, r)| polar_xy(t, r.clamp(0.0, POLAR_RIM)))
+            .collect();
+        draw_data_polyline(
+            chart.plotting_area(),
+            &map,
+            &curve,
+            Pen::solid(series_color(0), 2.0),
+        )?;
         let red = series_color(3);
         chart.draw_series(
             self.measured
@@ -721,20 +729,19 @@ impl Picture for PolarPlot {
 
 impl PolarPlot {
     /// The rings at L / L_max = 0.25 … 1 and the spokes every 15° (labelled every 30°).
-    fn draw_grid<DB: DrawingBackend>(
+    fn draw_grid<DB: super::smooth::Canvas>(
         &self,
         chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     ) -> std::result::Result<(), DrawError<DB>> {
-        let grey = RGBColor(200, 200, 200);
+        let grey = Pen::solid(RGBColor(200, 200, 200), 1.0);
+        let map = PixelMap::of_linear(chart);
         for r in [0.25, 0.5, 0.75, 1.0] {
             let arc: Vec<(f64, f64)> = (0..=180).map(|d| polar_xy(d as f64 - 90.0, r)).collect();
-            chart.draw_series(std::iter::once(PathElement::new(arc, grey.stroke_width(1))))?;
+            draw_data_polyline(chart.plotting_area(), &map, &arc, grey)?;
         }
         for d in (-90..=90).step_by(15) {
-            chart.draw_series(std::iter::once(PathElement::new(
-                vec![(0.0, 0.0), polar_xy(d as f64, 1.0)],
-                grey.stroke_width(1),
-            )))?;
+            let spoke = [(0.0, 0.0), polar_xy(d as f64, 1.0)];
+            draw_data_polyline(chart.plotting_area(), &map, &spoke, grey)?;
             if d % 30 == 0 {
                 let p = polar_xy(d as f64, 1.08);
                 chart.draw_series(std::iter::once(Text::new(

@@ -4,6 +4,7 @@
 //! palette has colours.
 
 use super::marks::arrow_glyph;
+use super::smooth::{draw_polyline, Canvas, Pen};
 use super::{font, DrawError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -96,45 +97,25 @@ pub fn draw_marker<DB: DrawingBackend>(
     }
 }
 
-/// A dashed polyline from `a` to `b` (pixels): `on` pixels drawn, `off` skipped.
-pub fn dashes(a: (i32, i32), b: (i32, i32), on: u32, off: u32) -> Vec<Vec<(i32, i32)>> {
-    let (dx, dy) = ((b.0 - a.0) as f64, (b.1 - a.1) as f64);
-    let len = (dx * dx + dy * dy).sqrt();
-    let mut out = Vec::new();
-    let mut s = 0.0;
-    let at = |t: f64| {
-        (
-            a.0 + (dx * t / len).round() as i32,
-            a.1 + (dy * t / len).round() as i32,
-        )
-    };
-    while s < len {
-        let e = (s + on as f64).min(len);
-        out.push(vec![at(s), at(e)]);
-        s = e + off as f64;
-    }
-    out
-}
-
 /// Draw `glyph` with its left end at pixel (x, y) of `area` (y the text's middle).
-fn draw_glyph<DB: DrawingBackend>(
+fn draw_glyph<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     (x, y): (i32, i32),
     glyph: Glyph,
 ) -> Result<(), DrawError<DB>> {
     match glyph {
-        Glyph::Line { color, width, dash } => match dash {
-            None => area.draw(&PathElement::new(
-                vec![(x, y), (x + 26, y)],
-                color.stroke_width(width.max(2)),
-            )),
-            Some((on, off)) => {
-                for piece in dashes((x, y), (x + 26, y), on, off) {
-                    area.draw(&PathElement::new(piece, color.stroke_width(width.max(2))))?;
-                }
-                Ok(())
-            }
-        },
+        Glyph::Line { color, width, dash } => {
+            // The same stroke as the chart's curves, on whole pixel rows (crisp): an odd
+            // width centred on the row's middle, an even one on its top edge.
+            let width = width.max(2);
+            let pen = Pen {
+                color,
+                width: width as f64,
+                dash: dash.map(|(on, off)| (on as f64, off as f64)),
+            };
+            let (x, y) = (x as f64, y as f64 + if width % 2 == 1 { 0.5 } else { 0.0 });
+            draw_polyline(area, &[(x, y), (x + 26.0, y)], pen)
+        }
         Glyph::Point { color, marker, r } => {
             draw_marker(area, (x + 13, y), marker, r.max(3), color)
         }
@@ -147,7 +128,7 @@ fn draw_glyph<DB: DrawingBackend>(
 
 /// Draw `entries` as a column starting at pixel (x, y) of `area`; returns the y below the
 /// last line.
-pub fn draw_column<DB: DrawingBackend>(
+pub fn draw_column<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     (x, y): (i32, i32),
     entries: &[Entry],
@@ -181,7 +162,7 @@ pub fn rows(entries: &[Entry], width: u32) -> Vec<Vec<Entry>> {
 }
 
 /// Draw `entries` in rows across `area` (as laid out by [`rows`]), centred.
-pub fn draw_rows<DB: DrawingBackend>(
+pub fn draw_rows<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     entries: &[Entry],
 ) -> Result<(), DrawError<DB>> {
@@ -305,13 +286,5 @@ mod tests {
             .map(|k| light(sequential_color(k as f64 / 10.0)))
             .collect();
         assert!(ls.windows(2).all(|w| w[1] >= w[0]), "{ls:?}");
-    }
-
-    #[test]
-    fn dashes_cover_the_line() {
-        let d = dashes((0, 0), (26, 0), 8, 5);
-        assert_eq!(d.len(), 2);
-        assert_eq!(d[0], vec![(0, 0), (8, 0)]);
-        assert_eq!(d[1], vec![(13, 0), (21, 0)]);
     }
 }

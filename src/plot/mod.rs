@@ -13,6 +13,7 @@ pub mod figures;
 pub mod fit;
 pub mod legend;
 pub mod marks;
+pub mod smooth;
 pub mod sphere;
 pub mod ticks;
 pub mod xy;
@@ -58,8 +59,9 @@ pub trait Picture {
     /// Size in pixels (width, height).
     fn size(&self) -> (u32, u32);
 
-    /// Draw on `root` (already filled white, of [`Picture::size`]).
-    fn draw<DB: DrawingBackend>(
+    /// Draw on `root` (already filled white, of [`Picture::size`]); curves go through
+    /// [`smooth::Canvas`] at sub-pixel positions.
+    fn draw<DB: smooth::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>>;
@@ -153,12 +155,15 @@ pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
     ensure_font()?;
     let mut out = String::new();
     let here = Path::new("<svg in memory>");
+    let strokes = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
     {
-        let root = SVGBackend::with_string(&mut out, pic.size()).into_drawing_area();
+        let root =
+            smooth::SvgCanvas::new(&mut out, pic.size(), strokes.clone()).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error(here))?;
         pic.draw(&root).map_err(plot_error(here))?;
         root.present().map_err(plot_error(here))?;
     }
+    let out = smooth::SvgCanvas::finish(&out, &strokes.borrow());
     // plotters-svg 0.3.7 labels embedded bitmaps "data:png"; viewers need the MIME type.
     Ok(out.replace("href=\"data:png;base64,", "href=\"data:image/png;base64,"))
 }

@@ -2,7 +2,8 @@
 //! logarithmic, with its legend in a panel to the right of the chart (never over the data):
 //! Figures 5 and 6, the fit plots and the work-precision plot are built from it.
 //!
-//! Honest by construction: lines are clipped at the chart's edges (interpolated, not
+//! Honest by construction: curves are drawn at sub-pixel positions
+//! ([`super::smooth`]), lines are clipped at the chart's edges (interpolated, not
 //! clamped), measured points above the y range are drawn as arrows at the top edge and
 //! counted in the legend, logarithmic axes get labelled ticks for any range
 //! ([`super::ticks::log_ticks`]), and a chart with more series than the palette holds can
@@ -10,6 +11,7 @@
 
 use super::legend::{self, ColorKey, Entry, Glyph, Marker};
 use super::marks::{self, Beyond, Rect};
+use super::smooth::{draw_data_polyline, Canvas, Pen, PixelMap};
 use super::ticks::log_ticks;
 use super::{font, DrawError, Picture};
 use plotters::coord::ranged1d::{Ranged, ValueFormatter};
@@ -376,7 +378,7 @@ pub fn clip_polyline(
 pub trait Axis: Ranged<ValueType = f64> + ValueFormatter<f64> {}
 impl<T: Ranged<ValueType = f64> + ValueFormatter<f64>> Axis for T {}
 
-fn draw_series_of<DB: DrawingBackend, X: Axis, Y: Axis>(
+fn draw_series_of<DB: Canvas, X: Axis, Y: Axis>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
     plot: &XyPlot,
     s: &Series,
@@ -392,15 +394,19 @@ fn draw_series_of<DB: DrawingBackend, X: Axis, Y: Axis>(
         _ => None,
     };
     if let Some((w, on, off)) = dash {
+        let map = PixelMap {
+            size: chart.plotting_area().dim_in_pixel(),
+            x_range: xr,
+            y_range: yr,
+            log: (plot.log_x, plot.log_y),
+        };
+        let pen = Pen {
+            color,
+            width: w as f64,
+            dash: (on > 0).then_some((on as f64, off as f64)),
+        };
         for piece in clip_polyline(&s.points, xr, yr, (plot.log_x, plot.log_y)) {
-            if on == 0 {
-                chart.draw_series(std::iter::once(PathElement::new(
-                    piece,
-                    color.stroke_width(w),
-                )))?;
-            } else {
-                chart.draw_series(DashedLineSeries::new(piece, on, off, color.stroke_width(w)))?;
-            }
+            draw_data_polyline(chart.plotting_area(), &map, &piece, pen)?;
         }
         return Ok(());
     }
@@ -486,7 +492,7 @@ fn draw_annotations<DB: DrawingBackend, X: Axis, Y: Axis>(
     Ok(())
 }
 
-fn draw_body<DB: DrawingBackend, X: Axis, Y: Axis>(
+fn draw_body<DB: Canvas, X: Axis, Y: Axis>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
     plot: &XyPlot,
 ) -> Result<(), DrawError<DB>> {
@@ -544,20 +550,28 @@ fn draw_body<DB: DrawingBackend, X: Axis, Y: Axis>(
     draw_annotations(chart, plot)
 }
 
-/// Build the chart on `area` with each axis linear or logarithmic (log axes with ticks
-/// from [`log_ticks`]) and draw its body.
-fn draw_chart<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
-    plot: &XyPlot,
-) -> Result<(), DrawError<DB>> {
-    let (x0, x1) = plot.x_range;
-    let (y0, y1) = plot.y_range;
+/// The chart's margins and label areas (the same for every axis kind).
+fn chart_builder<'a, 'b, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+) -> ChartBuilder<'a, 'b, DB> {
     let mut builder = ChartBuilder::on(area);
     builder
         .margin(16)
         .margin_right(28)
         .x_label_area_size(55)
         .y_label_area_size(85);
+    builder
+}
+
+/// Build the chart on `area` with each axis linear or logarithmic (log axes with ticks
+/// from [`log_ticks`]) and draw its body.
+fn draw_chart<DB: Canvas>(
+    area: &DrawingArea<DB, Shift>,
+    plot: &XyPlot,
+) -> Result<(), DrawError<DB>> {
+    let (x0, x1) = plot.x_range;
+    let (y0, y1) = plot.y_range;
+    let mut builder = chart_builder(area);
     let lx = || (x0..x1).log_scale().with_key_points(log_ticks(x0, x1));
     let ly = || (y0..y1).log_scale().with_key_points(log_ticks(y0, y1));
     match (plot.log_x, plot.log_y) {
@@ -570,10 +584,7 @@ fn draw_chart<DB: DrawingBackend>(
 
 impl XyPlot {
     /// Draw the chart, its titles and its legend panel into `root` (any size).
-    pub fn draw_in<DB: DrawingBackend>(
-        &self,
-        root: &DrawingArea<DB, Shift>,
-    ) -> Result<(), DrawError<DB>> {
+    pub fn draw_in<DB: Canvas>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), DrawError<DB>> {
         let (w, h) = root.dim_in_pixel();
         let lay = self.layout_in(w, h);
         let body = draw_titles(root, &self.title, &self.subtitle)?;
@@ -589,13 +600,47 @@ impl XyPlot {
     }
 }
 
+impl XyPlot {
+    /// The plotting area (the data rectangle inside the axes, in pixels of the whole
+    /// picture) and the map from values to sub-pixel positions in it that the curves are
+    /// drawn with. Found by laying the chart out as [`Picture::draw`] does.
+    pub fn plotting_area(&self) -> (Rect, PixelMap) {
+        let (w, h) = self.size();
+        let lay = self.layout_in(w, h);
+        let top = titles_height(&self.title, &self.subtitle, w);
+        let mut buf = vec![0u8; w as usize * h as usize * 3];
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let (_, body) = root.split_vertically(top);
+        let (main, _) = body.split_horizontally(lay.chart.w as u32);
+        let (x0, x1) = self.x_range;
+        let (y0, y1) = self.y_range;
+        let (xs, ys) = match chart_builder(&main).build_cartesian_2d(x0..x1, y0..y1) {
+            Ok(chart) => chart.plotting_area().get_pixel_range(),
+            Err(_) => (0..0, 0..0),
+        };
+        let rect = Rect {
+            x: xs.start as f64,
+            y: ys.start as f64,
+            w: (xs.end - xs.start) as f64,
+            h: (ys.end - ys.start) as f64,
+        };
+        let map = PixelMap {
+            size: (rect.w as u32, rect.h as u32),
+            x_range: self.x_range,
+            y_range: self.y_range,
+            log: (self.log_x, self.log_y),
+        };
+        (rect, map)
+    }
+}
+
 impl Picture for XyPlot {
     fn size(&self) -> (u32, u32) {
         let panel = self.panel_width(&self.legend_entries());
         (self.size.0 + panel, self.size.1)
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), DrawError<DB>> {
+    fn draw<DB: Canvas>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), DrawError<DB>> {
         self.draw_in(root)
     }
 }

@@ -274,7 +274,11 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         }
         let mut config = spec.config_for(m, uncertainties);
         config.lm.stop = Some(stop.clone());
-        results.push(driver::fit(&input, &config)?);
+        match driver::fit(&input, &config) {
+            // A candidate whose first evaluation a stop cut has no result.
+            Err(Error::Stopped(_)) if !results.is_empty() => not_fitted.push(m.as_str()),
+            r => results.push(r?),
+        }
     }
     let (best, skipped) = lowest_bic_usable(&results);
     // The chosen fit keeps its per-sample vectors; the candidates (the comparison) keep
@@ -357,8 +361,9 @@ fn finish_result(
 
 /// The candidate with the lowest BIC among the converged fits (among all when none
 /// converged), and a note for each candidate with a lower BIC that was skipped because its
-/// fit is not a usable optimum (degenerate, or stopped without converging). `results` is
-/// not empty.
+/// fit is not a usable optimum (degenerate, or stopped without converging), quoting why:
+/// the degeneracy itself ([`FitResult::unusable`]: one reason, whatever other notes the
+/// point also earns), else the fit's last note. `results` is not empty.
 fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
     let any_converged = results.iter().any(|r| r.converged());
     let best = results
@@ -375,9 +380,9 @@ fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
                 "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
                 r.model,
                 r.bic,
-                r.notes
-                    .last()
-                    .map(String::as_str)
+                r.unusable
+                    .as_deref()
+                    .or(r.notes.last().map(String::as_str))
                     .unwrap_or(r.termination.describe())
             )
         })
@@ -407,7 +412,10 @@ fn joint_narrowing(
     let mut config = spec.config_for(&joint.model, ds.sigma_l.is_some());
     config.lm.progress = false;
     config.lm.stop = Some(stop.clone());
-    let alone = driver::fit(&input, &config)?;
+    let alone = match driver::fit(&input, &config) {
+        Err(Error::Stopped(_)) => return Ok(None),
+        r => r?,
+    };
     if stop.is_requested() {
         // The single-channel fit was cut short: its errors say nothing.
         return Ok(None);
