@@ -118,7 +118,8 @@ pub struct FitArgs {
     /// Maximum solver iterations.
     #[arg(long, default_value_t = 500)]
     pub max_iter: u64,
-    /// Stop the solver after this many seconds.
+    /// Stop the whole command after this many seconds of wall time (counted from its start:
+    /// reading, fitting, writing); exit 3 with what exists (see the README).
     #[arg(long)]
     pub timeout: Option<f64>,
     /// Show progress on standard error (reading, datasets done of total, solver
@@ -338,13 +339,17 @@ fn fit_one(
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
+    // From the start Ctrl-C, SIGTERM and SIGHUP stop the command instead of ending the
+    // process, and `--timeout` counts from here: reading stops within a MiB (nothing
+    // fitted, exit 3), a fit reports its best point (exit 3).
+    let stop = Stop::new(args.timeout.map(std::time::Duration::from_secs_f64), None);
     let opts = args.read_options()?;
     if let Some(r) = &args.residuals {
         let inputs: Vec<(&str, &Path)> = args.file.iter().map(|f| ("input", f.as_path())).collect();
         io::check_distinct(&inputs, &[("--residuals", r)])?;
     }
     // Every input is read (and checked) before any fit starts.
-    let (jobs, files) = read_jobs(&args, &opts)?;
+    let (jobs, files) = read_jobs(&args, &opts, &stop)?;
     let single = jobs.len() == 1;
     if !single && (args.residuals.is_some() || args.plot.is_some() || args.html.is_some()) {
         return Err(Error::Usage(
@@ -353,9 +358,6 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         )
         .into());
     }
-    // From here on Ctrl-C, SIGTERM and SIGHUP stop the fits (which report their best point
-    // and exit 3) instead of ending the process; `--timeout` bounds the whole command.
-    let stop = Stop::new(args.timeout.map(std::time::Duration::from_secs_f64), None);
     let t0 = std::time::Instant::now();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
@@ -396,6 +398,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
 fn read_jobs(
     args: &FitArgs,
     opts: &ReadOptions,
+    stop: &Stop,
 ) -> anyhow::Result<(
     Vec<(String, Dataset)>,
     Vec<(PathBuf, report::setting::InputInfo)>,
@@ -406,7 +409,8 @@ fn read_jobs(
         // The raw rows are kept only for the residuals file (which passes them through).
         let bar = reading_bar(file, args.show_progress());
         let ds = io::read_dataset_with(file, opts, args.residuals.is_some(), &|done| {
-            bar.set_position(done)
+            bar.set_position(done);
+            stop.requested().map_or(Ok(()), |why| Err(why.describe()))
         })?;
         bar.finish_and_clear();
         goniofit::fit::dataset::check_magnitudes(&ds)?;

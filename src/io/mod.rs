@@ -182,17 +182,22 @@ impl Dataset {
 
 /// Read a dataset, choosing the format by extension or content (see the module docs).
 pub fn read_dataset(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
-    read_file(path, opts, true, &|_| {})
+    read_file(path, opts, true, &|_| Ok(()))
 }
+
+/// What a caller's progress callback says after each MiB or so read: go on, or stop with
+/// the reason (e.g. "stopped: interrupted"; the read then ends with [`Error::Stopped`]).
+pub type Progress<'f> = &'f dyn Fn(u64) -> std::result::Result<(), &'static str>;
 
 /// [`read_dataset`] (with the raw rows only when `keep_rows`, see
 /// [`read_dataset_columns`]), calling `progress(bytes read so far)` every MiB or so while
-/// a CSV file is streamed.
+/// a CSV file is streamed (about 25,000 rows of a typical scan); when it returns a reason,
+/// reading ends with [`Error::Stopped`] ("REASON while reading FILE …: nothing fitted").
 pub fn read_dataset_with(
     path: &Path,
     opts: &ReadOptions,
     keep_rows: bool,
-    progress: &dyn Fn(u64),
+    progress: Progress,
 ) -> Result<Dataset> {
     read_file(path, opts, keep_rows, progress)
 }
@@ -201,14 +206,14 @@ pub fn read_dataset_with(
 /// writes no residuals file. A CSV file is streamed record by record, so reading holds
 /// one record's text at a time, not the file (a 1M-row scan is ~45 MB of text).
 pub fn read_dataset_columns(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
-    read_file(path, opts, false, &|_| {})
+    read_file(path, opts, false, &|_| Ok(()))
 }
 
 fn read_file(
     path: &Path,
     opts: &ReadOptions,
     keep_rows: bool,
-    progress: &dyn Fn(u64),
+    progress: Progress,
 ) -> Result<Dataset> {
     use std::io::{BufRead, Read};
     let io_err = |source| Error::Io {
@@ -221,15 +226,26 @@ fn read_file(
     let head = reader.fill_buf().map_err(io_err)?;
     if !astm_by_extension(path) && surely_csv(head) {
         let rows_hint = estimate_rows(head, len);
+        let stopped = std::cell::Cell::new(None);
         let counted = std::io::BufReader::new(Counting {
             inner: reader,
             done: 0,
             reported: 0,
             progress,
+            stopped: &stopped,
         });
         // A file the streamed reader refuses is read whole again, so that every error
         // message is the whole-file reader's (header-based field limits and hints).
-        if let Ok(ds) = csv::parse_reader(path, counted, opts, keep_rows, rows_hint) {
+        let parsed = csv::parse_reader(path, counted, opts, keep_rows, rows_hint);
+        if let Some((why, done)) = stopped.get() {
+            return Err(Error::Stopped(format!(
+                "{why} while reading {} ({:.1} of {:.1} MB): nothing fitted",
+                shown(path),
+                done as f64 / 1e6,
+                len as f64 / 1e6
+            )));
+        }
+        if let Ok(ds) = parsed {
             return select_csv_channel(ds, opts.channel.as_deref());
         }
         let bytes = std::fs::read(path).map_err(io_err)?;
@@ -244,12 +260,14 @@ fn read_file(
     Ok(ds)
 }
 
-/// A reader that reports the bytes read through it (every MiB).
+/// A reader that reports the bytes read through it (every MiB), and fails once the
+/// report says stop (the reason and the bytes read are left in `stopped`).
 struct Counting<'f, R> {
     inner: R,
     done: u64,
     reported: u64,
-    progress: &'f dyn Fn(u64),
+    progress: Progress<'f>,
+    stopped: &'f std::cell::Cell<Option<(&'static str, u64)>>,
 }
 
 impl<R: std::io::Read> std::io::Read for Counting<'_, R> {
@@ -258,7 +276,10 @@ impl<R: std::io::Read> std::io::Read for Counting<'_, R> {
         self.done += n as u64;
         if self.done - self.reported >= 1 << 20 {
             self.reported = self.done;
-            (self.progress)(self.done);
+            if let Err(why) = (self.progress)(self.done) {
+                self.stopped.set(Some((why, self.done)));
+                return Err(std::io::Error::other(why));
+            }
         }
         Ok(n)
     }
