@@ -204,7 +204,7 @@ pub fn fit_input(
     };
     Ok(FitInput {
         geo,
-        y,
+        y: y.into(),
         weight,
         channel,
         channel_names,
@@ -281,7 +281,14 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         }
     }
     let (best, skipped) = lowest_bic_usable(&results);
+    // The chosen fit keeps its per-sample vectors; the candidates (the comparison) keep
+    // their summaries only, so a big fit's vectors exist once.
+    let samples = results[best].take_samples();
     let mut result = results[best].clone();
+    result.put_samples(samples);
+    for r in &mut results {
+        r.take_samples();
+    }
     result.notes.extend(skipped);
     if !not_fitted.is_empty() {
         result.notes.push(format!(
