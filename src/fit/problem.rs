@@ -779,7 +779,7 @@ impl FitProblem<'_> {
         };
         let n_spec = self.model.params().len();
         let identity = b.idx.len() == self.n
-            && b.idx.iter().enumerate().all(|(r, &i)| r == i)
+            && b.idx.iter().enumerate().all(|(r, i)| r == i)
             && n_free == n_spec
             && (0..n_spec).all(|s| {
                 let k = self.layout.index[b.channel][s];
