@@ -64,8 +64,8 @@ pub struct FitArgs {
     /// Wavelength, with its unit (633nm, 0.633um) or as a bare number (then σ and T are in
     /// that number's unknown unit); σ and T are reported in this unit. Required for KBS
     /// models unless a `wavelength` column or an ASTM channel name gives it.
-    #[arg(long, value_parser = parse_wavelength_arg)]
-    pub wavelength: Option<(f64, Option<&'static str>)>,
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_wavelength)]
+    pub wavelength: Option<super::args::Wavelength>,
     /// One channel: an ASTM channel (e.g. 550nm); for CSV a `group` label, or a wavelength
     /// (0.532 in the file's unit, or 532nm) selecting the rows of that wavelength. `all`: a
     /// joint fit over every channel (CSV without a group column: every wavelength) with
@@ -204,11 +204,6 @@ impl FitArgs {
     pub fn wavelength_value(&self) -> Option<f64> {
         self.wavelength.map(|w| w.0)
     }
-}
-
-/// `--wavelength`: a positive number with an optional unit (nm, um, µm).
-fn parse_wavelength_arg(text: &str) -> Result<(f64, Option<&'static str>), String> {
-    io::parse_length(text).map_err(|e| e.to_string())
 }
 
 /// The whole setting of one dataset's fit, for the report (`report::Setting`).
