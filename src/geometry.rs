@@ -9,7 +9,8 @@ use crate::error::{Error, Result};
 use nalgebra::Vector3;
 use std::sync::Arc;
 
-/// One per-sample column of a [`Geometry`], read as a slice. The storage is shared:
+/// One per-sample column (of a [`Geometry`], or a fit's values), read as a slice. The
+/// storage is shared:
 /// cloning a column or a geometry, or slicing a contiguous range of samples
 /// ([`Geometry::slice`]), copies nothing, so a fit's evaluation blocks and its input hold
 /// one copy of the geometry between them.
@@ -40,6 +41,15 @@ impl std::ops::Deref for Column {
     type Target = [f64];
     fn deref(&self) -> &[f64] {
         &self.data[self.start..self.start + self.len]
+    }
+}
+
+/// Writing through a column that shares its storage copies it first (copy on write):
+/// the other holders keep the values they had.
+impl std::ops::DerefMut for Column {
+    fn deref_mut(&mut self) -> &mut [f64] {
+        let (start, len) = (self.start, self.len);
+        &mut Arc::make_mut(&mut self.data)[start..start + len]
     }
 }
 

@@ -228,7 +228,7 @@ pub fn fit_input() -> Result<FitInput> {
     let n = data.len();
     Ok(FitInput {
         geo: Geometry::new(&data.samples, &[1.0], Quantity::Radiance)?,
-        y: data.value,
+        y: data.value.into(),
         weight: vec![1.0; n],
         channel: vec![0; n],
         channel_names: vec![String::new()],

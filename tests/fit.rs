@@ -60,7 +60,7 @@ fn joint_synthetic(
     let n = geo.len();
     FitInput {
         geo,
-        y,
+        y: y.into(),
         weight: vec![1.0; n],
         channel,
         channel_names: names.iter().map(|s| s.to_string()).collect(),

@@ -65,7 +65,7 @@ fn data(truth: [f64; 3], angles: &[AnglesDeg], level: f64, seed: u64) -> FitInpu
         .collect();
     FitInput {
         geo: Geometry::new(&d.samples, &[1.0], Quantity::Radiance).unwrap(),
-        y: d.value,
+        y: d.value.into(),
         weight,
         channel: vec![0; d.samples.len()],
         channel_names: vec![String::new()],

@@ -47,6 +47,7 @@ pub(super) fn assemble(
         unc,
         verdict,
         mut notes,
+        unusable,
     } = solved;
     let layout = &problem.layout;
     let specs = model.params();
@@ -77,6 +78,7 @@ pub(super) fn assemble(
         condition: unc.condition,
         verdict,
         notes,
+        unusable,
         validity: None,
         loss: problem.loss(),
         beyond_f_scale: gof.beyond_f_scale,

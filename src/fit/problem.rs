@@ -18,7 +18,7 @@
 use super::lm::{LeastSquaresProblem, Stop};
 use super::loss::Loss;
 use crate::error::{Error, Result};
-use crate::geometry::Geometry;
+use crate::geometry::{Column, Geometry};
 use crate::model::{Mode, Model};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -234,8 +234,8 @@ impl ParamLayout {
 #[derive(Debug, Clone)]
 pub struct FitInput {
     pub geo: Geometry,
-    /// Measured values.
-    pub y: Vec<f64>,
+    /// Measured values (shared storage: a problem built on them refers to them).
+    pub y: Column,
     /// Weights wᵢ > 0.
     pub weight: Vec<f64>,
     /// Channel index per sample into `channel_names` (all 0 for a single channel).
@@ -274,8 +274,34 @@ impl FitInput {
 struct Block {
     geo: Geometry,
     /// Global sample indices.
-    idx: Vec<usize>,
+    idx: Rows,
     channel: usize,
+}
+
+/// The global indices of a block's samples: a run of consecutive samples (a one-channel
+/// fit), or a list.
+#[derive(Debug, Clone)]
+enum Rows {
+    Run(std::ops::Range<usize>),
+    List(Vec<usize>),
+}
+
+impl Rows {
+    fn len(&self) -> usize {
+        match self {
+            Rows::Run(r) => r.len(),
+            Rows::List(l) => l.len(),
+        }
+    }
+
+    /// The global indices in block order.
+    fn iter(&self) -> impl Iterator<Item = usize> + '_ {
+        let (run, list) = match self {
+            Rows::Run(r) => (Some(r.clone()), None),
+            Rows::List(l) => (None, Some(l.iter().copied())),
+        };
+        run.into_iter().flatten().chain(list.into_iter().flatten())
+    }
 }
 
 /// The fit's least-squares problem.
@@ -283,7 +309,8 @@ pub struct FitProblem<'a> {
     pub model: &'a dyn Model,
     pub layout: ParamLayout,
     blocks: Vec<Block>,
-    y: Vec<f64>,
+    /// The input's measured values (shared, not a second copy of a big file's).
+    y: Column,
     sqrt_w: Vec<f64>,
     kind: ResidualKind,
     /// Floor for relative and log residuals (in the unit of y).
@@ -339,22 +366,39 @@ impl<'a> FitProblem<'a> {
             return Err(Error::Numerical("inconsistent fit data lengths".into()));
         }
         let n_ch = layout.index.len();
-        let mut blocks = Vec::new();
-        for c in 0..n_ch {
-            let idx: Vec<usize> = (0..n).filter(|&i| channel[i] == c).collect();
-            for chunk in idx.chunks(BLOCK) {
-                blocks.push(Block {
-                    geo: geo.subset(chunk),
-                    idx: chunk.to_vec(),
-                    channel: c,
-                });
+        let blocks = if channel.iter().all(|&c| c == 0) {
+            // One channel: blocks are runs of consecutive samples, their geometry a view of
+            // the input's (nothing per sample is copied).
+            (0..n)
+                .step_by(BLOCK)
+                .map(|first| {
+                    let run = first..(first + BLOCK).min(n);
+                    Block {
+                        geo: geo.slice(run.clone()),
+                        idx: Rows::Run(run),
+                        channel: 0,
+                    }
+                })
+                .collect()
+        } else {
+            let mut blocks = Vec::new();
+            for c in 0..n_ch {
+                let idx: Vec<usize> = (0..n).filter(|&i| channel[i] == c).collect();
+                for chunk in idx.chunks(BLOCK) {
+                    blocks.push(Block {
+                        geo: geo.subset(chunk),
+                        idx: Rows::List(chunk.to_vec()),
+                        channel: c,
+                    });
+                }
             }
-        }
+            blocks
+        };
         Ok(FitProblem {
             model,
             layout,
             blocks,
-            y: y.to_vec(),
+            y: y.clone(),
             sqrt_w: weight.iter().map(|w| w.sqrt()).collect(),
             kind,
             floor,
@@ -454,13 +498,13 @@ impl<'a> FitProblem<'a> {
             |_, _, _| {},
             |b, out, bj| {
                 let m = b.idx.len();
-                for (r, &i) in b.idx.iter().enumerate() {
+                for (r, i) in b.idx.iter().enumerate() {
                     f[i] = out[r];
                 }
                 if let Some(j) = jac.as_mut() {
                     for s in 0..n_spec {
                         let col = self.layout.index[b.channel][s];
-                        for (r, &i) in b.idx.iter().enumerate() {
+                        for (r, i) in b.idx.iter().enumerate() {
                             j[(i, col)] = bj[s * m + r];
                         }
                     }
@@ -482,7 +526,7 @@ impl<'a> FitProblem<'a> {
             .collect();
         let mut modes = vec![Mode::Closed; self.n];
         for (b, part) in self.blocks.iter().zip(parts) {
-            for (m, &i) in part.into_iter().zip(&b.idx) {
+            for (m, i) in part.into_iter().zip(b.idx.iter()) {
                 modes[i] = m;
             }
         }
@@ -687,7 +731,7 @@ impl FitProblem<'_> {
         let mut out = DMatrix::zeros(self.n, free.len());
         let finish = |b: &Block, f: &mut [f64], jac: &mut [f64]| {
             let m = f.len();
-            for (r, &i) in b.idx.iter().enumerate() {
+            for (r, i) in b.idx.iter().enumerate() {
                 let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
                 for s in 0..n_spec {
                     jac[s * m + r] *= d;
@@ -697,12 +741,12 @@ impl FitProblem<'_> {
         };
         self.eval_blocks(&p, true, stop, finish, |b, r, bj| {
             let m = b.idx.len();
-            for (row, &i) in b.idx.iter().enumerate() {
+            for (row, i) in b.idx.iter().enumerate() {
                 rw[i] = r[row];
             }
             for s in 0..n_spec {
                 if let Some((col, chain)) = column[self.layout.index[b.channel][s]] {
-                    for (row, &i) in b.idx.iter().enumerate() {
+                    for (row, i) in b.idx.iter().enumerate() {
                         out[(i, col)] = bj[s * m + row] * chain;
                     }
                 }

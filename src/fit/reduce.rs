@@ -26,6 +26,8 @@ pub(super) struct Solved<'m> {
     pub unc: stats::Uncertainty,
     pub verdict: Verdict,
     pub notes: Vec<String>,
+    /// Why the point is not a usable optimum ([`super::validate::accept`]; also in `notes`).
+    pub unusable: Option<String>,
 }
 
 /// The reduced refit when the verdict is a known regime and σ is free; otherwise the first
@@ -45,6 +47,7 @@ pub(super) fn reduce<'m>(
         unc: id.unc,
         verdict: id.verdict,
         notes: Vec::new(),
+        unusable: None,
     };
     if super::validate::rough_by_construction(model, config) {
         // σ is held from the start: nothing to reduce.

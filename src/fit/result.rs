@@ -82,6 +82,9 @@ pub struct FitResult {
     pub condition: f64,
     pub verdict: Verdict,
     pub notes: Vec<String>,
+    /// Why the fit's point is not a usable optimum when it is degenerate (an edge of the
+    /// domain, a lobe the sampling does not resolve, a lost rank; also among `notes`).
+    pub unusable: Option<String>,
     /// Whether the fitted surface satisfies the paper's assumptions (KBS models; a warning,
     /// not a failure): [`super::validity`].
     pub validity: Option<super::validity::Validity>,
@@ -126,7 +129,35 @@ pub struct FitResult {
     pub start: Vec<f64>,
 }
 
+/// A fit's per-sample vectors, moved out of a [`FitResult`] and back.
+pub struct SampleVectors {
+    fitted: Vec<f64>,
+    residuals: Vec<f64>,
+    std_residuals: Vec<f64>,
+    sample_modes: Vec<Mode>,
+}
+
 impl FitResult {
+    /// Moves out the per-sample vectors (fitted values, residuals, standardised residuals,
+    /// modes), leaving them empty: a candidate of a model comparison keeps only its summary,
+    /// and a copy of the summary costs nothing per sample.
+    pub fn take_samples(&mut self) -> SampleVectors {
+        SampleVectors {
+            fitted: std::mem::take(&mut self.fitted),
+            residuals: std::mem::take(&mut self.residuals),
+            std_residuals: std::mem::take(&mut self.std_residuals),
+            sample_modes: std::mem::take(&mut self.sample_modes),
+        }
+    }
+
+    /// Puts back what [`Self::take_samples`] moved out.
+    pub fn put_samples(&mut self, s: SampleVectors) {
+        self.fitted = s.fitted;
+        self.residuals = s.residuals;
+        self.std_residuals = s.std_residuals;
+        self.sample_modes = s.sample_modes;
+    }
+
     /// Whether the fit is a usable optimum: the solver met a convergence criterion and the
     /// cost, every parameter, standard error and correlation is a finite number (R² may be
     /// undefined, NaN, only for data without spread).

@@ -30,6 +30,19 @@ pub const EDGE_MARGIN: f64 = 1e-3;
 /// subsample, the narrow one is 6 % lower on the full data).
 pub const RIVAL_MARGIN: f64 = 0.1;
 
+/// Relative difference in every parameter within which two refined candidates ended at the
+/// same optimum: the refinement stops at relative steps of its `xtol` (10⁻⁶), so one valley
+/// reached from two starts agrees far closer than this, while distinct valleys of the grid
+/// lie a factor of ~2 apart ([`init::initial_values`]).
+pub const SAME_OPTIMUM: f64 = 1e-3;
+
+/// Whether two refined points (layout order) are the same optimum (see [`SAME_OPTIMUM`]).
+fn same_optimum(a: &[f64], b: &[f64]) -> bool {
+    a.iter()
+        .zip(b)
+        .all(|(x, y)| (x - y).abs() <= SAME_OPTIMUM * x.abs().max(y.abs()))
+}
+
 /// Model accuracy of the quick refinement on a subsample (it only has to land near the
 /// optimum; the full fit then works at the requested accuracy).
 pub const REFINE_TOL: f64 = 1e-6;
@@ -279,12 +292,16 @@ fn choose_refined(
             chosen.start = Some((values.clone(), grid.1.clone()));
         }
         (Some(winner), _) => {
-            chosen.start = Some(winner);
-            // A second valley about as low on the subsample is solved too.
+            // A second valley about as low on the subsample is solved too. A candidate whose
+            // refinement ended at the winner's optimum is no second valley: solving from it
+            // again would only find that optimum once more, to the solver's tolerance, and
+            // in a flat valley let rounding pick between the two ends.
             chosen.rival = others
-                .first()
+                .iter()
+                .find(|(_, v)| !same_optimum(v, &winner.0))
                 .filter(|(c, _)| *c <= best_usable * (1.0 + RIVAL_MARGIN))
                 .map(|(_, v)| v.clone());
+            chosen.start = Some(winner);
         }
         _ => {}
     }

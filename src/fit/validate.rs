@@ -301,7 +301,8 @@ pub(super) fn accept(solved: &mut Solved, input: &FitInput) {
     );
     if let Some(reason) = reason {
         solved.run.lm.termination = Termination::Degenerate;
-        solved.notes.push(reason);
+        solved.notes.push(reason.clone());
+        solved.unusable = Some(reason);
         if solved.verdict == Verdict::Full {
             solved.verdict = Verdict::Partial;
         }

@@ -306,7 +306,7 @@ pub fn scene_input(scene: &Scene) -> Result<FitInput> {
     let geo = Geometry::new(&data.samples, &[data.wavelength], data.quantity)?;
     Ok(FitInput {
         geo,
-        y: data.value,
+        y: data.value.into(),
         weight,
         channel: vec![0; data.samples.len()],
         channel_names: vec![String::new()],

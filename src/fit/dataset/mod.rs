@@ -204,7 +204,7 @@ pub fn fit_input(
     };
     Ok(FitInput {
         geo,
-        y,
+        y: y.into(),
         weight,
         channel,
         channel_names,
@@ -281,7 +281,14 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         }
     }
     let (best, skipped) = lowest_bic_usable(&results);
+    // The chosen fit keeps its per-sample vectors; the candidates (the comparison) keep
+    // their summaries only, so a big fit's vectors exist once.
+    let samples = results[best].take_samples();
     let mut result = results[best].clone();
+    result.put_samples(samples);
+    for r in &mut results {
+        r.take_samples();
+    }
     result.notes.extend(skipped);
     if !not_fitted.is_empty() {
         result.notes.push(format!(
@@ -354,8 +361,9 @@ fn finish_result(
 
 /// The candidate with the lowest BIC among the converged fits (among all when none
 /// converged), and a note for each candidate with a lower BIC that was skipped because its
-/// fit is not a usable optimum (degenerate, or stopped without converging). `results` is
-/// not empty.
+/// fit is not a usable optimum (degenerate, or stopped without converging), quoting why:
+/// the degeneracy itself ([`FitResult::unusable`]: one reason, whatever other notes the
+/// point also earns), else the fit's last note. `results` is not empty.
 fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
     let any_converged = results.iter().any(|r| r.converged());
     let best = results
@@ -372,9 +380,9 @@ fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
                 "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
                 r.model,
                 r.bic,
-                r.notes
-                    .last()
-                    .map(String::as_str)
+                r.unusable
+                    .as_deref()
+                    .or(r.notes.last().map(String::as_str))
                     .unwrap_or(r.termination.describe())
             )
         })
