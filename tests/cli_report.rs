@@ -75,21 +75,11 @@ fn every_command_reads_the_wavelength_with_its_unit() {
     let dir = tempfile::tempdir().unwrap();
     let csv = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
     let params = "sigma=150,T=900,scale=1";
+    let run = |args: String| goniofit().args(args.split_whitespace()).assert().code(0);
     let synth = |wl: &str, out: &str| {
-        let args = [
-            "synth",
-            "--model",
-            "kbs",
-            "--params",
-            params,
-            "--layout",
-            "inplane",
-            "--wavelength",
-            wl,
-            "--out",
-            out,
-        ];
-        goniofit().args(args).assert().code(0);
+        run(format!(
+            "synth --model kbs --params {params} --layout inplane --wavelength {wl} --out {out}"
+        ));
     };
     synth("633nm", &csv("nm.csv"));
     synth("633", &csv("bare.csv"));
@@ -108,80 +98,35 @@ fn every_command_reads_the_wavelength_with_its_unit() {
     assert_eq!(truth("um.truth.json")["wavelength_unit"], "µm");
     // eval: 633nm gives the values of 633.
     let eval = |wl: &str| {
-        common::success_stdout(&[
-            "eval",
-            "--model",
-            "kbs",
-            "--params",
-            params,
-            "--wavelength",
-            wl,
-            &csv("nm.csv"),
-        ])
+        let args = format!(
+            "eval --model kbs --params {params} --wavelength {wl} {}",
+            csv("nm.csv")
+        );
+        common::success_stdout(&args.split_whitespace().collect::<Vec<_>>())
     };
     let e = eval("633nm");
     assert_eq!(e, eval("633"));
     assert!(e.lines().count() > 100);
     // render: accepted, the same picture as the bare number.
     let render = |wl: &str, out: &str| {
-        let args = [
-            "render",
-            "sphere",
-            "--model",
-            "kbs",
-            "--params",
-            params,
-            "--size",
-            "64",
-            "--wavelength",
-            wl,
-            "--out",
-            out,
-        ];
-        goniofit().args(args).assert().code(0);
+        run(format!(
+            "render sphere --model kbs --params {params} --size 64 --wavelength {wl} --out {out}"
+        ));
         std::fs::read(out).unwrap()
     };
     assert_eq!(render("633nm", &csv("a.png")), render("633", &csv("b.png")));
     // One message for a unit no command knows.
-    let bad = "633nm, 0.633um";
-    usage_error(
-        &[
-            "synth",
-            "--model",
-            "kbs",
-            "--params",
-            params,
-            "--wavelength",
-            "633pm",
-        ],
-        bad,
-    );
-    usage_error(
-        &[
-            "eval",
-            "--model",
-            "kbs",
-            "--params",
-            params,
-            "--wavelength",
-            "633pm",
-            HEMI,
-        ],
-        bad,
-    );
-    usage_error(
-        &[
-            "render",
-            "sphere",
-            "--model",
-            "kbs",
-            "--params",
-            params,
-            "--wavelength",
-            "-1nm",
-        ],
-        bad,
-    );
+    for (command, wl, file) in [
+        ("synth", "633pm", ""),
+        ("eval", "633pm", HEMI),
+        ("render sphere", "-1nm", ""),
+    ] {
+        let line = format!("{command} --model kbs --params {params} --wavelength {wl} {file}");
+        usage_error(
+            &line.split_whitespace().collect::<Vec<_>>(),
+            "633nm, 0.633um",
+        );
+    }
 }
 
 #[test]

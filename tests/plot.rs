@@ -580,17 +580,13 @@ fn a_paint_fit_linear_is_not_crushed_by_its_grazing_points() {
     }
 }
 
+/// The PTFE fit of the picture tests (before the file).
+const PTFE_FIT: &[&str] = &["fit", "--model", "kbs+lambert", "--residual", "log"];
+
 #[test]
 fn ptfe_pictures_have_log_ticks_and_a_colour_bar() {
     // All four wavelengths: 24 (θi, λ) series, more than the 10 colours.
-    let pics = real_fit_pictures(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--residual",
-        "log",
-        "data/nist-ptfe/PTFE.data.csv",
-    ]);
+    let pics = real_fit_pictures(&[PTFE_FIT, &["data/nist-ptfe/PTFE.data.csv"]].concat());
     let log = svg_texts(&pics["fit_log"]);
     // The BRDF spans 0.27–0.5 sr⁻¹, under a decade: labelled ticks all the same.
     for tick in ["0.3", "0.35", "0.4", "0.45", "0.5"] {
@@ -613,16 +609,13 @@ fn ptfe_pictures_have_log_ticks_and_a_colour_bar() {
 #[test]
 fn a_joint_fit_draws_every_channel_with_its_own_scales() {
     // PTFE `--channel all`: one joint fit, four channels (one per λ) with their own scales.
-    let pics = real_fit_pictures(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--residual",
-        "log",
-        "--channel",
-        "all",
-        "data/nist-ptfe/PTFE.data.csv",
-    ]);
+    let pics = real_fit_pictures(
+        &[
+            PTFE_FIT,
+            &["--channel", "all", "data/nist-ptfe/PTFE.data.csv"],
+        ]
+        .concat(),
+    );
     let log = svg_texts(&pics["fit_log"]);
     for wl in ["0.351", "0.532", "0.633", "1.064"] {
         assert!(

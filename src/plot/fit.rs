@@ -190,6 +190,17 @@ fn quantity_desc(q: Quantity) -> &'static str {
     }
 }
 
+/// The model's values for group `g` (its channel's parameters, its wavelength) at `samples`.
+fn eval_group(input: &FitPlotInput, g: &Group, samples: &[Sample]) -> Result<Vec<f64>> {
+    eval_at(
+        input.model,
+        input.params_of(g.channel),
+        samples,
+        g.wavelength,
+        input.geo.quantity,
+    )
+}
+
 /// "θi = 30°", with ", λ = 0.532 µm" when the groups' wavelengths differ, or the channel's
 /// name when channels share one.
 fn group_label(g: &Group, multi_wavelength: bool, input: &FitPlotInput) -> String {
@@ -500,13 +511,7 @@ fn dense_plane_curve(
             phi_r: geo.phi_r[k],
         })
         .collect();
-    let here = eval_at(
-        input.model,
-        input.params_of(g.channel),
-        &at,
-        g.wavelength,
-        geo.quantity,
-    )?;
+    let here = eval_group(input, g, &at)?;
     let scale = idx
         .iter()
         .map(|&k| input.fitted[k].abs())
@@ -519,13 +524,7 @@ fn dense_plane_curve(
         return Ok(None);
     }
     let (xs, samples) = plane_curve_samples(g.theta_i, 361);
-    let ys = eval_at(
-        input.model,
-        input.params_of(g.channel),
-        &samples,
-        g.wavelength,
-        geo.quantity,
-    )?;
+    let ys = eval_group(input, g, &samples)?;
     Ok(Some(xs.into_iter().zip(ys).collect()))
 }
 
@@ -677,13 +676,7 @@ pub fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
     let geo = input.geo;
     let g = busiest(&gs);
     let (xs, samples) = plane_curve_samples(g.theta_i, 361);
-    let ys = eval_at(
-        input.model,
-        input.params_of(g.channel),
-        &samples,
-        g.wavelength,
-        geo.quantity,
-    )?;
+    let ys = eval_group(input, g, &samples)?;
     let l_max = ys
         .iter()
         .copied()
@@ -853,13 +846,7 @@ pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
             samples.push(Sample::from_degrees(g.theta_i.to_degrees(), tr, phi));
         }
     }
-    let z = eval_at(
-        input.model,
-        input.params_of(g.channel),
-        &samples,
-        g.wavelength,
-        geo.quantity,
-    )?;
+    let z = eval_group(input, g, &samples)?;
     let grid = Grid { xs, ys, z };
     let (_, hi) = grid.range();
     let hi = if hi.is_finite() { hi } else { 0.0 };
