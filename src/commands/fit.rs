@@ -527,7 +527,8 @@ fn print_reports(
     wall: f64,
     threads: usize,
 ) -> anyhow::Result<()> {
-    let single = outcomes.len() == 1;
+    // One dataset to fit (a batch with all but one not fitted is still a batch).
+    let single = outcomes.len() == 1 && skipped.is_empty();
     let rows: Vec<report::summary::Row> = outcomes
         .iter()
         .zip(infos)
