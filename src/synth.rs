@@ -770,6 +770,9 @@ pub struct Truth {
     pub params: BTreeMap<String, f64>,
     /// Wavelength, in the unit of σ and T.
     pub wavelength: f64,
+    /// That unit, when `--wavelength` named one (`nm`, `µm`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wavelength_unit: Option<String>,
     /// `radiance` or `brdf`.
     pub quantity: Quantity,
     /// KBS evaluation mode (`auto`, `series`, `smooth`, `rough`).

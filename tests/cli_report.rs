@@ -70,6 +70,66 @@ fn wavelength_units_scale_sigma_and_t_and_are_stated() {
 }
 
 #[test]
+fn every_command_reads_the_wavelength_with_its_unit() {
+    // synth, eval, render and fit share one parser: 633nm, 0.633um, a bare number.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let params = "sigma=150,T=900,scale=1";
+    let run = |args: String| goniofit().args(args.split_whitespace()).assert().code(0);
+    let synth = |wl: &str, out: &str| {
+        run(format!(
+            "synth --model kbs --params {params} --layout inplane --wavelength {wl} --out {out}"
+        ));
+    };
+    synth("633nm", &csv("nm.csv"));
+    synth("633", &csv("bare.csv"));
+    // The same data (σ, T in the unit of λ), and the truth names the unit.
+    let nm = std::fs::read_to_string(csv("nm.csv")).unwrap();
+    assert_eq!(nm, std::fs::read_to_string(csv("bare.csv")).unwrap());
+    assert!(nm.lines().nth(1).unwrap().ends_with(",633.0"), "{nm:.200}");
+    let truth = |name: &str| -> serde_json::Value {
+        let t = std::fs::read_to_string(dir.path().join(name)).unwrap();
+        serde_json::from_str(&t).unwrap()
+    };
+    assert_eq!(truth("nm.truth.json")["wavelength_unit"], "nm");
+    assert_eq!(truth("nm.truth.json")["wavelength"], 633.0);
+    assert!(truth("bare.truth.json").get("wavelength_unit").is_none());
+    synth("0.633um", &csv("um.csv"));
+    assert_eq!(truth("um.truth.json")["wavelength_unit"], "µm");
+    // eval: 633nm gives the values of 633.
+    let eval = |wl: &str| {
+        let args = format!(
+            "eval --model kbs --params {params} --wavelength {wl} {}",
+            csv("nm.csv")
+        );
+        common::success_stdout(&args.split_whitespace().collect::<Vec<_>>())
+    };
+    let e = eval("633nm");
+    assert_eq!(e, eval("633"));
+    assert!(e.lines().count() > 100);
+    // render: accepted, the same picture as the bare number.
+    let render = |wl: &str, out: &str| {
+        run(format!(
+            "render sphere --model kbs --params {params} --size 64 --wavelength {wl} --out {out}"
+        ));
+        std::fs::read(out).unwrap()
+    };
+    assert_eq!(render("633nm", &csv("a.png")), render("633", &csv("b.png")));
+    // One message for a unit no command knows.
+    for (command, wl, file) in [
+        ("synth", "633pm", ""),
+        ("eval", "633pm", HEMI),
+        ("render sphere", "-1nm", ""),
+    ] {
+        let line = format!("{command} --model kbs --params {params} --wavelength {wl} {file}");
+        usage_error(
+            &line.split_whitespace().collect::<Vec<_>>(),
+            "633nm, 0.633um",
+        );
+    }
+}
+
+#[test]
 fn json_carries_the_whole_setting() {
     let v = fit_json(&[&GARNET_550[..], &["--json", GARNET]].concat());
     let st = &v["setting"];

@@ -203,16 +203,16 @@ fn sigint_during_a_fit_prints_what_exists_and_exits_3() {
 /// 18,000 rough samples (σ = 20, T = 100, g ≈ 2.6e4) in a scratch folder `name`: forced
 /// `--mode series` costs ~0.5 s of CPU per evaluation on them.
 fn rough_file(name: &str) -> std::path::PathBuf {
-    let csv = scratch(name).join("rough.csv");
+    synth_file(name, "rough.csv", "sigma=20,T=100,scale=1", "10x30x60")
+}
+
+/// `goniofit synth` of a KBS surface (`params`) on `grid` with 1 % noise, into `file` of a
+/// scratch folder `name` (with its truth JSON beside it).
+fn synth_file(name: &str, file: &str, params: &str, grid: &str) -> std::path::PathBuf {
+    let csv = scratch(name).join(file);
     let made = goniofit()
-        .args([
-            "synth",
-            "--model",
-            "kbs",
-            "--params",
-            "sigma=20,T=100,scale=1",
-        ])
-        .args(["--grid", "10x30x60", "--noise", "0.01", "--out"])
+        .args(["synth", "--model", "kbs", "--params", params])
+        .args(["--grid", grid, "--noise", "0.01", "--out"])
         .arg(&csv)
         .output()
         .expect("run synth");
@@ -415,4 +415,59 @@ fn timeout_in_the_first_evaluation_leaves_nothing_fitted() {
     assert_eq!(files_in(&dir), ["rough.csv", "rough.truth.json"]);
     // Sanity bound only: one block per thread after the limit.
     assert!(wall < 10.0, "took {wall:.2} s with --timeout 0.3");
+}
+
+#[test]
+fn timeout_in_a_big_fit_reports_the_point_without_uncertainties_it_did_not_compute() {
+    // 400,000 samples (a Jacobian too large to keep: the end of the fit asks for it again),
+    // from starting values that take ~10 evaluations (~3 s unloaded) to converge.
+    // A limit that falls in a trial evaluation leaves the last evaluation off the best
+    // point: its Jacobian is not evaluated after the stop, and the report gives the point
+    // and its cost with "not computed" instead of standard errors (never NaN). A limit that
+    // falls right after an accepted step has the Jacobian cached (standard errors shown);
+    // one before the first evaluation finished leaves nothing fitted.
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let csv = synth_file(
+        "big_timeout",
+        "big.csv",
+        "sigma=0.4,T=3,scale=1",
+        "20x100x200",
+    );
+    let t0 = Instant::now();
+    let out = goniofit()
+        .args(["fit", "--model", "kbs", "--init", "sigma=2,T=5,scale=10"])
+        .args(["--timeout", "1", "--json"])
+        .arg(&csv)
+        .output()
+        .expect("run goniofit");
+    let wall = t0.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&out.stderr);
+    if out.stdout.is_empty() {
+        assert_nothing_fitted(&out, "time limit reached");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON report");
+    assert_eq!(v["termination"], "timeout");
+    assert!(v["cost"].as_f64().is_some_and(f64::is_finite));
+    assert!(v["r2"].as_f64().is_some_and(f64::is_finite));
+    let params: Vec<&serde_json::Value> =
+        v["params"].as_object().expect("params").values().collect();
+    let notes = v["notes"].to_string();
+    if v["verdict"] == "not_computed" {
+        assert!(
+            notes.contains("before the Jacobian at its best point"),
+            "{notes}"
+        );
+        for p in params {
+            assert!(p["value"].as_f64().is_some_and(f64::is_finite), "{p}");
+            assert!(p["stderr"].is_null() && p["determined"] == false, "{p}");
+        }
+    } else {
+        assert!(params.iter().all(|p| p["stderr"].as_f64().is_some()), "{v}");
+    }
+    // Sanity bound only: reading, 1 s of limit, one block per thread, the report.
+    assert!(wall < 30.0, "took {wall:.2} s with --timeout 1");
 }

@@ -6,6 +6,7 @@ use goniofit::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
 use goniofit::geometry::{Geometry, Quantity};
 use goniofit::model::{by_name, ModelOptions};
 use goniofit::synth::{generate, Layout, Noise, NoiseKind};
+use std::sync::atomic::Ordering::SeqCst;
 
 /// Synthetic data for `model` at `params` on `layout`, with relative noise: one channel of
 /// [`joint_synthetic`].
@@ -353,10 +354,37 @@ fn an_evaluation_stopped_before_it_starts_gives_no_number() {
     // Jacobian entry is a number (the solver rejects such a point), and a whole fit stopped
     // before its first evaluation on the data ends with Error::Stopped instead of a report.
     // Without the request the same evaluation is finite everywhere.
-    use goniofit::fit::lm::Stop;
+    with_stoppable_kbs(|input, problem, x, flag, stop| {
+        assert!(input.geo.len() > 2 * 1024, "several evaluation blocks");
+        let open = problem.evaluate(x, Some(stop));
+        assert!(open.residuals.iter().all(|v| v.is_finite()));
+        assert!(open.jacobian.iter().all(|v| v.is_finite()));
+        flag.store(true, SeqCst);
+        let cut = problem.evaluate(x, Some(stop));
+        assert!(cut.residuals.iter().all(|v| v.is_nan()));
+        assert!(cut.jacobian.iter().all(|v| v.is_nan()));
+        let mut config = config("kbs");
+        config.lm.stop = Some(stop.clone());
+        match fit(input, &config) {
+            Err(goniofit::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
+            other => panic!("expected Error::Stopped, got {:?}", other.map(|r| r.cost)),
+        }
+    });
+}
+
+/// A KBS problem on 4,800 synthetic samples (σ = 0.3, T = 2, scale = 1; several evaluation
+/// blocks), the truth's solver variables x, and a stop request of a flag not yet set,
+/// handed to `check`.
+fn with_stoppable_kbs(
+    check: impl FnOnce(
+        &FitInput,
+        &goniofit::fit::problem::FitProblem,
+        &nalgebra::DVector<f64>,
+        &std::sync::atomic::AtomicBool,
+        &goniofit::fit::lm::Stop,
+    ),
+) {
     use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
-    use std::sync::atomic::AtomicBool;
-    use std::sync::Arc;
     let input = synthetic(
         "kbs",
         &[0.3, 2.0, 1.0],
@@ -365,25 +393,37 @@ fn an_evaluation_stopped_before_it_starts_gives_no_number() {
         3,
         1.0,
     );
-    assert!(input.geo.len() > 2 * 1024, "several evaluation blocks");
     let model = by_name("kbs", &ModelOptions::default()).unwrap();
     let layout = ParamLayout::new(model.as_ref(), &input.channel_names);
     let x = layout.to_x(&[0.3, 2.0, 1.0]);
     let problem =
         FitProblem::new(model.as_ref(), layout, &input, ResidualKind::Absolute, 1e-9).unwrap();
-    let flag = Arc::new(AtomicBool::new(false));
-    let stop = Stop::without_handler(None, Some(flag.clone()));
-    let open = problem.evaluate(&x, Some(&stop));
-    assert!(open.residuals.iter().all(|v| v.is_finite()));
-    assert!(open.jacobian.iter().all(|v| v.is_finite()));
-    flag.store(true, std::sync::atomic::Ordering::SeqCst);
-    let cut = problem.evaluate(&x, Some(&stop));
-    assert!(cut.residuals.iter().all(|v| v.is_nan()));
-    assert!(cut.jacobian.iter().all(|v| v.is_nan()));
-    let mut config = config("kbs");
-    config.lm.stop = Some(stop);
-    match fit(&input, &config) {
-        Err(goniofit::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
-        other => panic!("expected Error::Stopped, got {:?}", other.map(|r| r.cost)),
-    }
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let stop = goniofit::fit::lm::Stop::without_handler(None, Some(flag.clone()));
+    check(&input, &problem, &x, &flag, &stop);
+}
+
+#[test]
+fn a_jacobian_not_cached_is_not_evaluated_after_a_stop() {
+    // The end of a stopped fit asks for the Jacobian at its best point: handed over from
+    // the cache when the last evaluation was there, otherwise not evaluated once the stop
+    // is requested (every entry NaN; the fit then reports its point with the uncertainties
+    // "not computed"). Without the request it is evaluated, equal to the cached one.
+    with_stoppable_kbs(|input, problem, x, flag, stop| {
+        flag.store(true, SeqCst);
+        let skipped = problem.jacobian_until(x, Some(stop));
+        assert_eq!(skipped.shape(), (input.geo.len(), 3));
+        assert!(skipped.iter().all(|v| v.is_nan()));
+        flag.store(false, SeqCst);
+        let evaluated = problem.jacobian_until(x, Some(stop));
+        assert!(evaluated.iter().all(|v| v.is_finite()));
+        // Cached by a residual evaluation at x: handed over even after the request (once).
+        let _ = problem.residuals_until(x, None);
+        flag.store(true, SeqCst);
+        assert_eq!(problem.jacobian_until(x, Some(stop)), evaluated);
+        assert!(problem
+            .jacobian_until(x, Some(stop))
+            .iter()
+            .all(|v| v.is_nan()));
+    });
 }

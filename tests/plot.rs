@@ -384,6 +384,8 @@ fn with_synthetic_input<R>(wiggle: f64, f: impl FnOnce(&FitPlotInput) -> R) -> R
         measured: &measured,
         fitted: &fitted,
         std_residuals: &res,
+        wavelength_unit: None,
+        channels: Default::default(),
     })
 }
 
@@ -470,6 +472,8 @@ fn fit_plots_cope_with_awkward_data() {
         measured: &measured,
         fitted: &fitted,
         std_residuals: &res,
+        wavelength_unit: None,
+        channels: Default::default(),
     };
     let dir = tempfile::tempdir().unwrap();
     let paths = write_fit_plots(&dir.path().join("new/sub"), &input).unwrap();
@@ -576,17 +580,13 @@ fn a_paint_fit_linear_is_not_crushed_by_its_grazing_points() {
     }
 }
 
+/// The PTFE fit of the picture tests (before the file).
+const PTFE_FIT: &[&str] = &["fit", "--model", "kbs+lambert", "--residual", "log"];
+
 #[test]
 fn ptfe_pictures_have_log_ticks_and_a_colour_bar() {
     // All four wavelengths: 24 (θi, λ) series, more than the 10 colours.
-    let pics = real_fit_pictures(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--residual",
-        "log",
-        "data/nist-ptfe/PTFE.data.csv",
-    ]);
+    let pics = real_fit_pictures(&[PTFE_FIT, &["data/nist-ptfe/PTFE.data.csv"]].concat());
     let log = svg_texts(&pics["fit_log"]);
     // The BRDF spans 0.27–0.5 sr⁻¹, under a decade: labelled ticks all the same.
     for tick in ["0.3", "0.35", "0.4", "0.45", "0.5"] {
@@ -594,10 +594,64 @@ fn ptfe_pictures_have_log_ticks_and_a_colour_bar() {
     }
     assert!(log.iter().any(|t| t == "colour: θi (degrees)"));
     for wl in ["0.351", "0.532", "0.633", "1.064"] {
-        assert!(log.iter().any(|t| *t == format!("λ = {wl} fitted")), "{wl}");
+        // With the file's unit (the PTFE lambda column is in µm).
+        assert!(
+            log.iter().any(|t| *t == format!("λ = {wl} µm fitted")),
+            "{wl}"
+        );
     }
     // No per-series legend lines (24 of them would repeat colours).
     assert!(!log.iter().any(|t| t.starts_with("θi = ")), "{log:?}");
     let res = svg_texts(&pics["residuals_theta"]);
     assert!(res.iter().any(|t| t == "colour: θi (degrees)"));
+}
+
+#[test]
+fn a_joint_fit_draws_every_channel_with_its_own_scales() {
+    // PTFE `--channel all`: one joint fit, four channels (one per λ) with their own scales.
+    let pics = real_fit_pictures(
+        &[
+            PTFE_FIT,
+            &["--channel", "all", "data/nist-ptfe/PTFE.data.csv"],
+        ]
+        .concat(),
+    );
+    let log = svg_texts(&pics["fit_log"]);
+    for wl in ["0.351", "0.532", "0.633", "1.064"] {
+        assert!(
+            log.iter().any(|t| *t == format!("λ = {wl} µm fitted")),
+            "{wl}"
+        );
+        assert!(
+            log.iter().any(|t| *t == format!("λ = {wl} µm measured")),
+            "{wl}"
+        );
+    }
+    assert!(
+        log.iter()
+            .any(|t| t.contains("(joint fit of 4 channels; scale, scale_d per channel)")),
+        "{log:?}"
+    );
+    // 6 θi × 4 λ fitted curves: every channel is drawn (it was the middle one alone): six
+    // solid curves (λ = 0.351 µm) and the other three line styles in short pieces.
+    let strokes: Vec<&str> = pics["fit_log"]
+        .lines()
+        .filter(|l| l.contains("stroke-linejoin=\"round\""))
+        .collect();
+    let solid = strokes
+        .iter()
+        .filter(|l| l.matches(',').count() > 100)
+        .count();
+    assert_eq!(solid, 6, "solid curves");
+    assert!(strokes.len() > 6 + 3 * 6 * 10, "{} strokes", strokes.len());
+    // The polar and contour maps show one θi of one channel, and say which.
+    for stem in ["polar", "contour"] {
+        let texts = svg_texts(&pics[stem]);
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.contains("θi = 75° [channel 0.351µm]")),
+            "{stem}: {texts:?}"
+        );
+    }
 }

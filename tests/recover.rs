@@ -91,6 +91,7 @@ fn scoring_follows_the_verdict() {
             goniofit::fit::driver::Verdict::Rough => assert_eq!(names, ["T/sigma", "amplitude"]),
             goniofit::fit::driver::Verdict::Smooth => assert_eq!(names, ["T", "amplitude"]),
             goniofit::fit::driver::Verdict::Partial => {}
+            v @ goniofit::fit::driver::Verdict::NotComputed => panic!("{v:?} without a stop"),
         }
         for c in &r.checks {
             assert!(c.value.is_finite() && c.truth > 0.0);

@@ -150,7 +150,7 @@ fn assert_recovered(r: &FitResult, truth: [f64; 3], rel: f64) {
                 rel,
             );
         }
-        Verdict::Partial => panic!("partial verdict: {:?}", r.notes),
+        v @ (Verdict::Partial | Verdict::NotComputed) => panic!("verdict {v:?}: {:?}", r.notes),
     }
 }
 

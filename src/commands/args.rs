@@ -5,6 +5,16 @@ use goniofit::fit::loss::LossKind;
 use goniofit::geometry::Quantity;
 use goniofit::model::EvalMode;
 
+/// A wavelength on the command line: the number and its unit (`nm`, `µm`), or no unit for
+/// a bare number (then it is in the unit of σ and T, whatever that is).
+pub type Wavelength = (f64, Option<&'static str>);
+
+/// `--wavelength` of every command: a positive number with an optional unit (`633nm`,
+/// `633 nm`, `0.633um`, `0.633µm`) or a bare number ([`goniofit::io::parse_length`]).
+pub fn parse_wavelength(text: &str) -> Result<Wavelength, String> {
+    goniofit::io::parse_length(text).map_err(|e| e.to_string())
+}
+
 /// The measured quantity, as chosen on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
 pub enum QuantityArg {

@@ -26,9 +26,10 @@ pub struct EvalArgs {
     /// Parameters as name=value pairs, e.g. sigma=0.3,T=2,scale=1.
     #[arg(long)]
     pub params: String,
-    /// Wavelength for every sample (the unit of sigma and T); overrides the file's.
-    #[arg(long, allow_hyphen_values = true)]
-    pub wavelength: Option<f64>,
+    /// Wavelength for every sample, with its unit (633nm, 0.633um) or as a bare number (the
+    /// unit of sigma and T); overrides the file's.
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_wavelength)]
+    pub wavelength: Option<super::args::Wavelength>,
     /// Output quantity.
     #[arg(long, value_enum, default_value_t = QuantityArg::Radiance)]
     pub quantity: QuantityArg,
@@ -88,7 +89,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
 
     let needs_wavelength =
         model.name().starts_with("kbs") || args.model.to_ascii_lowercase().starts_with("kbs");
-    let wavelength: Vec<f64> = match (args.wavelength, &ds.wavelength) {
+    let wavelength: Vec<f64> = match (args.wavelength.map(|w| w.0), &ds.wavelength) {
         (Some(l), _) => {
             if !(l.is_finite() && l > 0.0) {
                 return Err(goniofit::Error::Usage(format!(

@@ -64,8 +64,8 @@ pub struct FitArgs {
     /// Wavelength, with its unit (633nm, 0.633um) or as a bare number (then σ and T are in
     /// that number's unknown unit); σ and T are reported in this unit. Required for KBS
     /// models unless a `wavelength` column or an ASTM channel name gives it.
-    #[arg(long, value_parser = parse_wavelength_arg)]
-    pub wavelength: Option<(f64, Option<&'static str>)>,
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_wavelength)]
+    pub wavelength: Option<super::args::Wavelength>,
     /// One channel: an ASTM channel (e.g. 550nm); for CSV a `group` label, or a wavelength
     /// (0.532 in the file's unit, or 532nm) selecting the rows of that wavelength. `all`: a
     /// joint fit over every channel (CSV without a group column: every wavelength) with
@@ -206,11 +206,6 @@ impl FitArgs {
     }
 }
 
-/// `--wavelength`: a positive number with an optional unit (nm, um, µm).
-fn parse_wavelength_arg(text: &str) -> Result<(f64, Option<&'static str>), String> {
-    io::parse_length(text).map_err(|e| e.to_string())
-}
-
 /// The whole setting of one dataset's fit, for the report (`report::Setting`).
 pub fn setting_of(
     args: &FitArgs,
@@ -219,13 +214,12 @@ pub fn setting_of(
     file: &report::setting::InputInfo,
 ) -> report::Setting {
     let (quantity, quantity_source) = args.quantity_for(ds);
-    let (unit, source) = match (args.wavelength, &ds.wavelength) {
-        (Some((_, u)), _) => (u.map(String::from), "--wavelength"),
-        (None, Some(_)) if io::is_astm(&ds.path, "") => {
-            (ds.wavelength_unit.clone(), "channel name")
-        }
-        (None, Some(_)) => (ds.wavelength_unit.clone(), "wavelength column"),
-        (None, None) => (None, "none"),
+    let unit = wavelength_unit(args, ds);
+    let source = match (args.wavelength, &ds.wavelength) {
+        (Some(_), _) => "--wavelength",
+        (None, Some(_)) if io::is_astm(&ds.path, "") => "channel name",
+        (None, Some(_)) => "wavelength column",
+        (None, None) => "none",
     };
     let source = SettingSource {
         file: file.clone(),
@@ -607,6 +601,7 @@ fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyhow::
             &o.input,
             (&o.result.layout, &o.result.values),
             &status,
+            wavelength_unit(args, &o.dataset).as_deref(),
         )?;
         eprintln!(
             "goniofit: wrote {} pictures to {}",
@@ -646,6 +641,7 @@ fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyho
         &o.input,
         (&o.result.layout, &o.result.values),
         &status,
+        wavelength_unit(args, &o.dataset).as_deref(),
     )?;
     let mut pictures = Vec::new();
     for p in written
@@ -766,23 +762,27 @@ pub fn plot_status(json: &serde_json::Value) -> String {
 }
 
 /// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`), with `status`
-/// (see [`plot_status`]) under their titles. For a joint fit the middle channel is drawn.
+/// (see [`plot_status`]) under their titles and λ in `unit`. A joint fit draws every
+/// channel with its own parameters (the polar and contour maps: the busiest θi's channel,
+/// named in their titles).
 pub fn plot_fit(
     dir: &Path,
     config: &FitConfig,
     input: &FitInput,
     (layout, values): (&goniofit::fit::problem::ParamLayout, &[f64]),
     status: &str,
+    unit: Option<&str>,
 ) -> anyhow::Result<Vec<PathBuf>> {
     use goniofit::fit::problem::FitProblem;
     let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
-    let c = layout.index.len() / 2;
-    let idx: Vec<usize> = (0..input.y.len())
-        .filter(|&i| input.channel[i] == c)
-        .collect();
-    let sub = input.subset(&idx);
     let floor = driver::residual_floor(config, &input.y);
-    let problem = FitProblem::new(model.as_ref(), layout.clone(), &sub, config.residual, floor)?;
+    let problem = FitProblem::new(
+        model.as_ref(),
+        layout.clone(),
+        input,
+        config.residual,
+        floor,
+    )?;
     let (fitted, _) = problem.model_values(values, false);
     let residuals = problem.raw_residuals(&fitted);
     let std_residuals = driver::standardized_residuals(
@@ -791,24 +791,68 @@ pub fn plot_fit(
         layout.free().len(),
         config.weights_are_uncertainties,
     );
-    let params = layout.model_params(values, c);
-    let specs = model.params();
-    let mut title = format!("{}:", model.name());
-    for (spec, v) in specs.iter().zip(&params) {
-        title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
-    }
-    if layout.channel_names.len() > 1 {
-        title += &format!(" [{}]", layout.channel_names[c]);
-    }
+    let n_channels = layout.index.len().max(1);
+    let params: Vec<Vec<f64>> = (0..n_channels)
+        .map(|c| layout.model_params(values, c))
+        .collect();
+    let joint = n_channels > 1;
     let plot_input = goniofit::plot::fit::FitPlotInput {
-        title,
+        title: plot_title(model.as_ref(), layout, &params[0]),
         subtitle: status.to_string(),
         model: model.as_ref(),
-        params: &params,
-        geo: &sub.geo,
-        measured: &sub.y,
+        params: &params[0],
+        geo: &input.geo,
+        measured: &input.y,
         fitted: &fitted,
         std_residuals: &std_residuals,
+        wavelength_unit: unit,
+        channels: goniofit::plot::fit::Channels {
+            of_sample: if joint { &input.channel } else { &[] },
+            params: if joint { &params } else { &[] },
+            names: &layout.channel_names,
+        },
     };
     Ok(goniofit::plot::fit::write_fit_plots(dir, &plot_input)?)
+}
+
+/// "kbs: sigma=… T=… scale=…"; for a joint fit only the shared parameters, and which are
+/// per channel.
+fn plot_title(
+    model: &dyn goniofit::model::Model,
+    layout: &goniofit::fit::problem::ParamLayout,
+    params: &[f64],
+) -> String {
+    let n_channels = layout.index.len();
+    let per_channel = |j: usize| {
+        n_channels > 1
+            && layout
+                .params
+                .iter()
+                .any(|p| p.spec == j && p.channel.is_some())
+    };
+    let mut title = format!("{}:", model.name());
+    let mut own = Vec::new();
+    for (j, (spec, v)) in model.params().iter().zip(params).enumerate() {
+        if per_channel(j) {
+            own.push(spec.name.to_string());
+        } else {
+            title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
+        }
+    }
+    if !own.is_empty() {
+        title += &format!(
+            " (joint fit of {n_channels} channels; {} per channel)",
+            own.join(", ")
+        );
+    }
+    title
+}
+
+/// The unit of λ the fit's σ and T are in: `--wavelength`'s, else the file's.
+pub fn wavelength_unit(args: &FitArgs, ds: &Dataset) -> Option<String> {
+    match (args.wavelength, &ds.wavelength) {
+        (Some((_, u)), _) => u.map(String::from),
+        (None, Some(_)) => ds.wavelength_unit.clone(),
+        (None, None) => None,
+    }
 }

@@ -74,7 +74,15 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         return Err(bad("parameter count does not match the model").into());
     }
     let status = super::fit::plot_status(&json);
-    let written = plot_fit(&args.out, &config, &input, (&layout, &values), &status)?;
+    let unit = super::fit::wavelength_unit(&fa, &ds);
+    let written = plot_fit(
+        &args.out,
+        &config,
+        &input,
+        (&layout, &values),
+        &status,
+        unit.as_deref(),
+    )?;
     eprintln!(
         "goniofit: wrote {} pictures to {}",
         written.len(),

@@ -34,9 +34,10 @@ pub struct SphereArgs {
     /// Image width = height in pixels.
     #[arg(long, default_value_t = 256)]
     pub size: u32,
-    /// Wavelength, in the unit of sigma and T.
-    #[arg(long, default_value_t = 1.0)]
-    pub wavelength: f64,
+    /// Wavelength, with its unit (633nm, 0.633um) or as a bare number, in the unit of sigma
+    /// and T.
+    #[arg(long, default_value = "1", allow_hyphen_values = true, value_parser = super::args::parse_wavelength)]
+    pub wavelength: super::args::Wavelength,
     /// Draw a negative (darker = more light), as in the paper's Figure 4.
     #[arg(long)]
     pub negative: bool,
@@ -57,7 +58,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<u8> {
 fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
     let model = by_name(&a.model, &ModelOptions::default())?;
     let params = parse_params(model.as_ref(), &a.params)?;
-    let image = sphere_radiance(model.as_ref(), &params, a.light_deg, a.wavelength, a.size)?;
+    let image = sphere_radiance(model.as_ref(), &params, a.light_deg, a.wavelength.0, a.size)?;
     let pic = SpherePicture {
         image,
         negative: a.negative,

@@ -23,9 +23,10 @@ pub struct SynthArgs {
     /// Parameters as name=value pairs, e.g. sigma=0.3,T=2,scale=1 (every parameter once).
     #[arg(long)]
     pub params: String,
-    /// Wavelength, in the unit of sigma and T.
-    #[arg(long, default_value_t = 1.0)]
-    pub wavelength: f64,
+    /// Wavelength, with its unit (633nm, 0.633um) or as a bare number; sigma, T and the
+    /// wavelength column are in that unit (the truth JSON names it).
+    #[arg(long, default_value = "1", allow_hyphen_values = true, value_parser = super::args::parse_wavelength)]
+    pub wavelength: super::args::Wavelength,
     /// Layout: inplane (θi 15,30,45,60,75; signed θr −85..85 step 1), hemisphere
     /// (θi × θr × φr grid, default 5x18x36), grazing (θi 70..89°, same grid), or the path of
     /// a CSV with columns theta_i,theta_r,phi_r in degrees.
@@ -203,7 +204,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
             .iter()
             .map(synth::AnglesDeg::sample)
             .collect::<Vec<_>>(),
-        &[a.wavelength],
+        &[a.wavelength.0],
         quantity,
     ) {
         for w in goniofit::model::domain::accuracy_warnings(model.as_ref(), &params, &geo) {
@@ -214,7 +215,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         model.as_ref(),
         &params,
         &angles,
-        a.wavelength,
+        a.wavelength.0,
         quantity,
         &noise,
     )?;
@@ -236,7 +237,8 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     let truth = Truth {
         model: model.name().to_string(),
         params: Truth::params_by_name(model.as_ref(), &params),
-        wavelength: a.wavelength,
+        wavelength: a.wavelength.0,
+        wavelength_unit: a.wavelength.1.map(String::from),
         quantity,
         mode: synth::eval_mode_name(opts.mode).to_string(),
         tol: a.tol,

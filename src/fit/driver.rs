@@ -55,11 +55,18 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
             return Err(stopped_before_first_evaluation(why, input.geo.len()));
         }
     }
+    // A stop before the Jacobian at the best point was evaluated leaves no uncertainty.
+    let uncomputed = !run.lm.jacobian.iter().all(|v| v.is_finite()) && stop_requested(config);
     let mut identified = identify::identify(input, &problem, &run, config.reduce);
-    if validate::rough_by_construction(model, config) {
+    if uncomputed {
+        identified.verdict = Verdict::NotComputed;
+    } else if validate::rough_by_construction(model, config) {
         identified.verdict = Verdict::Rough;
     }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
+    if uncomputed {
+        solved.notes.push(UNCERTAINTIES_NOT_COMPUTED.to_string());
+    }
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     Ok(assemble::assemble(
@@ -81,6 +88,9 @@ fn stopped_before_first_evaluation(why: super::lm::Termination, n: usize) -> Err
         why.describe()
     ))
 }
+
+/// The note of a fit stopped before the Jacobian at its best point was evaluated.
+pub const UNCERTAINTIES_NOT_COMPUTED: &str = "the fit was stopped before the Jacobian at its best point was evaluated: the values and the cost are those of that point, and their standard errors, correlations and what the data determines were not computed";
 
 /// Solve from the start, and from the start search's rival valley when there is one
 /// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain

@@ -771,6 +771,26 @@ impl FitProblem<'_> {
         }
         e.residuals
     }
+
+    /// The Jacobian at `x` (solver variables) when the last evaluation was at `x` and left
+    /// it (handed over once); None otherwise.
+    pub fn cached_jacobian(&self, x: &DVector<f64>) -> Option<DMatrix<f64>> {
+        let mut c = self.cache.lock().ok()?;
+        c.as_mut().filter(|c| &c.x == x)?.jac.take()
+    }
+
+    /// The Jacobian at `x`: the cached one ([`Self::cached_jacobian`]), else evaluated —
+    /// unless `stop` is requested: then nothing is evaluated and every entry is NaN (no
+    /// uncertainty can be computed from it).
+    pub fn jacobian_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DMatrix<f64> {
+        if let Some(j) = self.cached_jacobian(x) {
+            return j;
+        }
+        if stop.is_some_and(Stop::is_requested) {
+            return DMatrix::from_element(self.n, self.layout.free().len(), f64::NAN);
+        }
+        self.residuals_and_jacobian(x).1
+    }
 }
 
 impl LeastSquaresProblem for FitProblem<'_> {
@@ -780,14 +800,7 @@ impl LeastSquaresProblem for FitProblem<'_> {
 
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
         // The solver asks once per accepted point: hand the cached matrix over.
-        if let Ok(mut c) = self.cache.lock() {
-            if let Some(cached) = c.as_mut().filter(|c| &c.x == x) {
-                if let Some(j) = cached.jac.take() {
-                    return j;
-                }
-            }
-        }
-        self.residuals_and_jacobian(x).1
+        self.jacobian_until(x, None)
     }
 
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {

@@ -54,13 +54,16 @@ pub(super) fn reduce<'m>(
         solved.notes.push(ROUGH_MODEL_NOTE.to_string());
         return Ok(solved);
     }
-    let (Some(g_median), true) = (id.g_median, id.verdict != Verdict::Full) else {
+    let (Some(g_median), true) = (
+        id.g_median,
+        !matches!(id.verdict, Verdict::Full | Verdict::NotComputed),
+    ) else {
         return Ok(solved);
     };
     let sig = solved.problem.layout.find("sigma")[0];
     let regime = matches!(id.verdict, Verdict::Rough | Verdict::Smooth);
     // After a stop request the first solve's point is the best so far: no refit.
-    let stopped = super::driver::stop_requested(config);
+    let mut stopped = super::driver::stop_requested(config);
     if regime && !stopped && solved.problem.layout.params[sig].fixed.is_none() {
         let mut reduced = solved.problem.layout.clone();
         reduced.params[sig].fixed = Some(solved.run.values[sig]);
@@ -69,11 +72,24 @@ pub(super) fn reduce<'m>(
         let problem_red =
             FitProblem::new(model, reduced, input, config.residual, floor)?.with_loss(config.loss);
         let mut red = run_lm(&problem_red, &p_start, &config.lm);
-        red.add_counts(&solved.run.lm);
-        let conditional = uncertainty_of(&problem_red, &red);
-        solved.unc = marginal_uncertainty(&solved.problem, &red, id.verdict, conditional);
-        solved.run = red;
-        solved.problem = problem_red;
+        let finite = red.lm.cost.is_finite() && red.lm.jacobian.iter().all(|v| v.is_finite());
+        if !finite && super::driver::stop_requested(config) {
+            // Stopped before the refit had a point with its Jacobian: the first solve stays.
+            stopped = true;
+        } else {
+            red.add_counts(&solved.run.lm);
+            let conditional = uncertainty_of(&problem_red, &red);
+            // The full problem's Jacobian at the reduced optimum; after a stop request it
+            // is not evaluated (NaN), and the conditional uncertainty stays.
+            let x = solved.problem.layout.to_x(&red.values);
+            let jac = solved.problem.jacobian_until(&x, config.lm.stop.as_ref());
+            if !jac.iter().all(|v| v.is_finite()) && super::driver::stop_requested(config) {
+                solved.notes.push(MARGINAL_NOT_COMPUTED.to_string());
+            }
+            solved.unc = marginal_uncertainty(&solved.problem, &jac, &red, id.verdict, conditional);
+            solved.run = red;
+            solved.problem = problem_red;
+        }
     }
     solved.notes.push(if stopped && regime {
         format!("the fit was stopped before the reduced refit (median g = {g_median:.3e}): the data determines only a regime's combinations, and σ, T, scale are those of the unreduced fit")
@@ -82,6 +98,10 @@ pub(super) fn reduce<'m>(
     });
     Ok(solved)
 }
+
+/// The note of a reduced refit stopped before the full problem's Jacobian at its optimum
+/// was evaluated.
+const MARGINAL_NOT_COMPUTED: &str = "the fit was stopped before the marginal uncertainty (σ free) of the determined combinations was computed: their standard errors are those with σ held at its estimate, which can be too narrow";
 
 /// The note of a `kbs-rough` fit (σ held by construction, see
 /// [`super::validate::rough_by_construction`]).
@@ -117,7 +137,7 @@ fn ridge_direction(layout: &ParamLayout, verdict: Verdict) -> Vec<f64> {
 
 /// The reduced problem's uncertainty with its covariance replaced by the marginal one of
 /// the determined combinations, σ free: the full problem's covariance at the reduced
-/// optimum (Jacobian with the σ column, pseudo-inverse as everywhere) is mapped along the
+/// optimum (from `jac`, its Jacobian there with the σ column; pseudo-inverse as everywhere) is mapped along the
 /// regime's ridge ([`ridge_direction`]) to σ = its held value, i.e. in log space
 /// y_k = ln p_k − d_k ln σ for each reduced free parameter k, and C_red = B C_full Bᵀ.
 /// Every combination the regime determines is constant along the ridge, so its variance
@@ -126,14 +146,13 @@ fn ridge_direction(layout: &ParamLayout, verdict: Verdict) -> Vec<f64> {
 /// values, rank and null space stay those of the reduced problem.
 fn marginal_uncertainty(
     full: &FitProblem,
+    jac: &DMatrix<f64>,
     red: &Run,
     verdict: Verdict,
     mut conditional: stats::Uncertainty,
 ) -> stats::Uncertainty {
     let layout = &full.layout;
-    let x = layout.to_x(&red.values);
-    let (_, jac) = full.residuals_and_jacobian(&x);
-    let unc = stats::uncertainty(&jac, red.lm.cost, full.len(), RANK_THRESHOLD);
+    let unc = stats::uncertainty(jac, red.lm.cost, full.len(), RANK_THRESHOLD);
     let c_full = log_covariance(layout, &unc, &red.values);
     let free = layout.free();
     let Some(i_sigma) = free.iter().position(|&k| layout.params[k].name == "sigma") else {

@@ -43,16 +43,21 @@ pub enum Verdict {
     Smooth,
     /// Some directions are undetermined and match no known regime.
     Partial,
+    /// Not computed: the fit was stopped before the Jacobian at its best point was
+    /// evaluated, so there are no standard errors, correlations or verdict.
+    #[serde(rename = "not_computed")]
+    NotComputed,
 }
 
 impl Verdict {
-    /// Lower-case name, as in JSON (`full`, `rough`, `smooth`, `partial`).
+    /// Lower-case name, as in JSON (`full`, `rough`, `smooth`, `partial`, `not_computed`).
     pub fn name(self) -> &'static str {
         match self {
             Verdict::Full => "full",
             Verdict::Rough => "rough",
             Verdict::Smooth => "smooth",
             Verdict::Partial => "partial",
+            Verdict::NotComputed => "not_computed",
         }
     }
 
@@ -63,6 +68,7 @@ impl Verdict {
             Verdict::Rough,
             Verdict::Smooth,
             Verdict::Partial,
+            Verdict::NotComputed,
         ]
         .into_iter()
         .find(|v| v.name() == name)

@@ -136,8 +136,8 @@ impl Run {
 }
 
 /// A fit problem whose trial evaluations end within one block of samples once `stop` is
-/// requested, and whose trial points outside `range` are rejected unevaluated (NaN
-/// residuals: a failed step). The first evaluation (the solver's start) is cut as well: a
+/// requested (and whose Jacobian, when not cached, is then not evaluated), and whose trial
+/// points outside `range` are rejected unevaluated (NaN residuals: a failed step). The first evaluation (the solver's start) is cut as well: a
 /// run whose start was cut has no point to report (a non-finite cost; the fit then ends
 /// with [`crate::Error::Stopped`]), never a number from a partial evaluation.
 struct Guarded<'p, 'm> {
@@ -178,7 +178,9 @@ impl LeastSquaresProblem for Guarded<'_, '_> {
     }
 
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
-        self.problem.jacobian(x)
+        // After a stop request a Jacobian not cached is not evaluated (NaN): the solver
+        // has stopped, and the fit reports its point without uncertainties.
+        self.problem.jacobian_until(x, self.stop)
     }
 
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {

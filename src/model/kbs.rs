@@ -217,6 +217,17 @@ impl Model for Kbs {
     }
 
     fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
+        // A forced mode is every sample's: nothing to evaluate (a forced series on rough
+        // data costs a whole evaluation, after a time limit too).
+        let forced = match self.opts.mode {
+            EvalMode::Series => Some(Mode::Series),
+            EvalMode::Smooth => Some(Mode::Smooth),
+            EvalMode::Rough => Some(Mode::Rough),
+            EvalMode::Auto => None,
+        };
+        if let Some(m) = forced {
+            return vec![m; geo.len()];
+        }
         self.batch_ln_q(geo, p[0], p[1])
             .2
             .iter()

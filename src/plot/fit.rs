@@ -37,33 +37,73 @@ pub struct FitPlotInput<'a> {
     pub measured: &'a [f64],
     pub fitted: &'a [f64],
     pub std_residuals: &'a [f64],
+    /// The unit of λ (`nm`, `µm`), shown with the wavelengths; `None` for a bare number.
+    pub wavelength_unit: Option<&'a str>,
+    /// The channels of a joint fit (each with its own parameters); default: one.
+    pub channels: Channels<'a>,
+}
+
+/// The channels of a joint fit: every channel is drawn with its own parameters.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Channels<'a> {
+    /// Per sample, its channel (an index into `params` and `names`); empty: one channel,
+    /// whose parameters are [`FitPlotInput::params`].
+    pub of_sample: &'a [usize],
+    /// Per channel, the model's parameters.
+    pub params: &'a [Vec<f64>],
+    /// Per channel, its name (for the legend when channels share a wavelength).
+    pub names: &'a [String],
+}
+
+impl FitPlotInput<'_> {
+    /// The model parameters of channel `c`.
+    fn params_of(&self, c: usize) -> &[f64] {
+        self.channels
+            .params
+            .get(c)
+            .map_or(self.params, |p| p.as_slice())
+    }
+
+    /// " [channel NAME]" for a joint fit's channel `c`, else "".
+    fn channel_note(&self, c: usize) -> String {
+        match self.channels.names.get(c) {
+            Some(name) if self.channels.names.len() > 1 => format!(" [channel {name}]"),
+            _ => String::new(),
+        }
+    }
 }
 
 /// Tolerance on φr (radians) for a sample to count as in the plane of incidence.
 const PLANE_TOL: f64 = PI / 180.0;
 
-/// Samples sharing an incidence angle (and wavelength).
+/// Samples sharing an incidence angle, wavelength and channel.
 #[derive(Debug, Clone)]
 pub struct Group {
     pub theta_i: f64,
     pub wavelength: f64,
+    /// The joint fit's channel (0 for a single fit).
+    pub channel: usize,
     pub idx: Vec<usize>,
 }
 
-/// Group samples by θi (to 1e-4°) and wavelength (to 1e-9 relative), sorted by θi.
-pub fn groups(geo: &Geometry) -> Vec<Group> {
+/// Group samples by θi (to 1e-4°), wavelength (to 1e-9 relative) and channel (`channel`
+/// per sample; empty: all 0), sorted by θi, λ, channel.
+pub fn groups(geo: &Geometry, channel: &[usize]) -> Vec<Group> {
     let mut out: Vec<Group> = Vec::new();
     for k in 0..geo.len() {
         let (ti, wl) = (geo.theta_i[k], geo.wavelength[k]);
+        let c = channel.get(k).copied().unwrap_or(0);
         let same = |g: &Group| {
             (g.theta_i - ti).abs().to_degrees() < 1e-4
                 && (g.wavelength - wl).abs() <= 1e-9 * wl.abs()
+                && g.channel == c
         };
         match out.iter_mut().find(|g| same(g)) {
             Some(g) => g.idx.push(k),
             None => out.push(Group {
                 theta_i: ti,
                 wavelength: wl,
+                channel: c,
                 idx: vec![k],
             }),
         }
@@ -72,6 +112,7 @@ pub fn groups(geo: &Geometry) -> Vec<Group> {
         a.theta_i
             .total_cmp(&b.theta_i)
             .then(a.wavelength.total_cmp(&b.wavelength))
+            .then(a.channel.cmp(&b.channel))
     });
     out
 }
@@ -149,12 +190,37 @@ fn quantity_desc(q: Quantity) -> &'static str {
     }
 }
 
-fn group_label(g: &Group, multi_wavelength: bool) -> String {
+/// The model's values for group `g` (its channel's parameters, its wavelength) at `samples`.
+fn eval_group(input: &FitPlotInput, g: &Group, samples: &[Sample]) -> Result<Vec<f64>> {
+    eval_at(
+        input.model,
+        input.params_of(g.channel),
+        samples,
+        g.wavelength,
+        input.geo.quantity,
+    )
+}
+
+/// "θi = 30°", with ", λ = 0.532 µm" when the groups' wavelengths differ, or the channel's
+/// name when channels share one.
+fn group_label(g: &Group, multi_wavelength: bool, input: &FitPlotInput) -> String {
     let mut s = format!("θi = {}°", fmt_num(g.theta_i.to_degrees()));
     if multi_wavelength {
-        s.push_str(&format!(", λ = {}", fmt_num(g.wavelength)));
+        s.push_str(&format!(", λ = {}", wavelength_text(g.wavelength, input)));
+    } else if input.channels.names.len() > 1 {
+        if let Some(name) = input.channels.names.get(g.channel) {
+            s.push_str(&format!(", {name}"));
+        }
     }
     s
+}
+
+/// A wavelength with its unit when known ("0.532 µm").
+fn wavelength_text(w: f64, input: &FitPlotInput) -> String {
+    match input.wavelength_unit {
+        Some(u) => format!("{} {u}", fmt_num(w)),
+        None => fmt_num(w),
+    }
 }
 
 /// Validate the slices against the geometry.
@@ -172,6 +238,21 @@ fn check(input: &FitPlotInput) -> Result<()> {
         }
     }
     crate::model::check_param_count(input.model, input.params)?;
+    for p in input.channels.params {
+        crate::model::check_param_count(input.model, p)?;
+    }
+    let channels = input.channels.params.len().max(1);
+    if let Some(c) = input.channels.of_sample.iter().find(|&&c| c >= channels) {
+        return Err(Error::Usage(format!(
+            "fit plots: channel {c} of {channels} channels"
+        )));
+    }
+    if !input.channels.of_sample.is_empty() && input.channels.of_sample.len() != n {
+        return Err(Error::Usage(format!(
+            "fit plots: {} channel indices for {n} samples",
+            input.channels.of_sample.len()
+        )));
+    }
     if n == 0 {
         return Err(Error::Usage("fit plots: no samples".into()));
     }
@@ -181,7 +262,7 @@ fn check(input: &FitPlotInput) -> Result<()> {
 /// The input checked, and its samples grouped by (θi, λ).
 fn checked_groups(input: &FitPlotInput) -> Result<Vec<Group>> {
     check(input)?;
-    Ok(groups(input.geo))
+    Ok(groups(input.geo, input.channels.of_sample))
 }
 
 /// How the groups of a chart are told apart. Up to [`super::PALETTE`] groups: a palette
@@ -242,13 +323,15 @@ pub fn group_styles(gs: &[Group]) -> GroupStyles {
 
 impl GroupStyles {
     /// A group's legend label, or `None` when colour and style name it instead.
-    fn label(&self, g: &Group, multi_wavelength: bool) -> Option<String> {
-        self.key.is_none().then(|| group_label(g, multi_wavelength))
+    fn label(&self, g: &Group, multi_wavelength: bool, input: &FitPlotInput) -> Option<String> {
+        self.key
+            .is_none()
+            .then(|| group_label(g, multi_wavelength, input))
     }
 
     /// The legend lines of the wavelength styles (`lines`: the line style, else the
     /// marker; `what` follows the wavelength: " fitted", " measured", "").
-    fn wavelength_entries(&self, lines: bool, what: &str) -> Vec<Entry> {
+    fn wavelength_entries(&self, lines: bool, what: &str, input: &FitPlotInput) -> Vec<Entry> {
         let grey = RGBColor(60, 60, 60);
         self.wavelengths
             .iter()
@@ -258,7 +341,7 @@ impl GroupStyles {
                 } else {
                     Kind::POINTS[k](4).glyph(grey)
                 },
-                label: format!("λ = {}{what}", fmt_num(w)),
+                label: format!("λ = {}{what}", wavelength_text(w, input)),
             })
             .collect()
     }
@@ -334,7 +417,7 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
         let line = curve.unwrap_or(fit_pts);
         curves.extend(line.iter().map(|p| p.1));
         plot.series.push(Series {
-            label: styles.label(g, multi),
+            label: styles.label(g, multi, input),
             color,
             kind: Kind::LINES[styles.style[c]](2),
             points: line,
@@ -359,9 +442,9 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
         },
     });
     plot.legend_extra
-        .extend(styles.wavelength_entries(true, " fitted"));
+        .extend(styles.wavelength_entries(true, " fitted", input));
     plot.legend_extra
-        .extend(styles.wavelength_entries(false, " measured"));
+        .extend(styles.wavelength_entries(false, " measured", input));
     plot.color_key = styles.key;
     plot.y_range = fit_y_range(&data, &curves, log_y);
     Ok(plot)
@@ -428,7 +511,7 @@ fn dense_plane_curve(
             phi_r: geo.phi_r[k],
         })
         .collect();
-    let here = eval_at(input.model, input.params, &at, g.wavelength, geo.quantity)?;
+    let here = eval_group(input, g, &at)?;
     let scale = idx
         .iter()
         .map(|&k| input.fitted[k].abs())
@@ -441,13 +524,7 @@ fn dense_plane_curve(
         return Ok(None);
     }
     let (xs, samples) = plane_curve_samples(g.theta_i, 361);
-    let ys = eval_at(
-        input.model,
-        input.params,
-        &samples,
-        g.wavelength,
-        geo.quantity,
-    )?;
+    let ys = eval_group(input, g, &samples)?;
     Ok(Some(xs.into_iter().zip(ys).collect()))
 }
 
@@ -490,14 +567,14 @@ pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
             })
             .collect();
         plot.series.push(Series {
-            label: styles.label(g, multi),
+            label: styles.label(g, multi, input),
             color: styles.colors[c],
             kind: Kind::POINTS[styles.style[c]](4),
             points: pts,
         });
     }
     plot.legend_extra
-        .extend(styles.wavelength_entries(false, ""));
+        .extend(styles.wavelength_entries(false, "", input));
     plot.color_key = styles.key;
     plot.hlines = vec![-2.0, 0.0, 2.0];
     plot.fit_y_range();
@@ -599,13 +676,7 @@ pub fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
     let geo = input.geo;
     let g = busiest(&gs);
     let (xs, samples) = plane_curve_samples(g.theta_i, 361);
-    let ys = eval_at(
-        input.model,
-        input.params,
-        &samples,
-        g.wavelength,
-        geo.quantity,
-    )?;
+    let ys = eval_group(input, g, &samples)?;
     let l_max = ys
         .iter()
         .copied()
@@ -624,9 +695,10 @@ pub fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
         .collect();
     Ok(PolarPlot {
         title: format!(
-            "{} — fitted lobe in the plane of incidence, θi = {}°",
+            "{} — fitted lobe in the plane of incidence, θi = {}°{}",
             input.title,
-            fmt_num(g.theta_i.to_degrees())
+            fmt_num(g.theta_i.to_degrees()),
+            input.channel_note(g.channel)
         ),
         subtitle: input.subtitle.clone(),
         theta_i: g.theta_i,
@@ -774,13 +846,7 @@ pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
             samples.push(Sample::from_degrees(g.theta_i.to_degrees(), tr, phi));
         }
     }
-    let z = eval_at(
-        input.model,
-        input.params,
-        &samples,
-        g.wavelength,
-        geo.quantity,
-    )?;
+    let z = eval_group(input, g, &samples)?;
     let grid = Grid { xs, ys, z };
     let (_, hi) = grid.range();
     let hi = if hi.is_finite() { hi } else { 0.0 };
@@ -791,9 +857,10 @@ pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
         .collect();
     Ok(ContourPlot {
         title: format!(
-            "{} — fitted model over (θr, φr), θi = {}°",
+            "{} — fitted model over (θr, φr), θi = {}°{}",
             input.title,
-            fmt_num(g.theta_i.to_degrees())
+            fmt_num(g.theta_i.to_degrees()),
+            input.channel_note(g.channel)
         ),
         subtitle: input.subtitle.clone(),
         x_desc: "θr, view angle from the surface normal (degrees)".into(),
@@ -875,6 +942,7 @@ mod tests {
         let group = |ti: f64, wl: f64| Group {
             theta_i: ti.to_radians(),
             wavelength: wl,
+            channel: 0,
             idx: vec![0],
         };
         let few: Vec<Group> = (0..10).map(|k| group(5.0 * k as f64, 1.0)).collect();
@@ -913,7 +981,7 @@ mod tests {
         .map(|&(a, b, c)| Sample::from_degrees(a, b, c))
         .collect();
         let geo = Geometry::new(&s, &[1.0], Quantity::Radiance).unwrap();
-        let gs = groups(&geo);
+        let gs = groups(&geo, &[]);
         assert_eq!(gs.len(), 2);
         assert_eq!(gs[0].idx, vec![0, 1]);
         let (idx, in_plane) = plane_samples(&geo, &gs[1]);

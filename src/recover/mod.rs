@@ -359,7 +359,7 @@ pub fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
         Verdict::Full => &["sigma", "T", "scale", "T/sigma"],
         Verdict::Rough => &["T/sigma", "amplitude"],
         Verdict::Smooth => &["T", "amplitude"],
-        Verdict::Partial => &["sigma", "T", "scale", "T/sigma", "amplitude"],
+        Verdict::Partial | Verdict::NotComputed => &["sigma", "T", "scale", "T/sigma", "amplitude"],
     };
     for &name in wanted {
         let truth = if name == "amplitude" {

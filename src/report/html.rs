@@ -255,7 +255,11 @@ fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
     for n in &r.notes {
         let _ = writeln!(s, "<li>{}</li>", escape(n));
     }
-    let _ = writeln!(s, "</ul>\n<p>condition number {:.3e}</p>", r.condition);
+    if !r.condition.is_nan() {
+        let _ = writeln!(s, "</ul>\n<p>condition number {:.3e}</p>", r.condition);
+    } else {
+        let _ = writeln!(s, "</ul>");
+    }
     validity(s, r);
 }
 

@@ -57,6 +57,7 @@ pub fn verdict_word(v: Verdict) -> &'static str {
         Verdict::Rough => "rough: T/σ only",
         Verdict::Smooth => "smooth: T only",
         Verdict::Partial => "partial",
+        Verdict::NotComputed => "not computed",
     }
 }
 

@@ -25,6 +25,16 @@ fn value_se(v: f64, se: Option<f64>) -> String {
     }
 }
 
+/// A number in scientific notation with 3 decimals; `inf` for +∞ (a singular problem's
+/// condition), `n/a` for NaN (not computed).
+fn sci(v: f64) -> String {
+    if v.is_nan() {
+        "n/a".into()
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
 /// A number printed with `digits` decimals, without a negative zero (R² of a fit no better
 /// than the mean prints as 0.0000000, not −0.0000000). Non-finite values print as `n/a`.
 pub fn fixed(v: f64, digits: usize) -> String {
@@ -50,6 +60,9 @@ pub fn verdict_text(v: Verdict) -> &'static str {
         Verdict::Rough => "rough regime: only T/sigma and the amplitude are determined",
         Verdict::Smooth => "smooth regime: only T and the amplitude s*sigma^2 are determined",
         Verdict::Partial => "some parameter combinations are not determined",
+        Verdict::NotComputed => {
+            "not computed: the fit was stopped before the Jacobian at its best point was evaluated"
+        }
     }
 }
 
@@ -156,6 +169,8 @@ fn variable_lines(s: &mut String, r: &FitResult, units: &Units) {
             "(fixed)"
         } else if p.determined {
             ""
+        } else if r.verdict == Verdict::NotComputed {
+            "(standard error not computed: stopped)"
         } else {
             "(not determined by the data)"
         };
@@ -179,6 +194,8 @@ fn variable_lines(s: &mut String, r: &FitResult, units: &Units) {
         for d in &r.derived {
             let tag = if d.determined {
                 ""
+            } else if r.verdict == Verdict::NotComputed {
+                "(standard error not computed: stopped) "
             } else {
                 "(not determined by the data) "
             };
@@ -258,7 +275,7 @@ fn interval_lines(s: &mut String, r: &FitResult, info: &RunInfo) {
 /// The `[[Correlations]]` block: the matrix when small, its largest |ρ| pairs otherwise.
 fn correlation_lines(s: &mut String, r: &FitResult) {
     let k = r.corr_names.len();
-    if k <= 1 {
+    if k <= 1 || r.verdict == Verdict::NotComputed {
         return;
     }
     if k > FULL_MATRIX_MAX {
@@ -384,11 +401,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     interval_lines(&mut s, r, info);
     let _ = writeln!(s, "[[Identifiability]]");
     let _ = writeln!(s, "    verdict         = {}", verdict_text(r.verdict));
-    let sv: Vec<String> = r
-        .singular_values
-        .iter()
-        .map(|v| format!("{v:.3e}"))
-        .collect();
+    let sv: Vec<String> = r.singular_values.iter().map(|v| sci(*v)).collect();
     let sv = if sv.len() > FULL_MATRIX_MAX {
         format!(
             "{} … {} ({} values; all in --json)",
@@ -400,7 +413,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         sv.join(", ")
     };
     let _ = writeln!(s, "    singular values = {sv}");
-    let _ = writeln!(s, "    condition       = {:.3e}", r.condition);
+    let _ = writeln!(s, "    condition       = {}", sci(r.condition));
     for note in &r.notes {
         let _ = writeln!(s, "    note: {note}");
     }
