@@ -127,6 +127,9 @@ fn linearised(problem: &FitProblem, basis: &PointBasis, d: &[f64]) -> Option<Vec
     let n = problem.len();
     let k = basis.columns.len() / n.max(1);
     let y = problem.y();
+    if k == 1 {
+        return linearised_one(y, basis, d);
+    }
     let mut normal = Normal::new(k);
     let mut row = vec![0.0; k];
     for i in 0..n {
@@ -141,6 +144,27 @@ fn linearised(problem: &FitProblem, basis: &PointBasis, d: &[f64]) -> Option<Vec
     }
     let (ata, atb) = normal.finish();
     nnls(&ata, &atb)
+}
+
+/// [`linearised`] for one amplitude (the scale of a single-lobe fit, every grid point of a
+/// small KBS fit): the same sums in the same order, without the matrices, and the same
+/// result as [`nnls`] of one unknown.
+fn linearised_one(y: &[f64], basis: &PointBasis, d: &[f64]) -> Option<Vec<f64>> {
+    let (mut ata, mut atb) = (0.0, 0.0);
+    for (((&yi, &rest), &col), &di) in y.iter().zip(&basis.rest).zip(&basis.columns).zip(d) {
+        let b = di * (yi - rest);
+        let r = di * col;
+        if !(b.is_finite() && r.is_finite()) {
+            return None;
+        }
+        atb += r * b;
+        ata += r * r;
+    }
+    if !(ata.is_finite() && atb.is_finite()) {
+        return None;
+    }
+    let x = if ata > 0.0 { atb / ata } else { 0.0 };
+    x.is_finite().then_some(vec![x.max(0.0)])
 }
 
 /// Non-negative least squares from the normal equations (AᵀA, Aᵀb) of a few unknowns, by
@@ -229,13 +253,26 @@ fn exact_cost(
     linear: &[usize],
 ) -> Option<f64> {
     let sw = problem.sqrt_weight();
-    let cost = 0.5
-        * (0..basis.rest.len())
+    let n = basis.rest.len();
+    let sum: f64 = match linear {
+        // One amplitude: the fold of `value_at` written out (the same arithmetic).
+        &[k] => {
+            let pk = p[k];
+            (0..n)
+                .map(|i| {
+                    let r = problem.residual(i, basis.rest[i] + pk * basis.columns[i]) * sw[i];
+                    r * r
+                })
+                .sum()
+        }
+        _ => (0..n)
             .map(|i| {
                 let r = problem.residual(i, value_at(basis, p, linear, i)) * sw[i];
                 r * r
             })
-            .sum::<f64>();
+            .sum(),
+    };
+    let cost = 0.5 * sum;
     cost.is_finite().then_some(cost)
 }
 

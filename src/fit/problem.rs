@@ -725,6 +725,9 @@ impl FitProblem<'_> {
             column[k] = Some((col, self.layout.params[k].transform.dp_dx(x[col])));
         }
         let n_spec = self.model.params().len();
+        if let Some(direct) = self.weighted_in_place(&p, &column, free.len(), stop) {
+            return direct;
+        }
         // Residuals in place of f; the model Jacobian scaled in place by √w ∂r/∂f (the
         // chain factor dp/dx is applied when scattering).
         let mut rw = DVector::zeros(self.n);
@@ -757,6 +760,56 @@ impl FitProblem<'_> {
 }
 
 impl FitProblem<'_> {
+    /// [`Self::weighted_and_jacobian`] for a problem of one block of every sample in order
+    /// whose model parameters are all free, in their layout order (a single-channel fit
+    /// with nothing held: every small fit, and every iteration of its start search): the
+    /// model writes its values and Jacobian straight into the returned vector and matrix
+    /// (whose columns are then the model's), which are scaled in place with the same
+    /// arithmetic as the general path, so the result is the same to the bit. None for any
+    /// other problem. `column[k]` is the solver column and chain factor of parameter k.
+    fn weighted_in_place(
+        &self,
+        p: &[f64],
+        column: &[Option<(usize, f64)>],
+        n_free: usize,
+        stop: Option<&Stop>,
+    ) -> Option<(DVector<f64>, DMatrix<f64>)> {
+        let [b] = &self.blocks[..] else {
+            return None;
+        };
+        let n_spec = self.model.params().len();
+        let identity = b.idx.len() == self.n
+            && b.idx.iter().enumerate().all(|(r, i)| r == i)
+            && n_free == n_spec
+            && (0..n_spec).all(|s| {
+                let k = self.layout.index[b.channel][s];
+                column[k].is_some_and(|(col, _)| col == s)
+            });
+        if !identity || stop.is_some_and(Stop::is_requested) {
+            return None;
+        }
+        let m = self.n;
+        let mp = self.layout.model_params(p, b.channel);
+        let mut f = DVector::zeros(m);
+        let mut jac = DMatrix::zeros(m, n_spec);
+        self.model
+            .eval(&b.geo, &mp, f.as_mut_slice(), Some(jac.as_mut_slice()));
+        for r in 0..m {
+            let d = self.sqrt_w[r] * self.dr_df(r, f[r]);
+            for s in 0..n_spec {
+                jac[(r, s)] *= d;
+            }
+            f[r] = self.sqrt_w[r] * self.residual(r, f[r]);
+        }
+        for s in 0..n_spec {
+            let (_, chain) = column[self.layout.index[b.channel][s]].expect("every parameter free");
+            for v in jac.column_mut(s).iter_mut() {
+                *v *= chain;
+            }
+        }
+        Some((f, jac))
+    }
+
     /// Weighted residuals at solver variables `x` (the Jacobian is kept for the solver's
     /// next request at `x`), cut short once `stop` is requested: then some rows are NaN and
     /// the solver rejects the point.

@@ -145,6 +145,7 @@ pub(super) fn starting_point(
         )?),
         None => None,
     };
+    let bar = search_bar(config.lm.progress);
     let sub = input.subset(&init::subsample(input.geo.len(), init::REFINE_SAMPLES));
     let exact = FitProblem::new(
         refine_model.as_ref(),
@@ -183,7 +184,18 @@ pub(super) fn starting_point(
     // After a stop request nothing is refined (the fit's first evaluation on the whole data
     // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
-        let refined = refine_candidates(&refiners, &candidates, &coarse, &inside);
+        bar.set_length(candidates.len() as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{spinner} start search {elapsed} {msg}: {pos}/{len} done",
+        ) {
+            bar.set_style(style);
+        }
+        bar.set_message(format!(
+            "refining {} candidates on {} samples",
+            candidates.len(),
+            refiners.sub.y.len()
+        ));
+        let refined = refine_candidates(&refiners, &candidates, &coarse, &inside, &bar);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
         let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol);
         if let Some((values, start)) = chosen.start {
@@ -193,6 +205,7 @@ pub(super) fn starting_point(
         alternatives = chosen.alternatives;
         rival = chosen.rival;
     }
+    bar.finish_and_clear();
     Ok(Start {
         p0,
         grid_start,
@@ -216,10 +229,12 @@ fn refine_candidates(
     candidates: &[(f64, Vec<f64>)],
     coarse: &LmConfig,
     inside: &(dyn Fn(&[f64]) -> bool + Sync),
+    bar: &indicatif::ProgressBar,
 ) -> Vec<(f64, Vec<f64>)> {
     candidates
         .par_iter()
         .map(|(_, start)| {
+            let _done = Done(bar);
             if stopped(coarse.stop.as_ref()) {
                 return (f64::INFINITY, start.clone());
             }
@@ -241,6 +256,34 @@ fn refine_candidates(
             (if usable { cost } else { f64::INFINITY }, values)
         })
         .collect()
+}
+
+/// The start search's line on standard error while it runs (`show`: the fit's progress
+/// display, on a terminal and without `--quiet`): the grid, then the candidates refined of
+/// how many. Hidden otherwise (and indicatif draws nothing when standard error is not a
+/// terminal).
+fn search_bar(show: bool) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} start search {elapsed} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.set_message("grid of starting values");
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
+}
+
+/// Counts one refined candidate on the start search's line when dropped (also when the
+/// refinement returns early).
+struct Done<'b>(&'b indicatif::ProgressBar);
+
+impl Drop for Done<'_> {
+    fn drop(&mut self) {
+        self.0.inc(1);
+    }
 }
 
 /// What the refined candidates give the full fit: its start (refined values, the grid
