@@ -506,6 +506,38 @@ fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
         svg.contains("2 measured beyond the rim (up to 12.5× L_max)"),
         "legend"
     );
+    // The arrow on the 60° spoke stays clear of the spoke's label (they touched): every
+    // vertex of the arrows more than the label's half-diagonal (~15 px) from its centre.
+    let label = svg
+        .split("<text")
+        .find(|t| t.contains(">\n60°\n</text>") || t.contains(">60°</text>"))
+        .expect("the 60° label");
+    let attr = |name: &str| -> f64 {
+        let v = label.split(&format!(" {name}=\"")).nth(1).unwrap();
+        v[..v.find('"').unwrap()].parse().unwrap()
+    };
+    let (lx, ly) = (attr("x"), attr("y"));
+    let red = svg
+        .lines()
+        .filter(|l| l.starts_with("<polyline") && l.contains("stroke=\"#D62728\""));
+    let mut vertices = 0;
+    for line in red {
+        let pts = line.split("points=\"").nth(1).unwrap();
+        for p in pts[..pts.find('"').unwrap()].split_whitespace() {
+            let (x, y) = p.split_once(',').unwrap();
+            let (x, y): (f64, f64) = (x.parse().unwrap(), y.parse().unwrap());
+            let d = ((x - lx).powi(2) + (y - ly).powi(2)).sqrt();
+            assert!(
+                d > 17.0,
+                "arrow vertex ({x}, {y}) {d:.1} px from the 60° label"
+            );
+            vertices += 1;
+        }
+    }
+    assert!(
+        vertices >= 10,
+        "two arrows of five vertices (and the legend's): {vertices}"
+    );
     // Nothing beyond the rim: no such legend entry.
     let inside = PolarPlot {
         measured: vec![(10.0, 0.5)],

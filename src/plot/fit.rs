@@ -617,6 +617,12 @@ pub struct PolarPlot {
 /// The radius (in L / L_max) of the polar plot's rim: values beyond it are drawn there as
 /// arrows pointing outwards, counted in the legend.
 pub const POLAR_RIM: f64 = 1.15;
+/// The radius of the spoke labels (0°, ±30°, …): just outside the L_max ring, inside the
+/// arrows at the rim (the 60° label touched them).
+const POLAR_LABEL_R: f64 = 1.035;
+/// The length (pixels) of the rim arrows: with about 340 px per unit of L / L_max they
+/// reach in to r ≈ 1.09, clear of the spoke labels.
+const POLAR_ARROW_PX: f64 = 20.0;
 
 const POLAR_SOURCE: RGBColor = RGBColor(200, 120, 0);
 const POLAR_MIRROR: RGBColor = RGBColor(120, 120, 120);
@@ -790,7 +796,7 @@ impl Picture for PolarPlot {
                     let a = t.to_radians();
                     EmptyElement::at(polar_xy(t, POLAR_RIM))
                         + PathElement::new(
-                            super::marks::arrow((a.sin(), -a.cos()), 30.0, 9.0),
+                            super::marks::arrow((a.sin(), -a.cos()), POLAR_ARROW_PX, 8.0),
                             red.stroke_width(2),
                         )
                 }),
@@ -815,7 +821,7 @@ impl PolarPlot {
             let spoke = [(0.0, 0.0), polar_xy(d as f64, 1.0)];
             draw_data_polyline(chart.plotting_area(), &map, &spoke, grey)?;
             if d % 30 == 0 {
-                let p = polar_xy(d as f64, 1.08);
+                let p = polar_xy(d as f64, POLAR_LABEL_R);
                 chart.draw_series(std::iter::once(Text::new(
                     format!("{d}°"),
                     p,
