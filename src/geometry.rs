@@ -190,15 +190,8 @@ pub struct Geometry {
     /// h = |v|²/(2k²) = 1 + cos θi cos θr − sin θi sin θr cos φr, computed without
     /// cancellation (≥ 0).
     pub h: Column,
-    /// v_x/k = sin θi − sin θr cos φr.
-    pub vx: Column,
-    /// v_y/k = −sin θr sin φr.
-    pub vy: Column,
     /// v_xy²/k², computed without cancellation near the mirror direction.
     pub vxy2: Column,
-    /// Factor that turns a radiance into the measured quantity: 1 for radiance, 1/cos θi
-    /// for a BRDF.
-    pub out_factor: Column,
     pub quantity: Quantity,
 }
 
@@ -212,10 +205,7 @@ struct Columns {
     wavelength: Vec<f64>,
     c: Vec<f64>,
     h: Vec<f64>,
-    vx: Vec<f64>,
-    vy: Vec<f64>,
     vxy2: Vec<f64>,
-    out_factor: Vec<f64>,
 }
 
 impl Columns {
@@ -230,10 +220,7 @@ impl Columns {
             wavelength: v(),
             c: v(),
             h: v(),
-            vx: v(),
-            vy: v(),
             vxy2: v(),
-            out_factor: v(),
         }
     }
 }
@@ -276,7 +263,6 @@ impl Geometry {
             let phi = wrap_phi(s.phi_r);
             let (sin_i, cos_i) = s.theta_i.sin_cos();
             let (sin_r, cos_r) = s.theta_r.sin_cos();
-            let (sin_p, cos_p) = phi.sin_cos();
             let half_sin2 = (0.5 * phi).sin().powi(2);
             let half_sum_cos = (0.5 * (s.theta_i + s.theta_r)).cos();
             g.theta_i.push(s.theta_i);
@@ -292,15 +278,9 @@ impl Geometry {
             g.c.push(cos_i + cos_r);
             // 1 + cos(θi+θr) + 2 sinθi sinθr sin²(φ/2), both terms ≥ 0.
             g.h.push(2.0 * half_sum_cos * half_sum_cos + 2.0 * sin_i * sin_r * half_sin2);
-            g.vx.push(sin_i - sin_r * cos_p);
-            g.vy.push(-sin_r * sin_p);
             // (sinθi − sinθr)² + 4 sinθi sinθr sin²(φ/2): exact zero at the mirror.
             g.vxy2
                 .push((sin_i - sin_r).powi(2) + 4.0 * sin_i * sin_r * half_sin2);
-            g.out_factor.push(match quantity {
-                Quantity::Radiance => 1.0,
-                Quantity::Brdf => 1.0 / cos_i,
-            });
         }
         Ok(Geometry {
             theta_i: g.theta_i.into(),
@@ -311,10 +291,7 @@ impl Geometry {
             wavelength: g.wavelength.into(),
             c: g.c.into(),
             h: g.h.into(),
-            vx: g.vx.into(),
-            vy: g.vy.into(),
             vxy2: g.vxy2.into(),
-            out_factor: g.out_factor.into(),
             quantity,
         })
     }
@@ -327,6 +304,26 @@ impl Geometry {
     /// Whether the batch is empty.
     pub fn is_empty(&self) -> bool {
         self.theta_i.is_empty()
+    }
+
+    /// (v_x/k, v_y/k) = (sin θi − sin θr cos φr, −sin θr sin φr) of sample i: only the
+    /// coherent (patch) term needs them, so they are computed when asked, not stored.
+    #[inline]
+    pub fn v_xy(&self, i: usize) -> (f64, f64) {
+        let sin_i = self.theta_i[i].sin();
+        let sin_r = self.theta_r[i].sin();
+        let (sin_p, cos_p) = self.phi_r[i].sin_cos();
+        (sin_i - sin_r * cos_p, -sin_r * sin_p)
+    }
+
+    /// The factor that turns a radiance into the measured quantity at sample i: 1 for a
+    /// radiance, 1/cos θi for a BRDF.
+    #[inline]
+    pub fn out_factor(&self, i: usize) -> f64 {
+        match self.quantity {
+            Quantity::Radiance => 1.0,
+            Quantity::Brdf => 1.0 / self.cos_i[i],
+        }
     }
 
     /// g = (2πσ/λ)² (cos θi + cos θr)² of sample i (eq. 36).
@@ -353,10 +350,7 @@ impl Geometry {
             wavelength: s(&self.wavelength),
             c: s(&self.c),
             h: s(&self.h),
-            vx: s(&self.vx),
-            vy: s(&self.vy),
             vxy2: s(&self.vxy2),
-            out_factor: s(&self.out_factor),
             quantity: self.quantity,
         }
     }
@@ -379,10 +373,7 @@ impl Geometry {
             wavelength: pick(&self.wavelength),
             c: pick(&self.c),
             h: pick(&self.h),
-            vx: pick(&self.vx),
-            vy: pick(&self.vy),
             vxy2: pick(&self.vxy2),
-            out_factor: pick(&self.out_factor),
             quantity: self.quantity,
         }
     }
@@ -424,7 +415,8 @@ mod tests {
             let (sr, cr) = s.theta_r.sin_cos();
             let h = 1.0 + ci * cr - si * sr * s.phi_r.cos();
             assert!((g.h[i] - h).abs() < 1e-14);
-            let vxy2 = g.vx[i].powi(2) + g.vy[i].powi(2);
+            let (vx, vy) = g.v_xy(i);
+            let vxy2 = vx.powi(2) + vy.powi(2);
             assert!((g.vxy2[i] - vxy2).abs() < 1e-14);
         }
         assert_eq!(g.vxy2[1], 0.0, "exact zero at the mirror");
@@ -448,6 +440,6 @@ mod tests {
         assert_eq!(*copied.vxy2, [g.vxy2[4], g.vxy2[2]]);
         assert_eq!(part.slice(1..3).theta_i[1], g.theta_i[4]);
         let direct = Geometry::new(&samples[2..5], &[0.5], Quantity::Brdf).unwrap();
-        assert!(part.c == direct.c && part.out_factor == direct.out_factor);
+        assert!(part.c == direct.c && (0..3).all(|i| part.out_factor(i) == direct.out_factor(i)));
     }
 }

@@ -45,7 +45,7 @@ impl Key {
     /// indices `channel`; [`Key::push`] adds what else the grid's points depend on (given
     /// values, parameter indices, model options).
     pub fn new(model_name: &str, geo: &Geometry, channel: &[usize], axes: &[Vec<f64>]) -> Self {
-        let mut k: Vec<u64> = Vec::with_capacity(16 + 12 * geo.len());
+        let mut k: Vec<u64> = Vec::with_capacity(16 + 9 * geo.len());
         k.extend(model_name.bytes().map(u64::from));
         k.push(u64::MAX);
         k.push(geo.quantity as u64);
@@ -58,10 +58,7 @@ impl Key {
             &geo.wavelength,
             &geo.c,
             &geo.h,
-            &geo.vx,
-            &geo.vy,
             &geo.vxy2,
-            &geo.out_factor,
         ] {
             k.push(col.len() as u64);
             k.extend(col.iter().map(|v| v.to_bits()));

@@ -147,7 +147,8 @@ impl Kbs {
         let d_corr = inc * (2.0 + 2.0 * a * q.d_a) / corr;
         if let Some((x, y)) = self.opts.patch {
             let k = 2.0 * PI / lambda;
-            let rho0 = sinc(k * geo.vx[i] * x) * sinc(k * geo.vy[i] * y);
+            let (vx, vy) = geo.v_xy(i);
+            let rho0 = sinc(k * vx * x) * sinc(k * vy * y);
             let coh_unit = geo.cos_i[i].powi(2) * (-g).exp() * rho0 * rho0;
             let coh = s * coh_unit;
             value += coh;

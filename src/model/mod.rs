@@ -139,8 +139,8 @@ pub trait Model: Send + Sync {
                 self.radiance(geo, p, out, Some(&mut *j));
                 if geo.quantity != crate::geometry::Quantity::Radiance {
                     for col in j.chunks_mut(n.max(1)) {
-                        for (v, f) in col.iter_mut().zip(&geo.out_factor) {
-                            *v *= f;
+                        for (i, v) in col.iter_mut().enumerate() {
+                            *v *= geo.out_factor(i);
                         }
                     }
                 }
@@ -148,8 +148,8 @@ pub trait Model: Send + Sync {
             None => self.radiance(geo, p, out, None),
         }
         if geo.quantity != crate::geometry::Quantity::Radiance {
-            for (v, f) in out.iter_mut().zip(&geo.out_factor) {
-                *v *= f;
+            for (i, v) in out.iter_mut().enumerate() {
+                *v *= geo.out_factor(i);
             }
         }
     }
