@@ -636,6 +636,15 @@ fn ptfe_pictures_have_log_ticks_and_a_colour_bar() {
     assert!(!log.iter().any(|t| t.starts_with("θi = ")), "{log:?}");
     let res = svg_texts(&pics["residuals_theta"]);
     assert!(res.iter().any(|t| t == "colour: θi (degrees)"));
+    // The residual sign, as the code, the residuals CSV and docs/conventions.md use it.
+    assert!(res
+        .iter()
+        .any(|t| t == "standardized residual (fitted − measured) / u"));
+    let conventions =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/conventions.md"))
+            .unwrap();
+    assert!(conventions.contains("Residual r = **fitted − measured**"));
+    assert!(conventions.contains("**φr = 0 is the forward side**"));
 }
 
 #[test]
