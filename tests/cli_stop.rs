@@ -288,6 +288,48 @@ fn timeout_bounds_a_slow_series_fit_with_its_intervals() {
     assert!(wall < 20.0, "took {wall:.2} s with --timeout 2");
 }
 
+#[test]
+fn a_time_limit_in_the_profile_intervals_ends_them_and_exits_3() {
+    // 300,000 samples: reading and the fit take about 1 s, the profile intervals (dozens of
+    // refits of the whole data) 2.5 s more, so a 2 s limit falls in the intervals here. The
+    // walks end within one block's evaluation (they overshot the limit by 13 s when their
+    // evaluations ignored the stop) and the run exits 3: it did not do all it was asked
+    // (it exited 0 with the intervals missing). On a slower machine the limit may fall in
+    // the fit, on a much faster one after the intervals: those outcomes are checked too.
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let csv = synth_file(
+        "interval_stop",
+        "hemi.csv",
+        "sigma=0.25,T=2.5,scale=1",
+        "10x100x300",
+    );
+    let t0 = Instant::now();
+    let out = goniofit()
+        .args(["fit", "--model", "kbs", "--timeout", "2", "--json"])
+        .arg(&csv)
+        .output()
+        .expect("run goniofit");
+    let wall = t0.elapsed().as_secs_f64();
+    assert!(wall < 12.0, "took {wall:.2} s with --timeout 2");
+    let err = String::from_utf8_lossy(&out.stderr);
+    if out.stdout.is_empty() {
+        assert_nothing_fitted(&out, "time limit reached");
+        return;
+    }
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON report");
+    let cut = v["notes"]
+        .to_string()
+        .contains("profile-likelihood intervals not computed: the fit was stopped");
+    let interval = &v["params"]["sigma"]["interval95"];
+    if v["converged"] == true && !cut {
+        assert!(interval.is_array(), "{v}");
+        assert_eq!(out.status.code(), Some(0), "{err}");
+    } else {
+        assert!(interval.is_null(), "{v}");
+        assert_eq!(out.status.code(), Some(3), "{err}");
+    }
+}
+
 #[cfg(unix)]
 #[test]
 fn sigint_while_eval_writes_leaves_no_temporary() {
@@ -458,6 +500,16 @@ fn timeout_in_a_big_fit_reports_the_point_without_uncertainties_it_did_not_compu
         return;
     }
     assert_eq!(out.status.code(), Some(3), "{err}");
+    if v["converged"] == true {
+        // Converged within the limit, which then fell in the profile intervals: exit 3
+        // with the intervals left out and said so.
+        let notes = v["notes"].to_string();
+        assert!(
+            notes.contains("profile-likelihood intervals not computed"),
+            "{notes}"
+        );
+        return;
+    }
     assert_eq!(v["termination"], "timeout");
     assert!(v["cost"].as_f64().is_some_and(f64::is_finite));
     assert!(v["r2"].as_f64().is_some_and(f64::is_finite));

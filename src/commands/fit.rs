@@ -378,7 +378,12 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // run was interrupted: every output is complete, and the exit code is 3.
     let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
     Ok(
-        if outcomes.iter().all(|o| o.result.converged()) && !interrupted && skipped.is_empty() {
+        if outcomes
+            .iter()
+            .all(|o| o.result.converged() && !o.intervals_stopped)
+            && !interrupted
+            && skipped.is_empty()
+        {
             0
         } else {
             3

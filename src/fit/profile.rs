@@ -30,7 +30,7 @@
 //! profile quadratic near the end puts it within 0.1 % of its distance from the estimate;
 //! each refit runs to a relative cost change that keeps the error of Δχ² a tenth of that.
 
-use super::lm::{self, LeastSquaresProblem, LmConfig};
+use super::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 use super::problem::{FitProblem, Transform};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
@@ -175,6 +175,9 @@ struct Restricted<'a, 'p> {
     t: f64,
     transforms: Vec<Transform>,
     cache: Mutex<Option<(DVector<f64>, DMatrix<f64>)>>,
+    /// The fit's stop (signals, time limit): an evaluation it cuts short is NaN, which the
+    /// refit rejects, so a stop ends the walk within one block's evaluation.
+    stop: Option<Stop>,
 }
 
 /// d ln p / dx for a transform at x (None where p = 0).
@@ -228,7 +231,8 @@ impl Restricted<'_, '_> {
         };
         // ∂r/∂z_j = ∂r/∂x_j + ∂r/∂x_held · ∂x_held/∂z_j, formed in J_x's own storage (no
         // second m × n matrix for a big fit), then the held column removed.
-        let (r, mut jx) = self.base.residuals_and_jacobian(&x);
+        let e = self.base.evaluate(&x, self.stop.as_ref());
+        let (r, mut jx) = (e.residuals, e.jacobian);
         let held = jx.column(self.held).into_owned();
         for (i, &gi) in grad.iter().enumerate() {
             if i != self.held && gi != 0.0 {
@@ -354,6 +358,7 @@ impl<'a, 'p> Profiler<'a, 'p> {
             t,
             transforms,
             cache: Mutex::new(None),
+            stop: self.lm.stop.clone(),
         })
     }
 

@@ -102,6 +102,9 @@ pub struct Outcome {
     pub intervals: Vec<super::profile::Interval>,
     /// Wall-clock seconds the intervals took (0 when not computed).
     pub interval_seconds: f64,
+    /// Whether a stop (signal or time limit) cut the intervals' walks short, so that none
+    /// is reported: the run did not do all it was asked (exit 3).
+    pub intervals_stopped: bool,
 }
 
 /// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
@@ -311,7 +314,8 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
     } else {
         Vec::new()
     };
-    if wanted && result.converged() && stop.is_requested() {
+    let intervals_stopped = wanted && result.converged() && stop.is_requested();
+    if intervals_stopped {
         // A profile walk cut short ends at a wrong likelihood: none is shown.
         intervals.clear();
         result.notes.push(
@@ -329,6 +333,7 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         result,
         intervals,
         interval_seconds,
+        intervals_stopped,
     })
 }
 
