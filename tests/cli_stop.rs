@@ -15,6 +15,13 @@ fn goniofit() -> Command {
     Command::new(env!("CARGO_BIN_EXE_goniofit"))
 }
 
+/// Run `cmd` to its end: its output and the wall seconds it took.
+fn run_timed(cmd: &mut Command) -> (std::process::Output, f64) {
+    let t0 = Instant::now();
+    let out = cmd.output().expect("run goniofit");
+    (out, t0.elapsed().as_secs_f64())
+}
+
 fn joint_fit_args() -> Vec<&'static str> {
     vec![
         "fit",
@@ -36,13 +43,7 @@ fn joint_fit_args() -> Vec<&'static str> {
 /// nothing was fitted (never a number from a partial evaluation): (wall seconds, the
 /// report if there is one).
 fn timed_out_fit(args: &[std::ffi::OsString]) -> (f64, Option<serde_json::Value>) {
-    let t0 = Instant::now();
-    let out = goniofit()
-        .args(args)
-        .arg("--json")
-        .output()
-        .expect("run goniofit");
-    let wall = t0.elapsed().as_secs_f64();
+    let (out, wall) = run_timed(goniofit().args(args).arg("--json"));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{err}");
     if out.stdout.is_empty() {
@@ -102,9 +103,7 @@ fn timeout_ends_a_by_group_batch_with_the_groups_it_has() {
         "--json",
         GARNET,
     ];
-    let t0 = Instant::now();
-    let out = goniofit().args(args).output().expect("run goniofit");
-    let wall = t0.elapsed().as_secs_f64();
+    let (out, wall) = run_timed(goniofit().args(args));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
@@ -303,13 +302,11 @@ fn a_time_limit_in_the_profile_intervals_ends_them_and_exits_3() {
         "sigma=0.25,T=2.5,scale=1",
         "10x100x300",
     );
-    let t0 = Instant::now();
-    let out = goniofit()
-        .args(["fit", "--model", "kbs", "--timeout", "2", "--json"])
-        .arg(&csv)
-        .output()
-        .expect("run goniofit");
-    let wall = t0.elapsed().as_secs_f64();
+    let (out, wall) = run_timed(
+        goniofit()
+            .args(["fit", "--model", "kbs", "--timeout", "2", "--json"])
+            .arg(&csv),
+    );
     assert!(wall < 12.0, "took {wall:.2} s with --timeout 2");
     let err = String::from_utf8_lossy(&out.stderr);
     if out.stdout.is_empty() {
@@ -444,16 +441,14 @@ fn timeout_in_the_first_evaluation_leaves_nothing_fitted() {
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
     let csv = rough_file("first_evaluation");
     let dir = csv.parent().unwrap().to_path_buf();
-    let t0 = Instant::now();
-    let out = goniofit()
-        .args(["fit", "--model", "kbs", "--mode", "series"])
-        .args(["--init", "sigma=25,T=160,scale=1", "--timeout", "0.3"])
-        .arg("--residuals")
-        .arg(dir.join("residuals.csv"))
-        .arg(&csv)
-        .output()
-        .expect("run goniofit");
-    let wall = t0.elapsed().as_secs_f64();
+    let (out, wall) = run_timed(
+        goniofit()
+            .args(["fit", "--model", "kbs", "--mode", "series"])
+            .args(["--init", "sigma=25,T=160,scale=1", "--timeout", "0.3"])
+            .arg("--residuals")
+            .arg(dir.join("residuals.csv"))
+            .arg(&csv),
+    );
     assert_nothing_fitted(&out, "time limit reached");
     assert!(String::from_utf8_lossy(&out.stderr).contains("(18000 samples)"));
     assert_eq!(files_in(&dir), ["rough.csv", "rough.truth.json"]);
@@ -478,14 +473,12 @@ fn timeout_in_a_big_fit_reports_the_point_without_uncertainties_it_did_not_compu
         "sigma=0.4,T=3,scale=1",
         "20x100x200",
     );
-    let t0 = Instant::now();
-    let out = goniofit()
-        .args(["fit", "--model", "kbs", "--init", "sigma=2,T=5,scale=10"])
-        .args(["--timeout", "2", "--json"])
-        .arg(&csv)
-        .output()
-        .expect("run goniofit");
-    let wall = t0.elapsed().as_secs_f64();
+    let (out, wall) = run_timed(
+        goniofit()
+            .args(["fit", "--model", "kbs", "--init", "sigma=2,T=5,scale=10"])
+            .args(["--timeout", "2", "--json"])
+            .arg(&csv),
+    );
     let err = String::from_utf8_lossy(&out.stderr);
     if out.stdout.is_empty() {
         assert_nothing_fitted(&out, "time limit reached");
@@ -572,12 +565,8 @@ fn a_stop_while_reading_ends_the_fit_with_nothing_fitted() {
         );
         assert!(wall < 5.0, "took {wall:.2} s");
     };
-    let t0 = Instant::now();
-    let out = fit()
-        .args(["--timeout", "0.3"])
-        .output()
-        .expect("run goniofit");
-    check(&out, "time limit reached", t0.elapsed().as_secs_f64());
+    let (out, wall) = run_timed(fit().args(["--timeout", "0.3"]));
+    check(&out, "time limit reached", wall);
     let child = fit()
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

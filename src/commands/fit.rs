@@ -1,10 +1,11 @@
 //! `goniofit fit`: a measurement file in, a fit report out.
 
 use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
+use super::plot::{plot_fit, plot_status};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
-use goniofit::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
+use goniofit::fit::driver::{FitConfig, FitInput, FitResult};
 use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
@@ -603,16 +604,7 @@ fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyhow::
         write_html(args, path, o, info)?;
     }
     if let Some(dir) = &args.plot {
-        let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
-        let status = plot_status(&report::json::to_json(&o.result, info));
-        let written = plot_fit(
-            dir,
-            &config,
-            &o.input,
-            (&o.result.layout, &o.result.values),
-            &status,
-            wavelength_unit(args, &o.dataset).as_deref(),
-        )?;
+        let written = draw_pictures(args, dir, o, info)?;
         eprintln!(
             "goniofit: wrote {} pictures to {}",
             written.len(),
@@ -620,6 +612,26 @@ fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyhow::
         );
     }
     Ok(())
+}
+
+/// Draw the pictures of one outcome into `dir` (PNG and SVG; see [`plot_fit`]), with the
+/// status line of its report; returns the files written.
+fn draw_pictures(
+    args: &FitArgs,
+    dir: &Path,
+    o: &Outcome,
+    info: &RunInfo,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+    let status = plot_status(&report::json::to_json(&o.result, info));
+    plot_fit(
+        dir,
+        &config,
+        &o.input,
+        (&o.result.layout, &o.result.values),
+        &status,
+        wavelength_unit(args, &o.dataset).as_deref(),
+    )
 }
 
 /// A bar of bytes read from `file` on standard error (hidden unless `show`).
@@ -642,17 +654,8 @@ const READING_BAR_BYTES: u64 = 4 << 20;
 /// Write the HTML page of one outcome: its pictures drawn into a temporary folder and
 /// inlined as SVG.
 fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
-    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
     let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
-    let status = plot_status(&report::json::to_json(&o.result, info));
-    let written = plot_fit(
-        dir.path(),
-        &config,
-        &o.input,
-        (&o.result.layout, &o.result.values),
-        &status,
-        wavelength_unit(args, &o.dataset).as_deref(),
-    )?;
+    let written = draw_pictures(args, dir.path(), o, info)?;
     let mut pictures = Vec::new();
     for p in written
         .iter()
@@ -724,138 +727,6 @@ fn replay_args() -> Vec<String> {
         .skip(1)
         .map(|a| a.to_string_lossy().into_owned())
         .collect()
-}
-
-/// The pictures' second title line, from the fit's JSON report (so that `goniofit plot`
-/// says the same as `fit --plot`): T/σ with its standard error, the parameters the data
-/// does not determine, and whether the fit converged (or why not).
-pub fn plot_status(json: &serde_json::Value) -> String {
-    use goniofit::plot::fmt_num;
-    let mut parts = Vec::new();
-    if let Some(d) = json["derived"].get("T/sigma") {
-        if let Some(v) = d["value"].as_f64() {
-            parts.push(match d["stderr"].as_f64().filter(|e| e.is_finite()) {
-                Some(e) => format!("T/σ = {} ± {}", fmt_num(v), fmt_num(e)),
-                None => format!("T/σ = {}", fmt_num(v)),
-            });
-        }
-    }
-    let mut undetermined: Vec<String> = json["params"]
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .filter(|(_, p)| p["determined"] == false && p["fixed"] != true)
-                .map(|(k, _)| k.replace("sigma", "σ"))
-                .collect()
-        })
-        .unwrap_or_default();
-    // σ and T first, as in the report.
-    undetermined.sort_by_key(|k| (k != "σ", k != "T", k.clone()));
-    // The text report's words for a verdict that leaves something undetermined (σ drawn
-    // as the glyph the pictures can show).
-    let verdict = json["verdict"].as_str().and_then(Verdict::from_name);
-    if let Some(v) = verdict.filter(|v| *v != Verdict::Full) {
-        parts.push(report::text::verdict_text(v).replace("sigma", "σ"));
-    }
-    if !undetermined.is_empty() {
-        parts.push(format!("not determined: {}", undetermined.join(", ")));
-    }
-    let termination = json["termination"].as_str().unwrap_or("?");
-    parts.push(if json["converged"] == true {
-        format!("converged ({termination})")
-    } else if termination == "degenerate" {
-        "degenerate: not a usable optimum (see the report's notes)".to_string()
-    } else {
-        format!("not converged ({termination}): the best point so far")
-    });
-    parts.join("; ")
-}
-
-/// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`), with `status`
-/// (see [`plot_status`]) under their titles and λ in `unit`. A joint fit draws every
-/// channel with its own parameters (the polar and contour maps: the busiest θi's channel,
-/// named in their titles).
-pub fn plot_fit(
-    dir: &Path,
-    config: &FitConfig,
-    input: &FitInput,
-    (layout, values): (&goniofit::fit::problem::ParamLayout, &[f64]),
-    status: &str,
-    unit: Option<&str>,
-) -> anyhow::Result<Vec<PathBuf>> {
-    use goniofit::fit::problem::FitProblem;
-    let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
-    let floor = driver::residual_floor(config, &input.y);
-    let problem = FitProblem::new(
-        model.as_ref(),
-        layout.clone(),
-        input,
-        config.residual,
-        floor,
-    )?;
-    let (fitted, _) = problem.model_values(values, false);
-    let residuals = problem.raw_residuals(&fitted);
-    let std_residuals = driver::standardized_residuals(
-        &residuals,
-        problem.sqrt_weight(),
-        layout.free().len(),
-        config.weights_are_uncertainties,
-    );
-    let n_channels = layout.index.len().max(1);
-    let params: Vec<Vec<f64>> = (0..n_channels)
-        .map(|c| layout.model_params(values, c))
-        .collect();
-    let joint = n_channels > 1;
-    let plot_input = goniofit::plot::fit::FitPlotInput {
-        title: plot_title(model.as_ref(), layout, &params[0]),
-        subtitle: status.to_string(),
-        model: model.as_ref(),
-        params: &params[0],
-        geo: &input.geo,
-        measured: &input.y,
-        fitted: &fitted,
-        std_residuals: &std_residuals,
-        wavelength_unit: unit,
-        channels: goniofit::plot::fit::Channels {
-            of_sample: if joint { &input.channel } else { &[] },
-            params: if joint { &params } else { &[] },
-            names: &layout.channel_names,
-        },
-    };
-    Ok(goniofit::plot::fit::write_fit_plots(dir, &plot_input)?)
-}
-
-/// "kbs: sigma=… T=… scale=…"; for a joint fit only the shared parameters, and which are
-/// per channel.
-fn plot_title(
-    model: &dyn goniofit::model::Model,
-    layout: &goniofit::fit::problem::ParamLayout,
-    params: &[f64],
-) -> String {
-    let n_channels = layout.index.len();
-    let per_channel = |j: usize| {
-        n_channels > 1
-            && layout
-                .params
-                .iter()
-                .any(|p| p.spec == j && p.channel.is_some())
-    };
-    let mut title = format!("{}:", model.name());
-    let mut own = Vec::new();
-    for (j, (spec, v)) in model.params().iter().zip(params).enumerate() {
-        if per_channel(j) {
-            own.push(spec.name.to_string());
-        } else {
-            title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
-        }
-    }
-    if !own.is_empty() {
-        title += &format!(
-            " (joint fit of {n_channels} channels; {} per channel)",
-            own.join(", ")
-        );
-    }
-    title
 }
 
 /// The unit of λ the fit's σ and T are in: `--wavelength`'s, else the file's.

@@ -1,5 +1,5 @@
 //! Fitting: Levenberg–Marquardt as an argmin solver ([`lm`]), covariance and
-//! identifiability ([`stats`]), the reflectance least-squares problem ([`problem`]),
+//! identifiability ([`stats`]), the reflectance least-squares problem ([`problem`]) and its parameters ([`layout`]),
 //! starting values ([`init`]) and the whole fit ([`driver`]), whose stages each have a
 //! file: start search (`start`), solve (`solve`), identify (`identify`), reduce
 //! (`reduce`), validate (`validate`) and assemble (`assemble`); a dataset's fit with
@@ -10,6 +10,7 @@ pub mod dataset;
 pub mod driver;
 pub mod grid_cache;
 pub mod init;
+pub mod layout;
 pub mod lm;
 pub mod loss;
 pub mod problem;

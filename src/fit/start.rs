@@ -136,15 +136,9 @@ pub(super) fn starting_point(
     let grid_model = loose_model(model, config, GRID_TOL, None)?;
     let refine_model = loose_model(model, config, REFINE_TOL, None)?;
     let sigma_k = layout.find("sigma").first().copied();
-    let rough_model = match sigma_k {
-        Some(_) => Some(loose_model(
-            model,
-            config,
-            REFINE_TOL,
-            Some(EvalMode::Rough),
-        )?),
-        None => None,
-    };
+    let rough_model = sigma_k
+        .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Rough)))
+        .transpose()?;
     let bar = search_bar(config.lm.progress);
     let sub = input.subset(&init::subsample(input.geo.len(), init::REFINE_SAMPLES));
     let exact = FitProblem::new(
@@ -184,17 +178,7 @@ pub(super) fn starting_point(
     // After a stop request nothing is refined (the fit's first evaluation on the whole data
     // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
-        bar.set_length(candidates.len() as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{spinner} start search {elapsed} {msg}: {pos}/{len} done",
-        ) {
-            bar.set_style(style);
-        }
-        bar.set_message(format!(
-            "refining {} candidates on {} samples",
-            candidates.len(),
-            refiners.sub.y.len()
-        ));
+        show_refining(&bar, candidates.len(), refiners.sub.y.len());
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside, &bar);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
         let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol);
@@ -274,6 +258,17 @@ fn search_bar(show: bool) -> indicatif::ProgressBar {
     bar.set_message("grid of starting values");
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
     bar
+}
+
+/// Turn the search bar into a count of the `n` candidates refined on `samples` samples.
+fn show_refining(bar: &indicatif::ProgressBar, n: usize, samples: usize) {
+    bar.set_length(n as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{spinner} start search {elapsed} {msg}: {pos}/{len} done",
+    ) {
+        bar.set_style(style);
+    }
+    bar.set_message(format!("refining {n} candidates on {samples} samples"));
 }
 
 /// Counts one refined candidate on the start search's line when dropped (also when the

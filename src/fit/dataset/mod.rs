@@ -268,62 +268,13 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         None => spec.config.lm.new_stop(),
     };
     let uncertainties = ds.sigma_l.is_some();
-    let mut results: Vec<FitResult> = Vec::new();
-    let mut not_fitted = Vec::new();
-    for m in &candidates {
-        if stop.is_requested() && !results.is_empty() {
-            not_fitted.push(m.as_str());
-            continue;
-        }
-        let mut config = spec.config_for(m, uncertainties);
-        config.lm.stop = Some(stop.clone());
-        match driver::fit(&input, &config) {
-            // A candidate whose first evaluation a stop cut has no result.
-            Err(Error::Stopped(_)) if !results.is_empty() => not_fitted.push(m.as_str()),
-            r => results.push(r?),
-        }
-    }
-    let (best, skipped) = lowest_bic_usable(&results);
-    // The chosen fit keeps its per-sample vectors; the candidates (the comparison) keep
-    // their summaries only, so a big fit's vectors exist once.
-    let samples = results[best].take_samples();
-    let mut result = results[best].clone();
-    result.put_samples(samples);
-    for r in &mut results {
-        r.take_samples();
-    }
-    result.notes.extend(skipped);
-    if !not_fitted.is_empty() {
-        result.notes.push(format!(
-            "the fit was stopped before the candidates {} were fitted",
-            not_fitted.join(", ")
-        ));
-    }
+    let (mut results, not_fitted) =
+        fit_candidates(spec, &input, &candidates, uncertainties, &stop)?;
+    let mut result = chosen(&mut results, &not_fitted);
     finish_result(spec, &ds, &input, &stop, &mut result)?;
     let t_intervals = std::time::Instant::now();
-    let wanted = spec.intervals && result.n_free <= MAX_PROFILED;
-    if wanted && !result.converged() {
-        // A profile around a point that is not a usable optimum (degenerate, stopped)
-        // would bound nothing the data says.
-        result
-            .notes
-            .push("no profile intervals: the fit did not converge to a usable optimum".into());
-    }
-    let mut intervals = if wanted && result.converged() {
-        profile_intervals(spec, &input, &result, uncertainties, &stop)?
-    } else {
-        Vec::new()
-    };
-    let intervals_stopped = wanted && result.converged() && stop.is_requested();
-    if intervals_stopped {
-        // A profile walk cut short ends at a wrong likelihood: none is shown.
-        intervals.clear();
-        result.notes.push(
-            "profile-likelihood intervals not computed: the fit was stopped while they were \
-             walked (only the standard errors are shown)"
-                .into(),
-        );
-    }
+    let (intervals, intervals_stopped) =
+        intervals_of(spec, &input, &mut result, uncertainties, &stop)?;
     let interval_seconds = t_intervals.elapsed().as_secs_f64();
     Ok(Outcome {
         label,
@@ -335,6 +286,89 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         interval_seconds,
         intervals_stopped,
     })
+}
+
+/// Fit every candidate model in turn, sharing `stop`: the results, and the names of the
+/// candidates a stop kept from a result (not started, or cut in their first evaluation;
+/// the first candidate's stop is an error: there is nothing to report).
+fn fit_candidates<'c>(
+    spec: &DatasetFit,
+    input: &FitInput,
+    candidates: &'c [String],
+    uncertainties: bool,
+    stop: &Stop,
+) -> Result<(Vec<FitResult>, Vec<&'c str>)> {
+    let mut results: Vec<FitResult> = Vec::new();
+    let mut not_fitted = Vec::new();
+    for m in candidates {
+        if stop.is_requested() && !results.is_empty() {
+            not_fitted.push(m.as_str());
+            continue;
+        }
+        let mut config = spec.config_for(m, uncertainties);
+        config.lm.stop = Some(stop.clone());
+        match driver::fit(input, &config) {
+            Err(Error::Stopped(_)) if !results.is_empty() => not_fitted.push(m.as_str()),
+            r => results.push(r?),
+        }
+    }
+    Ok((results, not_fitted))
+}
+
+/// The candidate with the lowest BIC among the usable ones ([`lowest_bic_usable`]), with
+/// the notes on the candidates skipped or not fitted. The chosen fit keeps its per-sample
+/// vectors; the candidates (the comparison) keep their summaries only, so a big fit's
+/// vectors exist once.
+fn chosen(results: &mut [FitResult], not_fitted: &[&str]) -> FitResult {
+    let (best, skipped) = lowest_bic_usable(results);
+    let samples = results[best].take_samples();
+    let mut result = results[best].clone();
+    result.put_samples(samples);
+    for r in results.iter_mut() {
+        r.take_samples();
+    }
+    result.notes.extend(skipped);
+    if !not_fitted.is_empty() {
+        result.notes.push(format!(
+            "the fit was stopped before the candidates {} were fitted",
+            not_fitted.join(", ")
+        ));
+    }
+    result
+}
+
+/// The profile-likelihood intervals of `result` when asked for and the fit is a usable
+/// optimum (a note on `result` says why not otherwise), and whether a stop cut their
+/// walks short (then none is returned: a walk cut short ends at a wrong likelihood).
+fn intervals_of(
+    spec: &DatasetFit,
+    input: &FitInput,
+    result: &mut FitResult,
+    uncertainties: bool,
+    stop: &Stop,
+) -> Result<(Vec<super::profile::Interval>, bool)> {
+    let wanted = spec.intervals && result.n_free <= MAX_PROFILED;
+    if !wanted {
+        return Ok((Vec::new(), false));
+    }
+    if !result.converged() {
+        // A profile around a point that is not a usable optimum (degenerate, stopped)
+        // would bound nothing the data says.
+        result
+            .notes
+            .push("no profile intervals: the fit did not converge to a usable optimum".into());
+        return Ok((Vec::new(), false));
+    }
+    let intervals = profile_intervals(spec, input, result, uncertainties, stop)?;
+    if !stop.is_requested() {
+        return Ok((intervals, false));
+    }
+    result.notes.push(
+        "profile-likelihood intervals not computed: the fit was stopped while they were \
+         walked (only the standard errors are shown)"
+            .into(),
+    );
+    Ok((Vec::new(), true))
 }
 
 /// The chosen fit as reported: absolute-sigma standard errors if asked, the reflectance
