@@ -16,21 +16,6 @@ mod common;
 /// smooth ridges (`RIDGE_G`, `SMOOTH_RIDGE_G`), which costs up to ~1e-5 of the cost.
 const TOL: f64 = 1e-3;
 
-/// Fits whose default start search still ends in a worse valley (two competing lobes on
-/// the acryl blue paint, see the closing note of issue 12): they must stay converged
-/// inside the domain and within [`KNOWN_MISS_TOL`] of the best cost, and the test fails
-/// when one reaches the best (then it leaves this list).
-const KNOWN_MISSES: [(&str, &str); 5] = [
-    ("acryl_blue.astm", "430nm"),
-    ("acryl_blue.astm", "460nm"),
-    ("acryl_blue.astm", "470nm"),
-    ("acryl_blue.astm", "530nm"),
-    ("acryl_blue.astm", "540nm"),
-];
-
-/// Relative cost above the best a known miss may have.
-const KNOWN_MISS_TOL: f64 = 0.07;
-
 struct Reference {
     cost_best: f64,
     edge_best: String,
@@ -110,21 +95,15 @@ fn check(path: &str, extra: &[&str], lambda_of: &dyn Fn(&str) -> f64) -> Vec<Str
         let r = &reference[&(file.clone(), group.clone())];
         let cost = f["cost"].as_f64().unwrap();
         let excess = cost / r.cost_best - 1.0;
-        let known_miss = KNOWN_MISSES.contains(&(file.as_str(), group.as_str()));
         let ok = match f["termination"].as_str().unwrap() {
             "degenerate" => r.edge_best != "none" && !f["notes"].as_array().unwrap().is_empty(),
             _ if f["converged"] != true || !inside(&f, lambda_of(&group)) => false,
-            _ if known_miss => excess > TOL && excess <= KNOWN_MISS_TOL,
             _ => excess <= TOL,
         };
         if !ok {
             bad.push(format!(
-                "{file} {group}: {} cost {cost:.7e} vs best {:.7e} ({:+.3e}), best at edge: {}{}",
-                f["termination"],
-                r.cost_best,
-                excess,
-                r.edge_best,
-                if known_miss { " (a known miss)" } else { "" }
+                "{file} {group}: {} cost {cost:.7e} vs best {:.7e} ({:+.3e}), best at edge: {}",
+                f["termination"], r.cost_best, excess, r.edge_best,
             ));
         }
     }
@@ -148,7 +127,7 @@ fn cornell_krylon_blue_fits_are_at_the_best_known_optimum() {
 }
 
 #[test]
-fn cornell_acryl_blue_fits_are_at_the_best_known_optimum_but_the_known_misses() {
+fn cornell_acryl_blue_fits_are_at_the_best_known_optimum() {
     let bad = check("cornell/acryl_blue.astm", &[], &nm);
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }

@@ -92,7 +92,7 @@ fn stopped_before_first_evaluation(why: super::lm::Termination, n: usize) -> Err
 /// The note of a fit stopped before the Jacobian at its best point was evaluated.
 pub const UNCERTAINTIES_NOT_COMPUTED: &str = "the fit was stopped before the Jacobian at its best point was evaluated: the values and the cost are those of that point, and their standard errors, correlations and what the data determines were not computed";
 
-/// Solve from the start, and from the start search's rival valley when there is one
+/// Solve from the start, and from each of the start search's rival valleys
 /// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain
 /// ([`validate::at_kbs_edge`]), solve again from each other usable refined candidate, and
 /// keep the lowest-cost run inside the domain unless the edge run is lower by more than
@@ -116,27 +116,18 @@ fn solve_checked(
     let first = solve(&start.p0);
     let layout = &problem.layout;
     if !validate::at_kbs_edge(layout, input, &first.values) {
-        return match start.rival.as_deref().filter(|_| !stop_requested(config)) {
-            Some(p0) => {
-                let rival = solve(p0);
-                let inside = !validate::at_kbs_edge(layout, input, &rival.values);
-                let (mut kept, other) = if inside && rival.lm.cost < first.lm.cost {
-                    (rival, first)
-                } else {
-                    (first, rival)
-                };
-                kept.add_counts(&other.lm);
-                kept
-            }
-            None => first,
-        };
+        let inside = |p: &[f64]| !validate::at_kbs_edge(layout, input, p);
+        return best_of_rivals(first, &start.rivals, &solve, &inside, config);
     }
     let mut runs = vec![first];
+    let mut cut = false;
     for p0 in &start.alternatives {
         if stop_requested(config) {
+            cut = true;
             break;
         }
         runs.push(solve(p0));
+        cut |= was_stopped(&runs[runs.len() - 1]);
     }
     let lowest = |edge: bool| {
         (0..runs.len())
@@ -153,7 +144,60 @@ fn solve_checked(
     for other in &runs {
         chosen.add_counts(&other.lm);
     }
+    if cut {
+        mark_cut(&mut chosen, config);
+    }
     chosen
+}
+
+/// The lowest-cost run `inside` the domain of `first` and the solves from each of `rivals`
+/// (`first` when none is lower). A stop request cuts the rivals short: the run kept then
+/// ends with the stop's termination, as the search over valleys is not complete.
+fn best_of_rivals(
+    first: solve::Run,
+    rivals: &[Vec<f64>],
+    solve: &dyn Fn(&[f64]) -> solve::Run,
+    inside: &dyn Fn(&[f64]) -> bool,
+    config: &FitConfig,
+) -> solve::Run {
+    let mut kept = first;
+    let mut cut = false;
+    for p0 in rivals {
+        if stop_requested(config) {
+            cut = true;
+            break;
+        }
+        let rival = solve(p0);
+        cut |= was_stopped(&rival);
+        let other;
+        (kept, other) = if inside(&rival.values) && rival.lm.cost < kept.lm.cost {
+            (rival, kept)
+        } else {
+            (kept, rival)
+        };
+        kept.add_counts(&other.lm);
+    }
+    if cut {
+        mark_cut(&mut kept, config);
+    }
+    kept
+}
+
+/// Whether a run ended on a stop request (time limit or interrupt).
+fn was_stopped(run: &solve::Run) -> bool {
+    matches!(
+        run.lm.termination,
+        super::lm::Termination::Timeout | super::lm::Termination::Interrupted
+    )
+}
+
+/// A converged run kept while a stop request cut the other starts short ends with the
+/// stop's termination: it is the best point found, not the fit's answer.
+fn mark_cut(run: &mut solve::Run, config: &FitConfig) {
+    let why = config.lm.stop.as_ref().and_then(Stop::requested);
+    if let Some(why) = why.filter(|_| run.lm.termination.converged()) {
+        run.lm.termination = why;
+    }
 }
 
 /// Largest g a forced `--mode series` fit accepts at its start: the series sums O(√g) terms

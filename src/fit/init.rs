@@ -33,6 +33,10 @@ pub const CANDIDATES: usize = 3;
 /// close as 512 did; with a plain stride, 256 could miss whole azimuth ranges).
 pub const REFINE_SAMPLES: usize = 256;
 
+/// Samples nearest the mirror direction that the start search's sample always holds
+/// ([`search_sample`]).
+pub const NEAR_SPECULAR_SAMPLES: usize = 32;
+
 /// Parameters that enter the model linearly (solved exactly at each grid point).
 pub use super::problem::LINEAR;
 
@@ -124,7 +128,8 @@ pub fn initial_values(
             amplitudes::solve(&sub, b, &prep, &mut p, &grid.linear).map(|c| (c, p, band_of(g)))
         })
         .collect();
-    let picked = pick_distinct(scored, is_kbs, &grid.nonlinear);
+    let kbs = grid.sigma_k.zip(layout.find("T").first().copied());
+    let picked = pick_distinct(scored, kbs.filter(|_| is_kbs), &grid.nonlinear);
     if picked.is_empty() {
         return fallback();
     }
@@ -284,35 +289,82 @@ fn band_of(g: Option<f64>) -> usize {
 
 /// The candidates from the scored grid points (cost, values, band): the grid ranks with
 /// the limits' approximations, which can favour a wrong regime (the rough asymptote σ → ∞
-/// at fixed T/σ is a valley of its own), so for KBS the best point of each regime band
-/// (smooth, intermediate, rough) is kept; otherwise the best points at least a factor
-/// e^{0.7} ≈ 2 apart in some nonlinear parameter. At most [`CANDIDATES`], best first.
+/// at fixed T/σ is a valley of its own), so for KBS (`kbs`: layout indices of σ and T) the
+/// best points of each regime band (smooth, intermediate, rough) are kept: the band's best
+/// and its best of a lobe at least [`SHAPE_APART`] wider or narrower ([`lobe_shape`]: two
+/// lobes of one paint, Cornell acryl_blue 460 nm, a wide one the subsample favours and a
+/// narrow near-mirror one 6 % lower on the whole data). Otherwise the best points at least
+/// a factor e^{0.7} ≈ 2 apart in some nonlinear parameter. At most [`CANDIDATES`] (KBS:
+/// [`KBS_CANDIDATES`]), best first.
 fn pick_distinct(
     mut scored: Vec<(f64, Vec<f64>, usize)>,
-    is_kbs: bool,
+    kbs: Option<(usize, usize)>,
     nonlinear: &[usize],
 ) -> Vec<(f64, Vec<f64>)> {
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut picked: Vec<(f64, Vec<f64>)> = Vec::new();
-    let mut bands_taken = [false; 3];
+    let mut picked: Vec<(f64, Vec<f64>, usize)> = Vec::new();
+    let most = if kbs.is_some() {
+        KBS_CANDIDATES
+    } else {
+        CANDIDATES
+    };
+    let best = scored.first().map_or(f64::INFINITY, |s| s.0);
     for (cost, p, band) in scored {
-        let distinct = if is_kbs {
-            !std::mem::replace(&mut bands_taken[band], true)
-        } else {
-            picked.iter().all(|(_, q)| {
+        let distinct = match kbs {
+            Some(ks) => {
+                let same_band: Vec<_> = picked.iter().filter(|q| q.2 == band).collect();
+                let second_ok = same_band.is_empty() || cost <= best * (1.0 + SECOND_MARGIN);
+                second_ok
+                    && same_band.len() < PER_BAND
+                    && same_band.iter().all(|q| {
+                        let (a, b) = (lobe_shape(&p, ks, band), lobe_shape(&q.1, ks, band));
+                        a.iter()
+                            .zip(&b)
+                            .any(|(x, y)| (x - y).abs() > SHAPE_APART.ln())
+                    })
+            }
+            None => picked.iter().all(|(_, q, _)| {
                 nonlinear.iter().any(|&k| {
                     (p[k].abs().max(1e-300).ln() - q[k].abs().max(1e-300).ln()).abs() > 0.7
                 })
-            })
+            }),
         };
         if distinct {
-            picked.push((cost, p));
-            if picked.len() == CANDIDATES {
+            picked.push((cost, p, band));
+            if picked.len() == most {
                 break;
             }
         }
     }
-    picked
+    picked.into_iter().map(|(c, p, _)| (c, p)).collect()
+}
+
+/// Grid candidates kept per regime band for KBS models (see [`pick_distinct`]).
+pub const PER_BAND: usize = 2;
+
+/// Relative grid cost above the grid's best within which a band's second lobe is kept: a
+/// lobe the grid ranks far worse than the best point is no rival on the whole data either
+/// (the second lobes of the Cornell acryl_blue channels that win on the whole data lie
+/// within 4 % of the grid's best; a texel scan with 1 % noise has none).
+pub const SECOND_MARGIN: f64 = 0.25;
+
+/// Most KBS candidates: [`PER_BAND`] in each of the three regime bands.
+pub const KBS_CANDIDATES: usize = 3 * PER_BAND;
+
+/// Factor by which the lobe shape of two candidates of one band must differ to count as
+/// two valleys: the grid's T axis steps by ≈ 2.1, so neighbours of one valley are closer.
+pub const SHAPE_APART: f64 = 3.0;
+
+/// The logarithms of what sets a KBS lobe's shape in a regime band (σ, T at layout indices
+/// `ks`): T/σ in the rough band (the rough limit depends on σ and T only through it), T in
+/// the smooth band (its limit's lobe width), both σ and T in between.
+fn lobe_shape(p: &[f64], (s, t): (usize, usize), band: usize) -> Vec<f64> {
+    let (ls, lt) = (p[s].abs().max(1e-300).ln(), p[t].abs().max(1e-300).ln());
+    match band {
+        2 => vec![lt - ls],
+        0 => vec![lt],
+        _ => vec![ls, lt],
+    }
 }
 
 /// The bits of a model's evaluation options (mode, tolerance, patch), for cache keys.
@@ -332,6 +384,45 @@ fn options_bits(model: &dyn crate::model::Model) -> Vec<u64> {
 pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Option<f64> {
     let basis = grid_cache::point_basis(problem, p, linear)?;
     amplitudes::solve(problem, &basis, &Prepared::new(problem), p, linear)
+}
+
+/// The start search's sample of `input` (at most `max` samples): the
+/// [`NEAR_SPECULAR_SAMPLES`] samples nearest the mirror direction (smallest v_xy²/v_z², the
+/// facet slope that reflects into them) and a [`subsample`] spread over the file. A narrow
+/// lobe lives on a few samples near the mirror direction only, which a spread subsample can
+/// miss altogether (Cornell acryl_blue 460 nm: a near-mirror lobe of rms slope 0.008 is 6 %
+/// lower on the whole data than the wide lobe the spread sample sees). The sample is
+/// stratified so that its cost stays an estimate of the whole data's (up to a constant
+/// factor): each near-mirror sample stands for itself, each spread one for its share of the
+/// rest, so the near-mirror ones carry weight m/(n − k) (k of them, m spread samples among
+/// the other n − k). Depends on the angles only, so every fit of one angular layout draws
+/// the same samples.
+pub fn search_input(input: &FitInput, max: usize) -> FitInput {
+    let geo = &input.geo;
+    let n = geo.len();
+    let near = NEAR_SPECULAR_SAMPLES.min(max / 4);
+    if n <= max || near == 0 {
+        return input.subset(&subsample(n, max));
+    }
+    let slope2 = |i: usize| geo.vxy2[i] / (geo.c[i] * geo.c[i]).max(f64::MIN_POSITIVE);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.select_nth_unstable_by(near - 1, |&a, &b| slope2(a).total_cmp(&slope2(b)));
+    let mut is_near = vec![false; n];
+    order[..near].iter().for_each(|&i| is_near[i] = true);
+    let spread = subsample(n, max - near);
+    let m = spread.iter().filter(|&&i| !is_near[i]).count();
+    let mut idx: Vec<usize> = order[..near].to_vec();
+    idx.extend(spread);
+    idx.sort_unstable();
+    idx.dedup();
+    let mut sub = input.subset(&idx);
+    let share = m as f64 / (n - near) as f64;
+    for (w, &i) in sub.weight.iter_mut().zip(&idx) {
+        if is_near[i] {
+            *w *= share;
+        }
+    }
+    sub
 }
 
 /// At most `max` of `n` sample indices, spread over the whole file: the multiples of a

@@ -30,17 +30,35 @@ pub const EDGE_MARGIN: f64 = 1e-3;
 /// subsample, the narrow one is 6 % lower on the full data).
 pub const RIVAL_MARGIN: f64 = 0.1;
 
+/// Most rival valleys solved on the whole data besides the winner's ([`choose_refined`]).
+pub const RIVALS: usize = 2;
+
 /// Relative difference in every parameter within which two refined candidates ended at the
 /// same optimum: the refinement stops at relative steps of its `xtol` (10⁻⁶), so one valley
 /// reached from two starts agrees far closer than this, while distinct valleys of the grid
 /// lie a factor of ~2 apart ([`init::initial_values`]).
 pub const SAME_OPTIMUM: f64 = 1e-3;
 
-/// Whether two refined points (layout order) are the same optimum (see [`SAME_OPTIMUM`]).
-fn same_optimum(a: &[f64], b: &[f64]) -> bool {
-    a.iter()
-        .zip(b)
-        .all(|(x, y)| (x - y).abs() <= SAME_OPTIMUM * x.abs().max(y.abs()))
+/// Relative cost difference within which two refined KBS points with the same T/σ (to
+/// [`SAME_OPTIMUM`]·10) lie in one valley of the rough ridge: the refinement with the rough
+/// approximation holds σ, so one valley reached from two starts ends at two σ along the
+/// ridge, with the same lobe and cost.
+pub const SAME_RIDGE_COST: f64 = 1e-5;
+
+/// Whether two refined points (layout order, with their costs) are the same optimum (see
+/// [`SAME_OPTIMUM`]), or, for KBS (`ridge`: layout indices of σ and T), the same valley of
+/// the rough ridge ([`SAME_RIDGE_COST`]).
+fn same_optimum(a: (f64, &[f64]), b: (f64, &[f64]), ridge: Option<(usize, usize)>) -> bool {
+    let close = |x: f64, y: f64, tol: f64| (x - y).abs() <= tol * x.abs().max(y.abs());
+    let same_point =
+        a.1.iter()
+            .zip(b.1)
+            .all(|(&x, &y)| close(x, y, SAME_OPTIMUM));
+    same_point
+        || ridge.is_some_and(|(s, t)| {
+            close(a.1[t] / a.1[s], b.1[t] / b.1[s], 10.0 * SAME_OPTIMUM)
+                && close(a.0, b.0, SAME_RIDGE_COST)
+        })
 }
 
 /// Model accuracy of the quick refinement on a subsample (it only has to land near the
@@ -60,10 +78,10 @@ pub(super) struct Start {
     /// The other usable refined candidates, lowest cost first: where the full fit starts
     /// again when its first solve runs to an edge of the domain.
     pub alternatives: Vec<Vec<f64>>,
-    /// The best other usable refined candidate when its subsample cost is within
-    /// [`RIVAL_MARGIN`] of the winner's: a second valley the full fit also solves from,
-    /// keeping the lower cost.
-    pub rival: Option<Vec<f64>>,
+    /// The other usable refined candidates in valleys of their own whose subsample costs
+    /// are within [`RIVAL_MARGIN`] of the winner's, lowest first (at most [`RIVALS`]):
+    /// valleys the full fit also solves from, keeping the lowest cost.
+    pub rivals: Vec<Vec<f64>>,
 }
 
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
@@ -77,6 +95,21 @@ struct Refiners<'m> {
     sigma_k: Option<usize>,
     /// The subsample both problems are built on.
     sub: FitInput,
+    /// Largest σ a slide along the rough ridge may reach: where a forced `--mode series`
+    /// would refuse the start ([`series_sigma_max`]); infinite otherwise.
+    sigma_max: f64,
+}
+
+/// The σ above which a forced `--mode series` fit refuses its start (its g over `input`
+/// exceeds [`super::driver::SERIES_G_MAX`]); infinite in any other mode.
+fn series_sigma_max(config: &FitConfig, input: &FitInput) -> f64 {
+    if config.model_opts.mode != EvalMode::Series {
+        return f64::INFINITY;
+    }
+    let g1 = (0..input.geo.len())
+        .map(|i| input.geo.g(i, 1.0))
+        .fold(0.0f64, f64::max);
+    (super::driver::SERIES_G_MAX / g1).sqrt()
 }
 
 impl<'m> Refiners<'m> {
@@ -140,7 +173,7 @@ pub(super) fn starting_point(
         .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Rough)))
         .transpose()?;
     let bar = search_bar(config.lm.progress);
-    let sub = input.subset(&init::subsample(input.geo.len(), init::REFINE_SAMPLES));
+    let sub = init::search_input(input, init::REFINE_SAMPLES);
     let exact = FitProblem::new(
         refine_model.as_ref(),
         layout.clone(),
@@ -153,6 +186,7 @@ pub(super) fn starting_point(
         rough: rough_model.as_deref(),
         sigma_k,
         sub,
+        sigma_max: series_sigma_max(config, input),
     };
     // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
     let stop = config.lm.stop.as_ref();
@@ -174,20 +208,21 @@ pub(super) fn starting_point(
     let mut p0 = grid_start.clone();
     let coarse = coarse_config(config);
     let mut alternatives = Vec::new();
-    let mut rival = None;
+    let mut rivals = Vec::new();
     // After a stop request nothing is refined (the fit's first evaluation on the whole data
     // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
         show_refining(&bar, candidates.len(), refiners.sub.y.len());
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside, &bar);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
-        let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol);
+        let ridge = sigma_k.zip(layout.find("T").first().copied());
+        let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol, ridge);
         if let Some((values, start)) = chosen.start {
             p0 = values;
             grid_start = start;
         }
         alternatives = chosen.alternatives;
-        rival = chosen.rival;
+        rivals = chosen.rivals;
     }
     bar.finish_and_clear();
     Ok(Start {
@@ -196,7 +231,7 @@ pub(super) fn starting_point(
         start_seconds,
         init_seconds: t0.elapsed().as_secs_f64(),
         alternatives,
-        rival,
+        rivals,
     })
 }
 
@@ -282,11 +317,11 @@ impl Drop for Done<'_> {
 }
 
 /// What the refined candidates give the full fit: its start (refined values, the grid
-/// point they came from), the other starts in the order to try them, and a rival valley.
+/// point they came from), the other starts in the order to try them, and rival valleys.
 struct Chosen {
     start: Option<(Vec<f64>, Vec<f64>)>,
     alternatives: Vec<Vec<f64>>,
-    rival: Option<Vec<f64>>,
+    rivals: Vec<Vec<f64>>,
 }
 
 /// Choose among the refined candidates (`refined[i]` from `candidates[i]`). A refined start
@@ -295,12 +330,14 @@ struct Chosen {
 /// by more than [`EDGE_MARGIN`], the data's best fit is the edge, and the full fit starts
 /// there (to end `degenerate`, saying why), the others as alternatives. Otherwise the
 /// lowest usable one starts (ties within `ftol` to the better-ranked grid point), and the
-/// next usable one is the rival when its cost is within [`RIVAL_MARGIN`].
+/// next usable ones in valleys of their own ([`same_optimum`], `ridge`: layout indices of σ
+/// and T) are rivals when their costs are within [`RIVAL_MARGIN`].
 fn choose_refined(
     refined: &[(f64, Vec<f64>)],
     candidates: &[(f64, Vec<f64>)],
     at_edge: &dyn Fn(&[f64]) -> bool,
     ftol: f64,
+    ridge: Option<(usize, usize)>,
 ) -> Chosen {
     let (edge, usable): (Vec<_>, Vec<_>) = refined
         .iter()
@@ -318,7 +355,7 @@ fn choose_refined(
     let mut chosen = Chosen {
         start: None,
         alternatives: Vec::new(),
-        rival: None,
+        rivals: Vec::new(),
     };
     match (lowest_refined(usable, &usable_grid, ftol), lowest_edge) {
         (winner, Some(((cost, values), grid)))
@@ -330,15 +367,18 @@ fn choose_refined(
             chosen.start = Some((values.clone(), grid.1.clone()));
         }
         (Some(winner), _) => {
-            // A second valley about as low on the subsample is solved too. A candidate whose
-            // refinement ended at the winner's optimum is no second valley: solving from it
-            // again would only find that optimum once more, to the solver's tolerance, and
-            // in a flat valley let rounding pick between the two ends.
-            chosen.rival = others
-                .iter()
-                .find(|(_, v)| !same_optimum(v, &winner.0))
-                .filter(|(c, _)| *c <= best_usable * (1.0 + RIVAL_MARGIN))
-                .map(|(_, v)| v.clone());
+            // Other valleys about as low on the subsample are solved too. A candidate whose
+            // refinement ended at an optimum already kept is no other valley: solving from
+            // it again would only find that optimum once more, to the solver's tolerance,
+            // and in a flat valley let rounding pick between the two ends.
+            let mut kept: Vec<(f64, &[f64])> = vec![(best_usable, &winner.0)];
+            for (c, v) in others.iter() {
+                let new = kept.iter().all(|&k| !same_optimum((*c, v), k, ridge));
+                if *c <= best_usable * (1.0 + RIVAL_MARGIN) && new && kept.len() <= RIVALS {
+                    kept.push((*c, v));
+                    chosen.rivals.push(v.clone());
+                }
+            }
             chosen.start = Some(winner);
         }
         _ => {}
@@ -370,8 +410,8 @@ pub const RIDGE_STEPS: usize = 12;
 /// 1/σ_L² with σ_L ∝ L) count those samples as much as the peak. The grid's σ axis ends at
 /// 4λ, so a lobe of σ ≈ 8λ would otherwise be judged at a σ where the exact cost is 10⁵
 /// times the truth's, and lose to a smooth-looking optimum (recovery issue #17). The slide
-/// steps by [`RIDGE_STEP`] while the exact cost falls, the point stays `inside` the domain,
-/// and at most [`RIDGE_STEPS`] times, and no step is started after a stop request.
+/// steps by [`RIDGE_STEP`] while the exact cost falls, the point stays `inside` the domain
+/// (and below the σ a forced series accepts, `refiners.sigma_max`), and at most [`RIDGE_STEPS`] times, and no step is started after a stop request.
 fn slide_rough_ridge(
     refiners: &Refiners,
     mut p: Vec<f64>,
@@ -395,7 +435,7 @@ fn slide_rough_ridge(
         let mut q = p.clone();
         q[ks] *= RIDGE_STEP;
         q[kt] *= RIDGE_STEP;
-        if !inside(&q) {
+        if !inside(&q) || q[ks] > refiners.sigma_max {
             break;
         }
         let c = exact_cost(&q);
