@@ -193,7 +193,7 @@ fn was_stopped(run: &solve::Run) -> bool {
 
 /// A converged run kept while a stop request cut the other starts short ends with the
 /// stop's termination: it is the best point found, not the fit's answer.
-fn mark_cut(run: &mut solve::Run, config: &FitConfig) {
+pub(super) fn mark_cut(run: &mut solve::Run, config: &FitConfig) {
     let why = config.lm.stop.as_ref().and_then(Stop::requested);
     if let Some(why) = why.filter(|_| run.lm.termination.converged()) {
         run.lm.termination = why;

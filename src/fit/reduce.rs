@@ -91,6 +91,10 @@ pub(super) fn reduce<'m>(
             solved.problem = problem_red;
         }
     }
+    if stopped && regime {
+        // The unreduced point is the best found, not the fit's answer.
+        super::driver::mark_cut(&mut solved.run, config);
+    }
     solved.notes.push(if stopped && regime {
         format!("the fit was stopped before the reduced refit (median g = {g_median:.3e}): the data determines only a regime's combinations, and σ, T, scale are those of the unreduced fit")
     } else {
