@@ -394,8 +394,10 @@ fn sigint_while_eval_writes_leaves_no_temporary() {
 fn sigint_in_the_solver_prints_the_report_and_exits_3() {
     // From given starting values the forced series fit of the rough file has its first
     // evaluation done within ~1 s and then needs many more (~0.7 s each): SIGINT at 3 s
-    // lands in the solver. The report of the best point and the whole residuals file, exit
-    // 3 (on a machine so loaded that the first evaluation had not finished: nothing fitted).
+    // lands in the solver. The report of the best point, exit 3; its evaluations being
+    // slow, the fitted values at that point are not evaluated after the signal: no
+    // residuals file, and the figures they give say "not computed" (on a machine so loaded
+    // that the first evaluation had not finished: nothing fitted).
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
     let csv = rough_file("sigint_solver");
     let dir = csv.parent().unwrap().to_path_buf();
@@ -413,24 +415,96 @@ fn sigint_in_the_solver_prints_the_report_and_exits_3() {
     let text = String::from_utf8_lossy(&out.stdout);
     if out.stdout.is_empty() {
         assert_nothing_fitted(&out, "interrupted");
-        assert_eq!(files_in(&dir), ["rough.csv", "rough.truth.json"]);
     } else {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(3), "{err}");
-        assert!(text.contains("termination     = interrupted"), "{text}");
-        assert!(text.contains("converged       = false"), "{text}");
-        assert!(text.contains("samples         = 18000"), "{text}");
-        assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
-        assert_eq!(
-            files_in(&dir),
-            ["residuals.csv", "rough.csv", "rough.truth.json"]
-        );
-        let written = std::fs::read_to_string(&residuals).unwrap();
-        assert_eq!(written.lines().count(), 18001, "header and every sample");
+        assert_stopped_before_the_fitted_values(&text, &err, "interrupted", 18000);
     }
+    assert_eq!(files_in(&dir), ["rough.csv", "rough.truth.json"]);
     // One evaluation block per thread after the signal, then the report: well under a
     // second unloaded; the bound allows a loaded machine.
     assert!(after < 10.0, "took {after:.2} s after SIGINT");
+}
+
+/// Check the text report `text` (and standard error `err`) of a fit of `samples` that a
+/// stop request (`why`: "interrupted", "timeout") ended in the solver (or right after it
+/// converged): the point, its cost and χ², "not computed" for what the fitted values give
+/// (never NaN), and the line saying no residuals file was written.
+fn assert_stopped_before_the_fitted_values(text: &str, err: &str, why: &str, samples: usize) {
+    // The solver may have converged just before the stop, which then fell after it.
+    if !text.contains("converged       = true") {
+        assert!(text.contains(&format!("termination     = {why}")), "{text}");
+        assert!(text.contains("converged       = false"), "{text}");
+    }
+    assert!(
+        text.contains(&format!("samples         = {samples}")),
+        "{text}"
+    );
+    assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
+    let not_computed = "= not computed (the fit was stopped first)";
+    for line in ["rms residual    ", "R-squared       ", "evaluation modes"] {
+        assert!(text.contains(&format!("{line}{not_computed}")), "{text}");
+    }
+    let chi2: f64 = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("chi-square      = "))
+        .and_then(|v| v.parse().ok())
+        .expect("a chi-square");
+    assert!(chi2.is_finite() && chi2 > 0.0, "{text}");
+    assert!(
+        text.contains("the fit was stopped before its fitted values at the reported point"),
+        "{text}"
+    );
+    assert!(
+        err.contains("no residuals file and no pictures written"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_time_limit_after_the_solve_does_not_evaluate_the_whole_data_again() {
+    // The forced series fit of 36,000 rough samples from given starting values: one
+    // evaluation costs ~3 s of CPU, the first one ends within ~2.5 s of the start, and the
+    // limit of 4 s falls in the solver's later evaluations. The solver's evaluation ends
+    // within one block; the fitted values, residuals and modes for the report and the
+    // residuals file were then evaluated on the whole data regardless, one more
+    // evaluation: 5.2-5.5 s in all on a loaded 2-core machine, and the residuals file
+    // written. Now they are not computed after the stop: 4.1 s, exit 3, no residuals file.
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let csv = synth_file(
+        "after_the_solve",
+        "rough.csv",
+        "sigma=20,T=100,scale=1",
+        "20x30x60",
+    );
+    let dir = csv.parent().unwrap().to_path_buf();
+    let (out, wall) = run_timed(
+        goniofit()
+            .args(["fit", "--model", "kbs", "--mode", "series"])
+            .args(["--init", "sigma=25,T=160,scale=1", "--timeout", "4"])
+            .arg("--residuals")
+            .arg(dir.join("residuals.csv"))
+            .arg(&csv),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    let text = String::from_utf8_lossy(&out.stdout);
+    if out.stdout.is_empty() {
+        // A machine so loaded that the first evaluation had not finished within 4 s.
+        assert_nothing_fitted(&out, "time limit reached");
+    } else if out.status.code() == Some(0) {
+        // A machine fast enough to converge within the limit: the whole residuals file.
+        assert!(text.contains("converged       = true"), "{text}");
+        let written = std::fs::read_to_string(dir.join("residuals.csv")).unwrap();
+        assert_eq!(written.lines().count(), 36001, "header and every sample");
+        return;
+    } else {
+        assert_eq!(out.status.code(), Some(3), "{err}");
+        assert_stopped_before_the_fitted_values(&text, &err, "timeout", 36000);
+    }
+    assert_eq!(files_in(&dir), ["rough.csv", "rough.truth.json"], "{err}");
+    // 4 s and one block (1024 samples, ~0.1 s of CPU) per thread; one more evaluation of
+    // the whole data would add ~1.5 s (more on a loaded machine).
+    assert!(wall < 4.8, "took {wall:.2} s with --timeout 4");
 }
 
 #[test]
