@@ -400,26 +400,14 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     }
     // Without the fitted values (a stop after the solve) the figures they give are not
     // computed: never printed as NaN.
-    let _ = writeln!(
-        s,
-        "    chi-square      = {}",
-        sci7(r.chi2, r.fitted_computed)
-    );
-    let _ = writeln!(
-        s,
-        "    reduced chi-sq  = {}",
-        sci7(r.reduced_chi2, r.fitted_computed)
-    );
-    let _ = writeln!(
-        s,
-        "    rms residual    = {}",
-        sci7(r.rms, r.fitted_computed)
-    );
-    let _ = writeln!(
-        s,
-        "    max |residual|  = {}",
-        sci7(r.max_abs_residual, r.fitted_computed)
-    );
+    for (label, v) in [
+        ("chi-square     ", r.chi2),
+        ("reduced chi-sq ", r.reduced_chi2),
+        ("rms residual   ", r.rms),
+        ("max |residual| ", r.max_abs_residual),
+    ] {
+        let _ = writeln!(s, "    {label} = {}", sci7(v, r.fitted_computed));
+    }
     let r2 = if r.fitted_computed {
         fixed(r.r2, 7)
     } else {
