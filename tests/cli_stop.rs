@@ -229,10 +229,21 @@ fn synth_file(name: &str, file: &str, params: &str, grid: &str) -> std::path::Pa
 /// the signal.
 #[cfg(unix)]
 fn interrupt_after(child: std::process::Child, wait: Duration) -> (std::process::Output, f64) {
+    signal_after(child, wait, "-INT")
+}
+
+/// Send `signal` (`kill`'s option: "-INT", "-TERM") to `child` after `wait`; its output,
+/// and the seconds it took to end after the signal.
+#[cfg(unix)]
+fn signal_after(
+    child: std::process::Child,
+    wait: Duration,
+    signal: &str,
+) -> (std::process::Output, f64) {
     std::thread::sleep(wait);
     let t0 = Instant::now();
     let status = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status()
         .expect("run kill");
     assert!(status.success());
@@ -391,39 +402,78 @@ fn sigint_while_eval_writes_leaves_no_temporary() {
 
 #[cfg(unix)]
 #[test]
-fn sigint_in_the_solver_prints_the_report_and_exits_3() {
+fn sigint_and_sigterm_in_the_solver_print_the_report_and_exit_3() {
     // From given starting values the forced series fit of the rough file has its first
-    // evaluation done within ~1 s and then needs many more (~0.7 s each): SIGINT at 3 s
+    // evaluation done within ~1 s and then needs many more (~0.7 s each): a signal at 3 s
     // lands in the solver. The report of the best point, exit 3; its evaluations being
     // slow, the fitted values at that point are not evaluated after the signal: no
     // residuals file, and the figures they give say "not computed" (on a machine so loaded
-    // that the first evaluation had not finished: nothing fitted).
+    // that the first evaluation had not finished: nothing fitted). SIGTERM the same as
+    // SIGINT (it was ignored for minutes inside one evaluation).
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
-    let csv = rough_file("sigint_solver");
-    let dir = csv.parent().unwrap().to_path_buf();
-    let residuals = dir.join("residuals.csv");
-    let child = goniofit()
-        .args(["fit", "--model", "kbs", "--mode", "series"])
-        .args(["--init", "sigma=8,T=60,scale=3", "--residuals"])
-        .arg(&residuals)
-        .arg(&csv)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start goniofit");
-    let (out, after) = interrupt_after(child, Duration::from_secs(3));
-    let text = String::from_utf8_lossy(&out.stdout);
-    if out.stdout.is_empty() {
-        assert_nothing_fitted(&out, "interrupted");
-    } else {
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(3), "{err}");
-        assert_stopped_before_the_fitted_values(&text, &err, "interrupted", 18000);
+    for signal in ["-INT", "-TERM"] {
+        let csv = rough_file(&format!("signal{signal}_solver"));
+        let dir = csv.parent().unwrap().to_path_buf();
+        let residuals = dir.join("residuals.csv");
+        let child = goniofit()
+            .args(["fit", "--model", "kbs", "--mode", "series"])
+            .args(["--init", "sigma=8,T=60,scale=3", "--residuals"])
+            .arg(&residuals)
+            .arg(&csv)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start goniofit");
+        let (out, after) = signal_after(child, Duration::from_secs(3), signal);
+        let text = String::from_utf8_lossy(&out.stdout);
+        if out.stdout.is_empty() {
+            assert_nothing_fitted(&out, "interrupted");
+        } else {
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(3), "{signal}: {err}");
+            assert_stopped_before_the_fitted_values(&text, &err, "interrupted", 18000);
+        }
+        assert_eq!(files_in(&dir), ["rough.csv", "rough.truth.json"]);
+        // One evaluation block per thread after the signal, then the report: well under a
+        // second unloaded; the bound allows a loaded machine.
+        assert!(after < 10.0, "{signal}: took {after:.2} s after the signal");
     }
-    assert_eq!(files_in(&dir), ["rough.csv", "rough.truth.json"]);
-    // One evaluation block per thread after the signal, then the report: well under a
-    // second unloaded; the bound allows a loaded machine.
-    assert!(after < 10.0, "took {after:.2} s after SIGINT");
+}
+
+#[test]
+fn a_forced_series_fit_of_very_rough_data_is_refused_with_a_hint() {
+    // σ = 300, T = 1500 at λ = 1 (g up to ~1e7): the series would sum thousands of terms
+    // per sample (one evaluation of a large file: minutes). Refused at once, exit 2, with
+    // the hint to use auto; `auto` fits the same file.
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let csv = synth_file(
+        "very_rough",
+        "rough.csv",
+        "sigma=300,T=1500,scale=1",
+        "5x10x20",
+    );
+    let (out, wall) = run_timed(
+        goniofit()
+            .args(["fit", "--model", "kbs", "--mode", "series"])
+            .arg(&csv),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(out.stdout.is_empty());
+    assert!(err.contains("(above 1e5)"), "{err}");
+    assert!(err.contains("use --mode auto"), "{err}");
+    assert!(wall < 5.0, "took {wall:.2} s to refuse");
+    let (out, _) = run_timed(
+        goniofit()
+            .args(["fit", "--model", "kbs", "--mode", "auto"])
+            .arg(&csv),
+    );
+    assert!(
+        matches!(out.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("[[Variables]]"));
 }
 
 /// Check the text report `text` (and standard error `err`) of a fit of `samples` that a
