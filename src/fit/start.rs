@@ -95,21 +95,9 @@ struct Refiners<'m> {
     sigma_k: Option<usize>,
     /// The subsample both problems are built on.
     sub: FitInput,
-    /// Largest σ a slide along the rough ridge may reach: where a forced `--mode series`
-    /// would refuse the start ([`series_sigma_max`]); infinite otherwise.
-    sigma_max: f64,
-}
-
-/// The σ above which a forced `--mode series` fit refuses its start (its g over `input`
-/// exceeds [`super::driver::SERIES_G_MAX`]); infinite in any other mode.
-fn series_sigma_max(config: &FitConfig, input: &FitInput) -> f64 {
-    if config.model_opts.mode != EvalMode::Series {
-        return f64::INFINITY;
-    }
-    let g1 = (0..input.geo.len())
-        .map(|i| input.geo.g(i, 1.0))
-        .fold(0.0f64, f64::max);
-    (super::driver::SERIES_G_MAX / g1).sqrt()
+    /// Whether σ or T has a value the user gave (`--init`): a slide along the rough ridge
+    /// would move it away from where the user asked the fit to start.
+    ridge_given: bool,
 }
 
 impl<'m> Refiners<'m> {
@@ -186,7 +174,8 @@ pub(super) fn starting_point(
         rough: rough_model.as_deref(),
         sigma_k,
         sub,
-        sigma_max: series_sigma_max(config, input),
+        ridge_given: sigma_k.is_some_and(|k| given[k].is_some())
+            || layout.find("T").iter().any(|&k| given[k].is_some()),
     };
     // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
     let stop = config.lm.stop.as_ref();
@@ -411,7 +400,8 @@ pub const RIDGE_STEPS: usize = 12;
 /// 4λ, so a lobe of σ ≈ 8λ would otherwise be judged at a σ where the exact cost is 10⁵
 /// times the truth's, and lose to a smooth-looking optimum (recovery issue #17). The slide
 /// steps by [`RIDGE_STEP`] while the exact cost falls, the point stays `inside` the domain
-/// (and below the σ a forced series accepts, `refiners.sigma_max`), and at most [`RIDGE_STEPS`] times, and no step is started after a stop request.
+/// and at most [`RIDGE_STEPS`] times, and no step is started after a stop request. A σ or
+/// T the user gave (`--init`) or held (`--fix`) is not slid.
 fn slide_rough_ridge(
     refiners: &Refiners,
     mut p: Vec<f64>,
@@ -425,7 +415,7 @@ fn slide_rough_ridge(
     };
     // A held σ (--fix) or T is not moved: the ridge is then not free to slide along.
     let held = |k: usize| refiners.exact.layout.params[k].fixed.is_some();
-    if held(ks) || held(kt) {
+    if held(ks) || held(kt) || refiners.ridge_given {
         return (cost, p);
     }
     for _ in 0..RIDGE_STEPS {
@@ -435,7 +425,7 @@ fn slide_rough_ridge(
         let mut q = p.clone();
         q[ks] *= RIDGE_STEP;
         q[kt] *= RIDGE_STEP;
-        if !inside(&q) || q[ks] > refiners.sigma_max {
+        if !inside(&q) {
             break;
         }
         let c = exact_cost(&q);
