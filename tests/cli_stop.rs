@@ -44,18 +44,23 @@ fn joint_fit_args() -> Vec<&'static str> {
 /// report if there is one).
 fn timed_out_fit(args: &[std::ffi::OsString]) -> (f64, Option<serde_json::Value>) {
     let (out, wall) = run_timed(goniofit().args(args).arg("--json"));
+    (wall, timed_out_report(&out))
+}
+
+/// The checks of [`timed_out_fit`] on a finished run's output: the report, if there is one.
+fn timed_out_report(out: &std::process::Output) -> Option<serde_json::Value> {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{err}");
     if out.stdout.is_empty() {
-        assert_nothing_fitted(&out, "time limit reached");
-        return (wall, None);
+        assert_nothing_fitted(out, "time limit reached");
+        return None;
     }
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON report");
     assert_eq!(v["termination"], "timeout");
     assert_eq!(v["converged"], false);
     let cost = v["cost"].as_f64().expect("a finite cost");
     assert!(cost.is_finite() && cost > 0.0, "cost {cost}");
-    (wall, Some(v))
+    Some(v)
 }
 
 #[test]
@@ -81,7 +86,7 @@ fn timeout_ends_a_joint_fit_with_its_report_and_exit_3() {
             );
             continue;
         }
-        let (wall, v) = timed_out_fit(&args);
+        let v = timed_out_report(&out);
         // A report says why it stopped (a stop in the start search leaves nothing fitted).
         if let Some(v) = v {
             let notes = v["notes"].to_string();
