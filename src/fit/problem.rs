@@ -634,10 +634,24 @@ impl FitProblem<'_> {
     }
 
     /// The Jacobian at `x` (solver variables) when the last evaluation was at `x` and left
-    /// it (handed over once); None otherwise.
+    /// it (handed over once); None otherwise, and then what the last evaluation left is
+    /// dropped (the solver asks for the Jacobian only at points it accepted, so one left at
+    /// another point is not asked for: a big fit does not hold a second `n × p` matrix
+    /// while the one asked for is evaluated).
     pub fn cached_jacobian(&self, x: &DVector<f64>) -> Option<DMatrix<f64>> {
         let mut c = self.cache.lock().ok()?;
-        c.as_mut().filter(|c| &c.x == x)?.jac.take()
+        if c.as_ref().is_some_and(|c| &c.x != x) {
+            *c = None;
+        }
+        c.as_mut()?.jac.take()
+    }
+
+    /// Drop what the last evaluation left for the solver (its Jacobian): at the end of a
+    /// solve, whose last trial point may have been rejected.
+    pub fn forget_cached(&self) {
+        if let Ok(mut c) = self.cache.lock() {
+            *c = None;
+        }
     }
 
     /// The Jacobian at `x`: the cached one ([`Self::cached_jacobian`]), else evaluated —
