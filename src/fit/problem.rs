@@ -13,7 +13,7 @@ pub use super::layout::{FitParam, ParamLayout, Transform, LINEAR, PER_CHANNEL};
 use super::lm::{LeastSquaresProblem, Stop};
 use super::loss::Loss;
 use crate::error::{Error, Result};
-use crate::geometry::{Column, Geometry};
+use crate::geometry::{Column, Geometry, PerSample};
 use crate::model::{Mode, Model};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -44,10 +44,10 @@ pub struct FitInput {
     pub geo: Geometry,
     /// Measured values (shared storage: a problem built on them refers to them).
     pub y: Column,
-    /// Weights wᵢ > 0.
-    pub weight: Vec<f64>,
-    /// Channel index per sample into `channel_names` (all 0 for a single channel).
-    pub channel: Vec<usize>,
+    /// Weights wᵢ > 0 (one value when they are all the same).
+    pub weight: PerSample,
+    /// Channel index per sample into `channel_names` (a single channel stores none).
+    pub channel: Channels,
     /// Channel names; one entry (possibly empty) for a single channel.
     pub channel_names: Vec<String>,
 }
@@ -70,9 +70,89 @@ impl FitInput {
         FitInput {
             geo: self.geo.subset(idx),
             y: idx.iter().map(|&i| self.y[i]).collect(),
-            weight: idx.iter().map(|&i| self.weight[i]).collect(),
-            channel: idx.iter().map(|&i| self.channel[i]).collect(),
+            weight: self.weight.subset(idx),
+            channel: self.channel.subset(idx),
             channel_names: self.channel_names.clone(),
+        }
+    }
+}
+
+/// The channel index of every sample: none stored when every sample is in channel 0 (a
+/// one-channel fit holds nothing per sample for it). Indexed like a slice (`c[i]`);
+/// [`Channels::from`] a vector of zeros stores none.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channels {
+    each: Option<Vec<usize>>,
+    len: usize,
+}
+
+impl Channels {
+    /// `len` samples, all in channel 0.
+    pub fn single(len: usize) -> Self {
+        Channels { each: None, len }
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Whether every sample is in channel 0.
+    pub fn is_single(&self) -> bool {
+        self.each.is_none()
+    }
+
+    /// The indices as a slice, None when every sample is in channel 0 (none stored).
+    pub fn as_slice(&self) -> Option<&[usize]> {
+        self.each.as_deref()
+    }
+
+    /// The indices in sample order.
+    pub fn iter(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.len).map(move |i| self[i])
+    }
+
+    /// The samples at the given indices.
+    pub fn subset(&self, idx: &[usize]) -> Channels {
+        match &self.each {
+            None => {
+                assert!(idx.iter().all(|&i| i < self.len), "subset out of range");
+                Channels::single(idx.len())
+            }
+            Some(e) => idx.iter().map(|&i| e[i]).collect::<Vec<usize>>().into(),
+        }
+    }
+}
+
+impl From<Vec<usize>> for Channels {
+    fn from(v: Vec<usize>) -> Self {
+        let len = v.len();
+        Channels {
+            each: v.iter().any(|&c| c != 0).then_some(v),
+            len,
+        }
+    }
+}
+
+impl std::ops::Index<usize> for Channels {
+    type Output = usize;
+    fn index(&self, i: usize) -> &usize {
+        const ZERO: usize = 0;
+        match &self.each {
+            Some(e) => &e[i],
+            None => {
+                assert!(
+                    i < self.len,
+                    "channel index {i} out of range for {}",
+                    self.len
+                );
+                &ZERO
+            }
         }
     }
 }
@@ -119,7 +199,9 @@ pub struct FitProblem<'a> {
     blocks: Vec<Block>,
     /// The input's measured values (shared, not a second copy of a big file's).
     y: Column,
-    sqrt_w: Vec<f64>,
+    /// √wᵢ (one value when the weights are all the same: a fit without weights holds no
+    /// per-sample weight).
+    sqrt_w: PerSample,
     kind: ResidualKind,
     /// Floor for relative and log residuals (in the unit of y).
     pub floor: f64,
@@ -174,7 +256,7 @@ impl<'a> FitProblem<'a> {
             return Err(Error::Numerical("inconsistent fit data lengths".into()));
         }
         let n_ch = layout.index.len();
-        let blocks = if channel.iter().all(|&c| c == 0) {
+        let blocks = if channel.is_single() {
             // One channel: blocks are runs of consecutive samples, their geometry a view of
             // the input's (nothing per sample is copied).
             (0..n)
@@ -207,7 +289,7 @@ impl<'a> FitProblem<'a> {
             layout,
             blocks,
             y: y.clone(),
-            sqrt_w: weight.iter().map(|w| w.sqrt()).collect(),
+            sqrt_w: weight.sqrt(),
             kind,
             floor,
             n,
@@ -232,7 +314,7 @@ impl<'a> FitProblem<'a> {
     pub fn cost_of(&self, r: &[f64]) -> f64 {
         0.5 * r
             .iter()
-            .zip(&self.sqrt_w)
+            .zip(self.sqrt_w.iter())
             .map(|(r, s)| self.loss.term(r * s))
             .sum::<f64>()
     }
@@ -380,7 +462,7 @@ impl<'a> FitProblem<'a> {
     pub fn weighted_residuals(&self, p: &[f64]) -> DVector<f64> {
         let (f, _) = self.model_values(p, false);
         let r = self.raw_residuals(&f);
-        DVector::from_iterator(self.n, r.iter().zip(&self.sqrt_w).map(|(r, s)| r * s))
+        DVector::from_iterator(self.n, r.iter().zip(self.sqrt_w.iter()).map(|(r, s)| r * s))
     }
 
     /// Measured values.
@@ -389,7 +471,7 @@ impl<'a> FitProblem<'a> {
     }
 
     /// √wᵢ.
-    pub fn sqrt_weight(&self) -> &[f64] {
+    pub fn sqrt_weight(&self) -> &PerSample {
         &self.sqrt_w
     }
 
