@@ -551,4 +551,31 @@ mod tests {
         let direct = Geometry::new(&samples[2..5], &[0.5], Quantity::Brdf).unwrap();
         assert!(part.c == direct.c && (0..3).all(|i| part.out_factor(i) == direct.out_factor(i)));
     }
+
+    #[test]
+    fn one_wavelength_or_weight_is_stored_once_and_read_as_given() {
+        let samples: Vec<Sample> = (0..5)
+            .map(|k| Sample::from_degrees(10.0 + k as f64, 20.0, 30.0))
+            .collect();
+        let one = Geometry::new(&samples, &[0.5; 5], Quantity::Radiance).unwrap();
+        assert_eq!(one.wavelength, PerSample::One { value: 0.5, len: 5 });
+        let each = [0.5, 0.6, 0.5, 0.7, 0.5];
+        let g = Geometry::new(&samples, &each, Quantity::Radiance).unwrap();
+        assert_eq!(g.wavelength.iter().collect::<Vec<_>>(), each);
+        assert_eq!((g.wavelength.median(), one.wavelength.median()), (0.5, 0.5));
+        assert_eq!(g.slice(1..4).wavelength[2], 0.7);
+        assert_eq!(
+            g.subset(&[3, 1]).wavelength.iter().collect::<Vec<_>>(),
+            [0.7, 0.6]
+        );
+        assert_eq!(
+            one.subset(&[4, 0]).wavelength,
+            PerSample::One { value: 0.5, len: 2 }
+        );
+        // Bits decide: −0 and 0 are not one value.
+        let w: PerSample = vec![0.0, -0.0].into();
+        assert!(matches!(w, PerSample::Each(_)) && w[1].is_sign_negative());
+        let w: PerSample = vec![4.0; 3].into();
+        assert_eq!(w.sqrt(), PerSample::One { value: 2.0, len: 3 });
+    }
 }

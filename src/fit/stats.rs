@@ -430,4 +430,45 @@ mod tests {
         );
         assert!((mean - b).abs() < 3.0 * sd / (trials as f64).sqrt() + 1e-3);
     }
+
+    #[test]
+    fn a_big_jacobian_reduced_to_its_r_factor_gives_the_same_uncertainty() {
+        // J repeats a 6 × 3 block k times (3·6k > 2^20 entries: the reduced path), so
+        // JᵀJ = k J₀ᵀJ₀: the unit-column singular values are J₀'s, the covariance at the
+        // same s² is J₀'s over k.
+        let j0 = DMatrix::from_row_slice(
+            6,
+            3,
+            &[
+                1.0, 0.5, -2.0, 0.3, 1.2, 0.7, -0.4, 2.0, 1.1, 2.2, -0.1, 0.4, 0.9, 0.8, -1.3,
+                -1.5, 0.6, 0.2,
+            ],
+        );
+        let k = 60_000;
+        let big = DMatrix::from_fn(6 * k, 3, |i, c| j0[(i % 6, c)]);
+        assert!(big.len() > REDUCE_ABOVE);
+        let (n, cost) = (6 * k, 0.5 * 6.0 * k as f64);
+        let ub = uncertainty(&big, cost, n, 1e-12);
+        let s2 = 2.0 * cost / (n - 3) as f64;
+        let u0 = uncertainty(&j0, 0.5 * s2 * 3.0, 6, 1e-12);
+        for c in 0..3 {
+            assert_relative_eq!(
+                ub.singular_values[c],
+                u0.singular_values[c],
+                max_relative = 1e-12
+            );
+            assert_relative_eq!(
+                ub.covariance[(c, c)] * k as f64,
+                u0.covariance[(c, c)],
+                max_relative = 1e-12
+            );
+        }
+        assert_relative_eq!(ub.condition, u0.condition, max_relative = 1e-12);
+        assert_relative_eq!(
+            ub.correlation[(0, 2)],
+            u0.correlation[(0, 2)],
+            max_relative = 1e-11
+        );
+        assert_eq!(ub.rank, 3);
+    }
 }

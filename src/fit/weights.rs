@@ -81,12 +81,19 @@ mod tests {
         let s = [0.02, 0.01, 0.01];
         let (w, info) = residual_weights(None, Some(&s), &y, ResidualKind::Relative, 0.1);
         // σ_r = σ_L/ŷ: 0.01, 0.02, 0.1 (the last ŷ is the floor).
-        assert_eq!(w, vec![1e4, 2500.0, 100.0]);
+        assert_eq!(w.iter().collect::<Vec<_>>(), vec![1e4, 2500.0, 100.0]);
         assert_eq!(info.source, "sigma_L column");
         let (w, _) = residual_weights(None, Some(&s), &y, ResidualKind::Absolute, 0.1);
-        assert_eq!(w, vec![2500.0, 1e4, 1e4]);
+        assert_eq!(w.iter().collect::<Vec<_>>(), vec![2500.0, 1e4, 1e4]);
         let (w, _) = residual_weights(Some(&[3.0, 1.0, 2.0]), None, &y, ResidualKind::Log, 0.1);
-        assert_eq!(w, vec![3.0, 1.0, 2.0]);
+        assert_eq!(w.iter().collect::<Vec<_>>(), vec![3.0, 1.0, 2.0]);
+        let (w, info) = residual_weights(None, None, &y, ResidualKind::Log, 0.1);
+        assert_eq!(
+            w,
+            PerSample::One { value: 1.0, len: 3 },
+            "none stored per sample"
+        );
+        assert_eq!((w[2], info.source.as_str()), (1.0, "none"));
         assert_eq!(floor_raised(&y, ResidualKind::Log, 0.1), 1);
         assert_eq!(floor_raised(&[-0.05, 0.2], ResidualKind::Relative, 0.1), 1);
         assert_eq!(floor_raised(&[-0.05, 0.2], ResidualKind::Log, 0.1), 1);
