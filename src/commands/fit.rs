@@ -383,7 +383,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     Ok(
         if outcomes
             .iter()
-            .all(|o| o.result.converged() && !o.intervals_stopped)
+            .all(|o| o.result.converged() && !o.intervals_stopped && o.result.fitted_computed)
             && !interrupted
             && skipped.is_empty()
         {
@@ -598,14 +598,21 @@ fn print_reports(
 }
 
 /// The outputs of a single fit: `--residuals`, `--html`, `--plot`.
+/// A fit whose stop request cut the evaluation of its fitted values (see
+/// [`FitResult::fitted_computed`]) writes neither the residuals file nor pictures, and
+/// says so.
 fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
-    if let Some(path) = &args.residuals {
+    if !o.result.fitted_computed {
+        if args.residuals.is_some() || args.plot.is_some() {
+            eprintln!("goniofit: no residuals file and no pictures written: the fit was stopped before its fitted values were evaluated");
+        }
+    } else if let Some(path) = &args.residuals {
         write_residuals(path, &o.dataset, &o.result)?;
     }
     if let Some(path) = &args.html {
         write_html(args, path, o, info)?;
     }
-    if let Some(dir) = &args.plot {
+    if let Some(dir) = args.plot.as_ref().filter(|_| o.result.fitted_computed) {
         let written = draw_pictures(args, dir, o, info)?;
         eprintln!(
             "goniofit: wrote {} pictures to {}",
@@ -657,7 +664,11 @@ const READING_BAR_BYTES: u64 = 4 << 20;
 /// inlined as SVG.
 fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
     let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
-    let written = draw_pictures(args, dir.path(), o, info)?;
+    let written = if o.result.fitted_computed {
+        draw_pictures(args, dir.path(), o, info)?
+    } else {
+        Vec::new()
+    };
     let mut pictures = Vec::new();
     for p in written
         .iter()

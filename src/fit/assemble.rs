@@ -56,10 +56,31 @@ pub(super) fn assemble(
     let p = &run.values;
     let n_free = free.len();
     let dof = (n - n_free).max(1) as f64;
-    let gof = goodness(&problem, input, p, n_free, config.weights_are_uncertainties);
+    let stop = config.lm.stop.as_ref().filter(|_| !quick(&run.lm));
+    let gof = goodness(
+        &problem,
+        input,
+        p,
+        n_free,
+        config.weights_are_uncertainties,
+        stop,
+    );
     let params = param_results(layout, specs, p, &unc, verdict, &mut notes);
     let derived = derived_quantities(layout, specs, p, &unc, verdict);
-    let sample_modes = problem.modes(p);
+    let sample_modes = gof.as_ref().and_then(|_| problem.modes_until(p, stop));
+    let (gof, sample_modes, fitted_computed) = match (gof, sample_modes) {
+        (Some(g), Some(m)) => (g, m, true),
+        (gof, _) => {
+            notes.push(if gof.is_some() {
+                SAMPLES_NOT_COMPUTED.to_string()
+            } else {
+                FITTED_NOT_COMPUTED.to_string()
+            });
+            let mut g = gof.unwrap_or_else(|| from_cost(&problem, run.lm.cost, n_free));
+            (g.fitted, g.residuals, g.std_residuals) = (Vec::new(), Vec::new(), Vec::new());
+            (g, Vec::new(), false)
+        }
+    };
     let mut modes = BTreeMap::new();
     for m in &sample_modes {
         *modes.entry(m.name().to_string()).or_insert(0) += 1;
@@ -101,6 +122,7 @@ pub(super) fn assemble(
         start_seconds: start.start_seconds,
         modes,
         g_range: g_range(layout, input, p),
+        fitted_computed,
         fitted: gof.fitted,
         residuals: gof.residuals,
         std_residuals: gof.std_residuals,
@@ -118,7 +140,49 @@ pub(super) fn assemble(
     result
 }
 
-/// Residuals, cost, χ², rms, R², AIC and BIC at `p`. Under a robust loss the
+/// The note of a fit whose stop request cut the evaluation of its fitted values at the
+/// reported point (after the solve; a fit whose evaluations are slower than
+/// [`QUICK_EVALUATION_SECONDS`] checks the stop between blocks of samples there).
+pub const FITTED_NOT_COMPUTED: &str = "the fit was stopped before its fitted values at the reported point were evaluated on the whole data: the cost is the solver's at that point, and the rms and max |residual|, R² (and χ² under a robust loss) were not computed, nor the residuals file and pictures";
+
+/// The note of a fit whose stop request cut the evaluation modes of its samples (after its
+/// fitted values).
+pub const SAMPLES_NOT_COMPUTED: &str = "the fit was stopped before the evaluation modes of its samples were found: the residuals file and pictures were not written";
+
+/// The mean seconds of one of the solver's evaluations at most which the fitted values and
+/// modes at the reported point are evaluated to the end after a stop request too (they cost
+/// about two evaluations: a quick fit stopped keeps its residuals file and pictures).
+pub const QUICK_EVALUATION_SECONDS: f64 = 0.25;
+
+/// Whether the solver's evaluations took at most [`QUICK_EVALUATION_SECONDS`] each.
+fn quick(lm: &super::lm::LmReport) -> bool {
+    lm.seconds <= QUICK_EVALUATION_SECONDS * lm.evaluations.max(1) as f64
+}
+
+/// The figures that the solver's cost at the reported point gives without the fitted
+/// values (see [`FITTED_NOT_COMPUTED`]): χ² = 2·cost under the linear loss, AIC and BIC
+/// from the objective 2·cost; rms, max |residual| and R² NaN (never printed as numbers).
+fn from_cost(problem: &FitProblem, cost: f64, n_free: usize) -> Goodness {
+    let nf = problem.len() as f64;
+    let objective = (2.0 * cost).max(f64::MIN_POSITIVE);
+    let linear = problem.loss().is_linear();
+    Goodness {
+        fitted: Vec::new(),
+        residuals: Vec::new(),
+        std_residuals: Vec::new(),
+        cost,
+        beyond_f_scale: None,
+        chi2: if linear { 2.0 * cost } else { f64::NAN },
+        rms: f64::NAN,
+        max_abs_residual: f64::NAN,
+        r2: f64::NAN,
+        aic: nf * (objective / nf).ln() + 2.0 * n_free as f64,
+        bic: nf * (objective / nf).ln() + n_free as f64 * nf.ln(),
+    }
+}
+
+/// Residuals, cost, χ², rms, R², AIC and BIC at `p`; None when `stop` was requested before
+/// the model values on every sample were evaluated. Under a robust loss the
 /// standardized residuals and AIC/BIC use the robust objective 2·cost = Σ C²ρ in place of
 /// χ² (the quantity the fit minimised, and the s² of its covariance), so that a few outliers
 /// neither inflate s nor decide a model comparison.
@@ -128,9 +192,10 @@ fn goodness(
     p: &[f64],
     n_free: usize,
     weights_are_uncertainties: bool,
-) -> Goodness {
+    stop: Option<&super::lm::Stop>,
+) -> Option<Goodness> {
     let n = problem.len();
-    let (fitted, _) = problem.model_values(p, false);
+    let (fitted, _) = problem.model_values_until(p, false, stop)?;
     let residuals = problem.raw_residuals(&fitted);
     let sw = problem.sqrt_weight();
     let chi2: f64 = residuals
@@ -168,7 +233,7 @@ fn goodness(
     let chi2_safe = objective.max(f64::MIN_POSITIVE);
     let aic = nf * (chi2_safe / nf).ln() + 2.0 * n_free as f64;
     let bic = nf * (chi2_safe / nf).ln() + n_free as f64 * nf.ln();
-    Goodness {
+    Some(Goodness {
         fitted,
         residuals,
         std_residuals,
@@ -180,7 +245,7 @@ fn goodness(
         r2,
         aic,
         bic,
-    }
+    })
 }
 
 /// Weighted R² in the space the residuals live in: the data itself, or ln y for log

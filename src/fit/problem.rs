@@ -259,7 +259,8 @@ impl<'a> FitProblem<'a> {
     ///
     /// With `stop`, a block that starts after the stop was requested is not evaluated: its
     /// values (and Jacobian) are NaN, so the evaluation ends within one block's time
-    /// ([`BLOCK`] samples) of the request and the solver rejects the point.
+    /// ([`BLOCK`] samples) of the request and the solver rejects the point. Returns
+    /// whether every block was evaluated (false: the stop cut the evaluation).
     fn eval_blocks(
         &self,
         p: &[f64],
@@ -267,12 +268,14 @@ impl<'a> FitProblem<'a> {
         stop: Option<&Stop>,
         finish: impl Fn(&Block, &mut [f64], &mut [f64]) + Sync,
         mut sink: impl FnMut(&Block, &[f64], &[f64]),
-    ) {
+    ) -> bool {
         let n_spec = self.model.params().len();
+        let cut = std::sync::atomic::AtomicBool::new(false);
         let run = |b: &Block| {
             let m = b.geo.len();
             let jac_len = if want_jac { m * n_spec } else { 0 };
             if stop.is_some_and(Stop::is_requested) {
+                cut.store(true, std::sync::atomic::Ordering::Relaxed);
                 return (vec![f64::NAN; m], vec![f64::NAN; jac_len]);
             }
             let mp = self.layout.model_params(p, b.channel);
@@ -287,25 +290,39 @@ impl<'a> FitProblem<'a> {
         if let [b] = &self.blocks[..] {
             let (f, jac) = run(b);
             sink(b, &f, &jac);
-            return;
-        }
-        for group in self.blocks.chunks(PARALLEL_GROUP) {
-            let parts: Vec<_> = group.par_iter().map(run).collect();
-            for (b, (f, jac)) in group.iter().zip(parts) {
-                sink(b, &f, &jac);
+        } else {
+            for group in self.blocks.chunks(PARALLEL_GROUP) {
+                let parts: Vec<_> = group.par_iter().map(run).collect();
+                for (b, (f, jac)) in group.iter().zip(parts) {
+                    sink(b, &f, &jac);
+                }
             }
         }
+        !cut.into_inner()
     }
 
     /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
     pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
+        self.model_values_until(p, want_jac, None)
+            .expect("an evaluation without a stop request is never cut")
+    }
+
+    /// [`Self::model_values`], or None when `stop` was requested before every block was
+    /// evaluated (it ends within one block's evaluation of the request).
+    #[allow(clippy::type_complexity)]
+    pub fn model_values_until(
+        &self,
+        p: &[f64],
+        want_jac: bool,
+        stop: Option<&Stop>,
+    ) -> Option<(Vec<f64>, Option<DMatrix<f64>>)> {
         let n_spec = self.model.params().len();
         let mut f = vec![0.0; self.n];
         let mut jac = want_jac.then(|| DMatrix::zeros(self.n, self.layout.len()));
-        self.eval_blocks(
+        let complete = self.eval_blocks(
             p,
             want_jac,
-            None,
+            stop,
             |_, _, _| {},
             |b, out, bj| {
                 let m = b.idx.len();
@@ -322,26 +339,39 @@ impl<'a> FitProblem<'a> {
                 }
             },
         );
-        (f, jac)
+        complete.then_some((f, jac))
     }
 
     /// Per-sample evaluation modes at full parameters `p`.
     pub fn modes(&self, p: &[f64]) -> Vec<Mode> {
-        let parts: Vec<Vec<Mode>> = self
+        self.modes_until(p, None)
+            .expect("modes without a stop request are never cut")
+    }
+
+    /// [`Self::modes`], or None when `stop` was requested before every block's modes were
+    /// found (a block that starts after the request is skipped: in `auto` mode finding a
+    /// sample's mode costs about an evaluation).
+    pub fn modes_until(&self, p: &[f64], stop: Option<&Stop>) -> Option<Vec<Mode>> {
+        let parts: Vec<Option<Vec<Mode>>> = self
             .blocks
             .par_iter()
             .map(|b| {
-                self.model
-                    .modes(&b.geo, &self.layout.model_params(p, b.channel))
+                if stop.is_some_and(Stop::is_requested) {
+                    return None;
+                }
+                Some(
+                    self.model
+                        .modes(&b.geo, &self.layout.model_params(p, b.channel)),
+                )
             })
             .collect();
         let mut modes = vec![Mode::Closed; self.n];
         for (b, part) in self.blocks.iter().zip(parts) {
-            for (m, i) in part.into_iter().zip(b.idx.iter()) {
+            for (m, i) in part?.into_iter().zip(b.idx.iter()) {
                 modes[i] = m;
             }
         }
-        modes
+        Some(modes)
     }
 
     /// Unweighted residuals rᵢ of the chosen kind for model values f.

@@ -124,6 +124,11 @@ pub struct FitResult {
     pub modes: BTreeMap<String, usize>,
     /// Range of g = (2πσ/λ)²(cos θi + cos θr)² over the samples (KBS models).
     pub g_range: Option<(f64, f64)>,
+    /// Whether the fitted values, residuals and evaluation modes of every sample were
+    /// computed at the reported point: false when a stop request cut their evaluation after
+    /// the solve (then those vectors and `modes` are empty, rms, max |residual| and R² are
+    /// NaN, a note says so, and the command exits 3 without a residuals file or pictures).
+    pub fitted_computed: bool,
     pub fitted: Vec<f64>,
     pub residuals: Vec<f64>,
     pub std_residuals: Vec<f64>,

@@ -33,40 +33,122 @@ use std::io::{ErrorKind, Write};
 use std::path::{Component, Path, PathBuf};
 use std::sync::Mutex;
 
-/// Temporaries being written right now, removed by [`remove_temporaries`] on an interrupt.
-static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Temporaries that exist (or are about to be made) right now, removed by
+/// [`remove_temporaries`] on an interrupt; `closed` once it ran (the process is ending).
+struct Temporaries {
+    paths: Vec<PathBuf>,
+    closed: bool,
+}
+
+static TEMPORARIES: Mutex<Temporaries> = Mutex::new(Temporaries {
+    paths: Vec::new(),
+    closed: false,
+});
+
+/// The list, also after a thread panicked while holding it.
+fn temporaries() -> std::sync::MutexGuard<'static, Temporaries> {
+    TEMPORARIES
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 /// Remove every temporary file an unfinished [`write_atomic`] holds. The interrupt handler
-/// calls this before it ends the process, so that Ctrl-C never leaves a hidden
-/// `.goniofit-*.tmp` behind. Safe to call from any thread at any time (a temporary that was
-/// already renamed into place is not touched: its name no longer exists).
+/// calls this just before it ends the process, so that Ctrl-C never leaves a hidden
+/// `.goniofit-*.tmp` behind, whatever the moment: a temporary is listed before it is
+/// created and created, renamed into place or removed only while the list is held, so the
+/// handler sees each one either not yet made (and then never made: after this call no
+/// temporary is created nor renamed into place, the writing thread waits for the end of
+/// the process) or made and not yet renamed (removed here). Safe to call from any thread
+/// at any time.
 pub fn remove_temporaries() {
-    let list = match TEMPORARIES.lock() {
-        Ok(l) => l,
-        Err(poisoned) => poisoned.into_inner(),
-    };
-    for p in list.iter() {
+    let mut list = temporaries();
+    list.closed = true;
+    for p in &list.paths {
         let _ = std::fs::remove_file(p);
     }
 }
 
-/// A registered temporary: listed while alive, unlisted on drop.
-struct Registered(PathBuf);
+/// The thread of a [`write_atomic`] that came after [`remove_temporaries`]: the process is
+/// ending; wait for it without touching any file.
+fn wait_for_the_end() -> ! {
+    loop {
+        std::thread::park();
+    }
+}
+
+/// A registered temporary: listed from before it is created, removed (unless renamed into
+/// place by [`Registered::persist`]) and unlisted on drop.
+struct Registered {
+    path: PathBuf,
+    file: std::fs::File,
+    persisted: bool,
+}
 
 impl Registered {
-    fn new(path: &Path) -> Self {
-        if let Ok(mut l) = TEMPORARIES.lock() {
-            l.push(path.to_path_buf());
+    /// Create a new hidden temporary in `dir`, listed before it exists.
+    fn create_in(dir: &Path) -> std::io::Result<Registered> {
+        static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let mut open = std::fs::OpenOptions::new();
+        open.write(true).create_new(true);
+        // An ordinary output file: 0o666 less the umask, not a temporary's private 0o600.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::OpenOptionsExt;
+            open.mode(0o666);
         }
-        Registered(path.to_path_buf())
+        let mut tries = 0;
+        loop {
+            let k = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let salt: u32 = rand::random();
+            let path = dir.join(format!(
+                ".goniofit-{}-{k}-{salt:08x}.tmp",
+                std::process::id()
+            ));
+            let mut list = temporaries();
+            if list.closed {
+                drop(list);
+                wait_for_the_end();
+            }
+            list.paths.push(path.clone());
+            match open.open(&path) {
+                Ok(file) => {
+                    return Ok(Registered {
+                        path,
+                        file,
+                        persisted: false,
+                    })
+                }
+                Err(e) => {
+                    list.paths.pop();
+                    tries += 1;
+                    if e.kind() != ErrorKind::AlreadyExists || tries >= 100 {
+                        return Err(e);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Rename the temporary over `target` (atomic on one file system).
+    fn persist(mut self, target: &Path) -> std::io::Result<()> {
+        let list = temporaries();
+        if list.closed {
+            drop(list);
+            wait_for_the_end();
+        }
+        std::fs::rename(&self.path, target)?;
+        self.persisted = true;
+        Ok(())
     }
 }
 
 impl Drop for Registered {
     fn drop(&mut self) {
-        if let Ok(mut l) = TEMPORARIES.lock() {
-            l.retain(|p| p != &self.0);
+        let mut list = temporaries();
+        if !self.persisted {
+            let _ = std::fs::remove_file(&self.path);
         }
+        list.paths.retain(|p| p != &self.path);
     }
 }
 
@@ -232,25 +314,14 @@ fn replace(
             message: "is a directory (name a file to write)".into(),
         });
     }
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".goniofit-").suffix(".tmp");
-    // An ordinary output file: 0o666 less the umask, not the temporary's private 0o600.
-    #[cfg(unix)]
+    let tmp = Registered::create_in(&dir).map_err(|e| open_error(path, Some(&dir), e))?;
     {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let tmp = builder
-        .tempfile_in(&dir)
-        .map_err(|e| open_error(path, Some(&dir), e))?;
-    let _listed = Registered::new(tmp.path());
-    {
-        let mut w = std::io::BufWriter::new(tmp.as_file());
+        let mut w = std::io::BufWriter::new(&tmp.file);
         f(&mut w).map_err(write_err)?;
         w.flush().map_err(write_err)?;
     }
-    tmp.as_file().sync_all().map_err(write_err)?;
-    tmp.persist(target).map_err(|e| write_err(e.error))?;
+    tmp.file.sync_all().map_err(write_err)?;
+    tmp.persist(target).map_err(write_err)?;
     Ok(())
 }
 

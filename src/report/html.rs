@@ -240,7 +240,10 @@ fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
             ("samples", r.n.to_string()),
             ("free parameters", r.n_free.to_string()),
             ("cost ½Σwr²", format!("{:.7e}", r.cost)),
-            ("reduced χ²", format!("{:.7e}", r.reduced_chi2)),
+            (
+                "reduced χ²",
+                super::text::sci7(r.reduced_chi2, r.fitted_computed),
+            ),
             ("R²", super::text::fixed(r.r2, 7)),
             ("iterations", r.iterations.to_string()),
         ],

@@ -117,6 +117,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "init_seconds": r.init_seconds,
         "start_seconds": r.start_seconds,
         "modes": r.modes,
+        "fitted_computed": r.fitted_computed,
         "g_range": r.g_range.map(|(a, b)| vec![num(a), num(b)]),
         "input": info.input,
         "setting": info.setting,

@@ -35,6 +35,19 @@ fn sci(v: f64) -> String {
     }
 }
 
+/// `v` with 8 significant digits; "not computed" when it is not a finite number and the
+/// fitted values it comes from were not `computed` (a stop request came first).
+pub fn sci7(v: f64, computed: bool) -> String {
+    if computed || v.is_finite() {
+        format!("{v:.7e}")
+    } else {
+        NOT_COMPUTED.to_string()
+    }
+}
+
+/// A figure of the report that a stop request kept from being computed.
+const NOT_COMPUTED: &str = "not computed (the fit was stopped first)";
+
 /// A number printed with `digits` decimals, without a negative zero (R² of a fit no better
 /// than the mean prints as 0.0000000, not −0.0000000). Non-finite values print as `n/a`.
 pub fn fixed(v: f64, digits: usize) -> String {
@@ -385,18 +398,34 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
             );
         }
     }
-    let _ = writeln!(s, "    chi-square      = {:.7e}", r.chi2);
-    let _ = writeln!(s, "    reduced chi-sq  = {:.7e}", r.reduced_chi2);
-    let _ = writeln!(s, "    rms residual    = {:.7e}", r.rms);
-    let _ = writeln!(s, "    max |residual|  = {:.7e}", r.max_abs_residual);
-    let _ = writeln!(s, "    R-squared       = {}", fixed(r.r2, 7));
+    // Without the fitted values (a stop after the solve) the figures they give are not
+    // computed: never printed as NaN.
+    for (label, v) in [
+        ("chi-square     ", r.chi2),
+        ("reduced chi-sq ", r.reduced_chi2),
+        ("rms residual   ", r.rms),
+        ("max |residual| ", r.max_abs_residual),
+    ] {
+        let _ = writeln!(s, "    {label} = {}", sci7(v, r.fitted_computed));
+    }
+    let r2 = if r.fitted_computed {
+        fixed(r.r2, 7)
+    } else {
+        NOT_COMPUTED.to_string()
+    };
+    let _ = writeln!(s, "    R-squared       = {r2}");
     let _ = writeln!(s, "    AIC             = {}", fixed(r.aic, 4));
     let _ = writeln!(s, "    BIC             = {}", fixed(r.bic, 4));
     if let Some((lo, hi)) = r.g_range {
         let _ = writeln!(s, "    g range         = {lo:.3e} .. {hi:.3e}");
     }
     let modes: Vec<String> = r.modes.iter().map(|(k, v)| format!("{k}: {v}")).collect();
-    let _ = writeln!(s, "    evaluation modes= {}", modes.join(", "));
+    let modes = if r.fitted_computed {
+        modes.join(", ")
+    } else {
+        NOT_COMPUTED.to_string()
+    };
+    let _ = writeln!(s, "    evaluation modes= {modes}");
     variable_lines(&mut s, r, &info.setting.units);
     interval_lines(&mut s, r, info);
     let _ = writeln!(s, "[[Identifiability]]");
