@@ -114,7 +114,9 @@ impl FitResult {
         self.outcome.result.notes.clone()
     }
 
-    /// The fitted values (radiance or BRDF, as measured) per sample.
+    /// The fitted values (radiance or BRDF, as measured) per sample; empty (as
+    /// ``residuals`` and ``std_residuals``) when a time limit or interrupt cut their
+    /// evaluation after the solve (a fit whose evaluations are slow; the notes say so).
     #[getter]
     #[allow(non_snake_case)]
     fn L_fit<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {

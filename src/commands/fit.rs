@@ -637,7 +637,7 @@ fn draw_pictures(
         dir,
         &config,
         &o.input,
-        (&o.result.layout, &o.result.values),
+        (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
         &status,
         wavelength_unit(args, &o.dataset).as_deref(),
     )

@@ -80,7 +80,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         &args.out,
         &config,
         &input,
-        (&layout, &values),
+        (&layout, &values, None),
         &status,
         unit.as_deref(),
     )?;
@@ -137,7 +137,8 @@ pub fn plot_status(json: &serde_json::Value) -> String {
     parts.join("; ")
 }
 
-/// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`), with `status`
+/// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`; `fit.2` its
+/// fitted values when the fit has them, else they are evaluated here), with `status`
 /// (see [`plot_status`]) under their titles and λ in `unit`. A joint fit draws every
 /// channel with its own parameters (the polar and contour maps: the busiest θi's channel,
 /// named in their titles).
@@ -145,7 +146,7 @@ pub fn plot_fit(
     dir: &Path,
     config: &FitConfig,
     input: &FitInput,
-    (layout, values): (&goniofit::fit::problem::ParamLayout, &[f64]),
+    (layout, values, fitted): (&goniofit::fit::problem::ParamLayout, &[f64], Option<&[f64]>),
     status: &str,
     unit: Option<&str>,
 ) -> anyhow::Result<Vec<PathBuf>> {
@@ -159,7 +160,10 @@ pub fn plot_fit(
         config.residual,
         floor,
     )?;
-    let (fitted, _) = problem.model_values(values, false);
+    let fitted = match fitted.filter(|f| f.len() == input.y.len()) {
+        Some(f) => f.to_vec(),
+        None => problem.model_values(values, false).0,
+    };
     let residuals = problem.raw_residuals(&fitted);
     let std_residuals = driver::standardized_residuals(
         &residuals,
