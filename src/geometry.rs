@@ -84,6 +84,121 @@ impl PartialEq for Column {
     }
 }
 
+/// A per-sample value that is often the same for every sample (a fit's wavelength, its
+/// weights): that one value (stored once), or a [`Column`]. Indexed like a column
+/// (`v[i]`); [`PerSample::from`] a vector keeps one value when every entry has the same
+/// bits, so reading it gives exactly the entries given.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PerSample {
+    One { value: f64, len: usize },
+    Each(Column),
+}
+
+impl PerSample {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        match self {
+            PerSample::One { len, .. } => *len,
+            PerSample::Each(c) => c.len(),
+        }
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The values in sample order.
+    pub fn iter(&self) -> impl Iterator<Item = f64> + '_ {
+        (0..self.len()).map(move |i| self[i])
+    }
+
+    /// √v of every sample, in the same form (one value, or a column).
+    pub fn sqrt(&self) -> PerSample {
+        match self {
+            PerSample::One { value, len } => PerSample::One {
+                value: value.sqrt(),
+                len: *len,
+            },
+            PerSample::Each(c) => PerSample::Each(c.iter().map(|v| v.sqrt()).collect()),
+        }
+    }
+
+    /// The median value ([`crate::fit::stats::median`]; NaN without samples).
+    pub fn median(&self) -> f64 {
+        match self {
+            PerSample::One { value, len } if *len > 0 => *value,
+            PerSample::One { .. } => f64::NAN,
+            PerSample::Each(c) => crate::fit::stats::median(c),
+        }
+    }
+
+    /// The samples `range` (a column's storage is shared).
+    pub fn slice(&self, range: std::ops::Range<usize>) -> PerSample {
+        match self {
+            PerSample::One { value, len } => {
+                assert!(
+                    range.start <= range.end && range.end <= *len,
+                    "slice out of range"
+                );
+                PerSample::One {
+                    value: *value,
+                    len: range.len(),
+                }
+            }
+            PerSample::Each(c) => PerSample::Each(c.slice(range)),
+        }
+    }
+
+    /// The samples at the given indices.
+    pub fn subset(&self, idx: &[usize]) -> PerSample {
+        match self {
+            PerSample::One { value, len } => {
+                assert!(idx.iter().all(|&i| i < *len), "subset out of range");
+                PerSample::One {
+                    value: *value,
+                    len: idx.len(),
+                }
+            }
+            PerSample::Each(c) => PerSample::Each(idx.iter().map(|&i| c[i]).collect()),
+        }
+    }
+}
+
+impl From<Vec<f64>> for PerSample {
+    fn from(v: Vec<f64>) -> Self {
+        match v.first() {
+            Some(&first) if v.iter().all(|x| x.to_bits() == first.to_bits()) => PerSample::One {
+                value: first,
+                len: v.len(),
+            },
+            _ => PerSample::Each(v.into()),
+        }
+    }
+}
+
+impl FromIterator<f64> for PerSample {
+    fn from_iter<I: IntoIterator<Item = f64>>(iter: I) -> Self {
+        Vec::from_iter(iter).into()
+    }
+}
+
+impl std::ops::Index<usize> for PerSample {
+    type Output = f64;
+    fn index(&self, i: usize) -> &f64 {
+        match self {
+            PerSample::One { value, len } => {
+                assert!(
+                    i < *len,
+                    "wavelength index {i} out of range for {len} samples"
+                );
+                value
+            }
+            PerSample::Each(c) => &c[i],
+        }
+    }
+}
+
 /// One measurement direction pair, in radians.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
@@ -182,10 +297,9 @@ pub struct Geometry {
     /// φr wrapped to (−π, π].
     pub phi_r: Column,
     pub cos_i: Column,
-    pub cos_r: Column,
-    /// Wavelength of each sample (unit of σ, T).
-    pub wavelength: Column,
-    /// c = cos θi + cos θr = |v_z|/k.
+    /// Wavelength of each sample (unit of σ, T): one value for all, or a column.
+    pub wavelength: PerSample,
+    /// c = cos θi + cos θr = |v_z|/k (cos θr itself is not stored: nothing needs it).
     pub c: Column,
     /// h = |v|²/(2k²) = 1 + cos θi cos θr − sin θi sin θr cos φr, computed without
     /// cancellation (≥ 0).
@@ -201,8 +315,6 @@ struct Columns {
     theta_r: Vec<f64>,
     phi_r: Vec<f64>,
     cos_i: Vec<f64>,
-    cos_r: Vec<f64>,
-    wavelength: Vec<f64>,
     c: Vec<f64>,
     h: Vec<f64>,
     vxy2: Vec<f64>,
@@ -216,8 +328,6 @@ impl Columns {
             theta_r: v(),
             phi_r: v(),
             cos_i: v(),
-            cos_r: v(),
-            wavelength: v(),
             c: v(),
             h: v(),
             vxy2: v(),
@@ -259,7 +369,7 @@ impl Geometry {
         }
         let n = samples.len();
         let mut g = Columns::with_capacity(n);
-        for (i, s) in samples.iter().enumerate() {
+        for s in samples {
             let phi = wrap_phi(s.phi_r);
             let (sin_i, cos_i) = s.theta_i.sin_cos();
             let (sin_r, cos_r) = s.theta_r.sin_cos();
@@ -269,12 +379,6 @@ impl Geometry {
             g.theta_r.push(s.theta_r);
             g.phi_r.push(phi);
             g.cos_i.push(cos_i);
-            g.cos_r.push(cos_r);
-            g.wavelength.push(if wavelength.len() == 1 {
-                wavelength[0]
-            } else {
-                wavelength[i]
-            });
             g.c.push(cos_i + cos_r);
             // 1 + cos(θi+θr) + 2 sinθi sinθr sin²(φ/2), both terms ≥ 0.
             g.h.push(2.0 * half_sum_cos * half_sum_cos + 2.0 * sin_i * sin_r * half_sin2);
@@ -287,8 +391,15 @@ impl Geometry {
             theta_r: g.theta_r.into(),
             phi_r: g.phi_r.into(),
             cos_i: g.cos_i.into(),
-            cos_r: g.cos_r.into(),
-            wavelength: g.wavelength.into(),
+            wavelength: match wavelength {
+                [first, ..] if wavelength.iter().all(|l| l.to_bits() == first.to_bits()) => {
+                    PerSample::One {
+                        value: *first,
+                        len: n,
+                    }
+                }
+                each => PerSample::Each(each.to_vec().into()),
+            },
             c: g.c.into(),
             h: g.h.into(),
             vxy2: g.vxy2.into(),
@@ -346,8 +457,7 @@ impl Geometry {
             theta_r: s(&self.theta_r),
             phi_r: s(&self.phi_r),
             cos_i: s(&self.cos_i),
-            cos_r: s(&self.cos_r),
-            wavelength: s(&self.wavelength),
+            wavelength: self.wavelength.slice(range.clone()),
             c: s(&self.c),
             h: s(&self.h),
             vxy2: s(&self.vxy2),
@@ -369,8 +479,7 @@ impl Geometry {
             theta_r: pick(&self.theta_r),
             phi_r: pick(&self.phi_r),
             cos_i: pick(&self.cos_i),
-            cos_r: pick(&self.cos_r),
-            wavelength: pick(&self.wavelength),
+            wavelength: self.wavelength.subset(idx),
             c: pick(&self.c),
             h: pick(&self.h),
             vxy2: pick(&self.vxy2),
@@ -441,5 +550,32 @@ mod tests {
         assert_eq!(part.slice(1..3).theta_i[1], g.theta_i[4]);
         let direct = Geometry::new(&samples[2..5], &[0.5], Quantity::Brdf).unwrap();
         assert!(part.c == direct.c && (0..3).all(|i| part.out_factor(i) == direct.out_factor(i)));
+    }
+
+    #[test]
+    fn one_wavelength_or_weight_is_stored_once_and_read_as_given() {
+        let samples: Vec<Sample> = (0..5)
+            .map(|k| Sample::from_degrees(10.0 + k as f64, 20.0, 30.0))
+            .collect();
+        let one = Geometry::new(&samples, &[0.5; 5], Quantity::Radiance).unwrap();
+        assert_eq!(one.wavelength, PerSample::One { value: 0.5, len: 5 });
+        let each = [0.5, 0.6, 0.5, 0.7, 0.5];
+        let g = Geometry::new(&samples, &each, Quantity::Radiance).unwrap();
+        assert_eq!(g.wavelength.iter().collect::<Vec<_>>(), each);
+        assert_eq!((g.wavelength.median(), one.wavelength.median()), (0.5, 0.5));
+        assert_eq!(g.slice(1..4).wavelength[2], 0.7);
+        assert_eq!(
+            g.subset(&[3, 1]).wavelength.iter().collect::<Vec<_>>(),
+            [0.7, 0.6]
+        );
+        assert_eq!(
+            one.subset(&[4, 0]).wavelength,
+            PerSample::One { value: 0.5, len: 2 }
+        );
+        // Bits decide: −0 and 0 are not one value.
+        let w: PerSample = vec![0.0, -0.0].into();
+        assert!(matches!(w, PerSample::Each(_)) && w[1].is_sign_negative());
+        let w: PerSample = vec![4.0; 3].into();
+        assert_eq!(w.sqrt(), PerSample::One { value: 2.0, len: 3 });
     }
 }

@@ -17,7 +17,7 @@ use crate::error::Result;
 use crate::fit::driver::{self, FitConfig, FitInput};
 use crate::fit::init;
 use crate::fit::lm::{self, LeastSquaresProblem, LmConfig};
-use crate::fit::problem::{FitProblem, ParamLayout, ResidualKind};
+use crate::fit::problem::{Channels, FitProblem, ParamLayout, ResidualKind};
 use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
 use crate::model::{self, EvalMode, Model, ModelOptions};
@@ -229,8 +229,8 @@ pub fn fit_input() -> Result<FitInput> {
     Ok(FitInput {
         geo: Geometry::new(&data.samples, &[1.0], Quantity::Radiance)?,
         y: data.value.into(),
-        weight: vec![1.0; n],
-        channel: vec![0; n],
+        weight: vec![1.0; n].into(),
+        channel: Channels::single(n),
         channel_names: vec![String::new()],
     })
 }

@@ -62,8 +62,8 @@ fn joint_synthetic(
     FitInput {
         geo,
         y: y.into(),
-        weight: vec![1.0; n],
-        channel,
+        weight: vec![1.0; n].into(),
+        channel: channel.into(),
         channel_names: names.iter().map(|s| s.to_string()).collect(),
     }
 }

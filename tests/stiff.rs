@@ -67,7 +67,7 @@ fn data(truth: [f64; 3], angles: &[AnglesDeg], level: f64, seed: u64) -> FitInpu
         geo: Geometry::new(&d.samples, &[1.0], Quantity::Radiance).unwrap(),
         y: d.value.into(),
         weight,
-        channel: vec![0; d.samples.len()],
+        channel: vec![0; d.samples.len()].into(),
         channel_names: vec![String::new()],
     }
 }
@@ -245,7 +245,7 @@ fn dynamic_range_1e6_with_log_residuals() {
         ..config()
     };
     let input = FitInput {
-        weight: vec![1.0; input.y.len()],
+        weight: vec![1.0; input.y.len()].into(),
         ..input
     };
     let r = fit(&input, &cfg).unwrap();

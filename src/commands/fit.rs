@@ -241,15 +241,17 @@ pub fn setting_of(
 
 /// The input file's absolute path, size and SHA-256.
 pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    let io_error = |source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let file = std::fs::File::open(path).map_err(io_error)?;
+    let (sha256, bytes) = report::checksum::sha256_hex_of(file).map_err(io_error)?;
     let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     Ok(report::setting::InputInfo {
         path: abs.display().to_string(),
-        sha256: report::checksum::sha256_hex(&bytes),
-        bytes: bytes.len() as u64,
+        sha256,
+        bytes,
     })
 }
 

@@ -187,7 +187,10 @@ pub fn plot_fit(
         std_residuals: &std_residuals,
         wavelength_unit: unit,
         channels: goniofit::plot::fit::Channels {
-            of_sample: if joint { &input.channel } else { &[] },
+            of_sample: match input.channel.as_slice() {
+                Some(c) if joint => c,
+                _ => &[],
+            },
             params: if joint { &params } else { &[] },
             names: &layout.channel_names,
         },

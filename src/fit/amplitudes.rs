@@ -48,7 +48,7 @@ impl Prepared {
             .iter()
             .zip(y)
             .map(|(sw, yi)| match kind {
-                ResidualKind::Absolute => *sw,
+                ResidualKind::Absolute => sw,
                 _ => sw / yi.abs().max(floor),
             })
             .collect();
@@ -296,7 +296,7 @@ fn refine_log(
         let r: Vec<f64> = f
             .iter()
             .zip(ly)
-            .zip(sw)
+            .zip(sw.iter())
             .map(|((fi, l), s)| s * (fi.max(floor).ln() - l))
             .collect();
         let cost = 0.5 * r.iter().map(|v| v * v).sum::<f64>();

@@ -198,7 +198,11 @@ fn goodness(
     let (fitted, _) = problem.model_values_until(p, false, stop)?;
     let residuals = problem.raw_residuals(&fitted);
     let sw = problem.sqrt_weight();
-    let chi2: f64 = residuals.iter().zip(sw).map(|(r, s)| (r * s).powi(2)).sum();
+    let chi2: f64 = residuals
+        .iter()
+        .zip(sw.iter())
+        .map(|(r, s)| (r * s).powi(2))
+        .sum();
     let linear = problem.loss().is_linear();
     let cost = if linear {
         0.5 * chi2
@@ -211,7 +215,7 @@ fn goodness(
     let beyond_f_scale = (!linear).then(|| {
         residuals
             .iter()
-            .zip(sw)
+            .zip(sw.iter())
             .filter(|(r, s)| (*r * *s).abs() > c)
             .count()
     });
@@ -254,16 +258,16 @@ fn r_squared(problem: &FitProblem, input: &FitInput, fitted: &[f64]) -> f64 {
     };
     let t: Vec<f64> = input.y.iter().map(|&v| space(v)).collect();
     let wsum: f64 = sw.iter().map(|s| s * s).sum();
-    let tbar = t.iter().zip(sw).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
+    let tbar = t.iter().zip(sw.iter()).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
     let ss_tot: f64 = t
         .iter()
-        .zip(sw)
+        .zip(sw.iter())
         .map(|(v, s)| (s * (v - tbar)).powi(2))
         .sum();
     let ss_res: f64 = fitted
         .iter()
         .zip(&t)
-        .zip(sw)
+        .zip(sw.iter())
         .map(|((f, v), s)| (s * (space(*f) - v)).powi(2))
         .sum();
     if ss_tot > 0.0 {
@@ -430,7 +434,7 @@ fn validity_of(r: &FitResult, input: &FitInput) -> Option<validity::Validity> {
         corr_len: corr.value,
         ratio_determined: ratio.determined,
         both_determined: (sigma.determined || sigma.fixed) && (corr.determined || corr.fixed),
-        wavelength: stats::median(&input.geo.wavelength),
+        wavelength: input.geo.wavelength.median(),
     };
     Some(validity::check(
         &surface,
@@ -455,13 +459,13 @@ fn g_range(layout: &ParamLayout, input: &FitInput, p: &[f64]) -> Option<(f64, f6
 /// inverse variances from stated uncertainties (or s = 0).
 pub fn standardized_residuals(
     residuals: &[f64],
-    sqrt_w: &[f64],
+    sqrt_w: &crate::geometry::PerSample,
     n_free: usize,
     weights_are_uncertainties: bool,
 ) -> Vec<f64> {
     let chi2: f64 = residuals
         .iter()
-        .zip(sqrt_w)
+        .zip(sqrt_w.iter())
         .map(|(r, s)| (r * s).powi(2))
         .sum();
     let dof = residuals.len().saturating_sub(n_free).max(1) as f64;
@@ -473,7 +477,7 @@ pub fn standardized_residuals(
     };
     residuals
         .iter()
-        .zip(sqrt_w)
+        .zip(sqrt_w.iter())
         .map(|(r, s)| r * s * scale)
         .collect()
 }

@@ -58,6 +58,9 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     // A stop before the Jacobian at the best point was evaluated leaves no uncertainty.
     let uncomputed = !run.lm.jacobian.iter().all(|v| v.is_finite()) && stop_requested(config);
     let mut identified = identify::identify(input, &problem, &run, config.reduce);
+    // The uncertainty is computed: the n × p Jacobian is not needed any more.
+    let mut run = run;
+    run.lm.jacobian = nalgebra::DMatrix::zeros(0, 0);
     if uncomputed {
         identified.verdict = Verdict::NotComputed;
     } else if validate::rough_by_construction(model, config) {

@@ -44,7 +44,12 @@ impl Key {
     /// The key of a grid over `axes` for a model (by name) on samples `geo` with channel
     /// indices `channel`; [`Key::push`] adds what else the grid's points depend on (given
     /// values, parameter indices, model options).
-    pub fn new(model_name: &str, geo: &Geometry, channel: &[usize], axes: &[Vec<f64>]) -> Self {
+    pub fn new(
+        model_name: &str,
+        geo: &Geometry,
+        channel: &super::problem::Channels,
+        axes: &[Vec<f64>],
+    ) -> Self {
         let mut k: Vec<u64> = Vec::with_capacity(16 + 9 * geo.len());
         k.extend(model_name.bytes().map(u64::from));
         k.push(u64::MAX);
@@ -54,8 +59,6 @@ impl Key {
             &geo.theta_r,
             &geo.phi_r,
             &geo.cos_i,
-            &geo.cos_r,
-            &geo.wavelength,
             &geo.c,
             &geo.h,
             &geo.vxy2,
@@ -63,7 +66,9 @@ impl Key {
             k.push(col.len() as u64);
             k.extend(col.iter().map(|v| v.to_bits()));
         }
-        k.extend(channel.iter().map(|&c| c as u64));
+        k.push(geo.wavelength.len() as u64);
+        k.extend(geo.wavelength.iter().map(f64::to_bits));
+        k.extend(channel.iter().map(|c| c as u64));
         for axis in axes {
             k.push(axis.len() as u64);
             k.extend(axis.iter().map(|v| v.to_bits()));

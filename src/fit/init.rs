@@ -229,7 +229,7 @@ impl Grid {
         input: &FitInput,
         sub_input: &FitInput,
     ) -> Self {
-        let lambda = median(&input.geo.wavelength);
+        let lambda = input.geo.wavelength.median();
         let c2_lambda = median(
             &(0..sub_input.geo.len())
                 .map(|i| (sub_input.geo.c[i] / sub_input.geo.wavelength[i]).powi(2))

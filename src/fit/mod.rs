@@ -6,6 +6,7 @@
 //! model selection, shared by the CLI and the Python package ([`dataset`]).
 
 pub mod amplitudes;
+pub mod channels;
 pub mod dataset;
 pub mod driver;
 pub mod grid_cache;

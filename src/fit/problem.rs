@@ -9,11 +9,12 @@
 //! With a robust loss ([`super::loss`]) the solver sees the cost residuals, the corrected
 //! Jacobian and the step residuals of [`super::loss::Loss::correct`] instead.
 //!
+pub use super::channels::Channels;
 pub use super::layout::{FitParam, ParamLayout, Transform, LINEAR, PER_CHANNEL};
 use super::lm::{LeastSquaresProblem, Stop};
 use super::loss::Loss;
 use crate::error::{Error, Result};
-use crate::geometry::{Column, Geometry};
+use crate::geometry::{Column, Geometry, PerSample};
 use crate::model::{Mode, Model};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -44,10 +45,10 @@ pub struct FitInput {
     pub geo: Geometry,
     /// Measured values (shared storage: a problem built on them refers to them).
     pub y: Column,
-    /// Weights wᵢ > 0.
-    pub weight: Vec<f64>,
-    /// Channel index per sample into `channel_names` (all 0 for a single channel).
-    pub channel: Vec<usize>,
+    /// Weights wᵢ > 0 (one value when they are all the same).
+    pub weight: PerSample,
+    /// Channel index per sample into `channel_names` (a single channel stores none).
+    pub channel: Channels,
     /// Channel names; one entry (possibly empty) for a single channel.
     pub channel_names: Vec<String>,
 }
@@ -70,8 +71,8 @@ impl FitInput {
         FitInput {
             geo: self.geo.subset(idx),
             y: idx.iter().map(|&i| self.y[i]).collect(),
-            weight: idx.iter().map(|&i| self.weight[i]).collect(),
-            channel: idx.iter().map(|&i| self.channel[i]).collect(),
+            weight: self.weight.subset(idx),
+            channel: self.channel.subset(idx),
             channel_names: self.channel_names.clone(),
         }
     }
@@ -119,7 +120,9 @@ pub struct FitProblem<'a> {
     blocks: Vec<Block>,
     /// The input's measured values (shared, not a second copy of a big file's).
     y: Column,
-    sqrt_w: Vec<f64>,
+    /// √wᵢ (one value when the weights are all the same: a fit without weights holds no
+    /// per-sample weight).
+    sqrt_w: PerSample,
     kind: ResidualKind,
     /// Floor for relative and log residuals (in the unit of y).
     pub floor: f64,
@@ -174,7 +177,7 @@ impl<'a> FitProblem<'a> {
             return Err(Error::Numerical("inconsistent fit data lengths".into()));
         }
         let n_ch = layout.index.len();
-        let blocks = if channel.iter().all(|&c| c == 0) {
+        let blocks = if channel.is_single() {
             // One channel: blocks are runs of consecutive samples, their geometry a view of
             // the input's (nothing per sample is copied).
             (0..n)
@@ -207,7 +210,7 @@ impl<'a> FitProblem<'a> {
             layout,
             blocks,
             y: y.clone(),
-            sqrt_w: weight.iter().map(|w| w.sqrt()).collect(),
+            sqrt_w: weight.sqrt(),
             kind,
             floor,
             n,
@@ -232,7 +235,7 @@ impl<'a> FitProblem<'a> {
     pub fn cost_of(&self, r: &[f64]) -> f64 {
         0.5 * r
             .iter()
-            .zip(&self.sqrt_w)
+            .zip(self.sqrt_w.iter())
             .map(|(r, s)| self.loss.term(r * s))
             .sum::<f64>()
     }
@@ -410,7 +413,7 @@ impl<'a> FitProblem<'a> {
     pub fn weighted_residuals(&self, p: &[f64]) -> DVector<f64> {
         let (f, _) = self.model_values(p, false);
         let r = self.raw_residuals(&f);
-        DVector::from_iterator(self.n, r.iter().zip(&self.sqrt_w).map(|(r, s)| r * s))
+        DVector::from_iterator(self.n, r.iter().zip(self.sqrt_w.iter()).map(|(r, s)| r * s))
     }
 
     /// Measured values.
@@ -419,7 +422,7 @@ impl<'a> FitProblem<'a> {
     }
 
     /// √wᵢ.
-    pub fn sqrt_weight(&self) -> &[f64] {
+    pub fn sqrt_weight(&self) -> &PerSample {
         &self.sqrt_w
     }
 
@@ -664,10 +667,24 @@ impl FitProblem<'_> {
     }
 
     /// The Jacobian at `x` (solver variables) when the last evaluation was at `x` and left
-    /// it (handed over once); None otherwise.
+    /// it (handed over once); None otherwise, and then what the last evaluation left is
+    /// dropped (the solver asks for the Jacobian only at points it accepted, so one left at
+    /// another point is not asked for: a big fit does not hold a second `n × p` matrix
+    /// while the one asked for is evaluated).
     pub fn cached_jacobian(&self, x: &DVector<f64>) -> Option<DMatrix<f64>> {
         let mut c = self.cache.lock().ok()?;
-        c.as_mut().filter(|c| &c.x == x)?.jac.take()
+        if c.as_ref().is_some_and(|c| &c.x != x) {
+            *c = None;
+        }
+        c.as_mut()?.jac.take()
+    }
+
+    /// Drop what the last evaluation left for the solver (its Jacobian): at the end of a
+    /// solve, whose last trial point may have been rejected.
+    pub fn forget_cached(&self) {
+        if let Ok(mut c) = self.cache.lock() {
+            *c = None;
+        }
     }
 
     /// The Jacobian at `x`: the cached one ([`Self::cached_jacobian`]), else evaluated —

@@ -233,10 +233,12 @@ impl Restricted<'_, '_> {
         // second m × n matrix for a big fit), then the held column removed.
         let e = self.base.evaluate(&x, self.stop.as_ref());
         let (r, mut jx) = (e.residuals, e.jacobian);
-        let held = jx.column(self.held).into_owned();
         for (i, &gi) in grad.iter().enumerate() {
             if i != self.held && gi != 0.0 {
-                jx.column_mut(i).axpy(gi, &held, 1.0);
+                for row in 0..m {
+                    let h = jx[(row, self.held)];
+                    jx[(row, i)] += gi * h;
+                }
             }
         }
         (r, jx.remove_column(self.held))
@@ -252,10 +254,13 @@ impl LeastSquaresProblem for Restricted<'_, '_> {
         r
     }
 
+    /// The cached Jacobian when the last evaluation was at `z`; else the cache is dropped
+    /// first (as [`FitProblem::cached_jacobian`] does: no stale `m × n` matrix is held
+    /// while the new one is evaluated).
     fn jacobian(&self, z: &DVector<f64>) -> DMatrix<f64> {
         if let Ok(mut c) = self.cache.lock() {
-            if c.as_ref().is_some_and(|(cz, _)| cz == z) {
-                if let Some((_, j)) = c.take() {
+            if let Some((cz, j)) = c.take() {
+                if &cz == z {
                     return j;
                 }
             }

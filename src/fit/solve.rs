@@ -31,6 +31,7 @@ pub(super) fn run_lm_in(
         (None, None) => lm::minimize(problem, x0, config),
         (stop, range) => lm::minimize(&Guarded::new(problem, stop.as_ref(), range), x0, config),
     };
+    problem.forget_cached();
     let mut lm = lm;
     canonicalise(problem, &mut lm);
     let values = problem.layout.from_x(&lm.x);

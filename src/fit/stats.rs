@@ -76,14 +76,19 @@ pub fn uncertainty(
     if p == 0 {
         return Uncertainty::filled(0, 0.0, 1.0, s2);
     }
-    let mut j = jacobian.clone();
-    if j.nrows() < p {
-        j = j.resize_vertically(p, 0.0);
-    }
-    if !j.iter().all(|v| v.is_finite()) {
+    if !jacobian.iter().all(|v| v.is_finite()) {
         return Uncertainty::filled(p, f64::NAN, f64::NAN, s2);
     }
-    let norms = unit_columns(&mut j);
+    let (j, norms) = if jacobian.len() > REDUCE_ABOVE {
+        reduced_unit_columns(jacobian)
+    } else {
+        let mut j = jacobian.clone();
+        if j.nrows() < p {
+            j = j.resize_vertically(p, 0.0);
+        }
+        let norms = unit_columns(&mut j);
+        (j, norms)
+    };
     let svd = j.svd(false, true);
     let v_t = svd.v_t.expect("SVD computed with V");
     let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
@@ -140,10 +145,9 @@ impl Uncertainty {
     }
 }
 
-/// Scale the columns of `j` to unit norm in place and return their norms (a zero or
-/// non-finite column keeps its entries and a factor 1).
-fn unit_columns(j: &mut DMatrix<f64>) -> Vec<f64> {
-    let norms: Vec<f64> = (0..j.ncols())
+/// The Euclidean norm of each column of `j`, 1 for a zero or non-finite one.
+fn column_norms(j: &DMatrix<f64>) -> Vec<f64> {
+    (0..j.ncols())
         .map(|k| {
             let d = j.column(k).norm();
             if d > 0.0 && d.is_finite() {
@@ -152,11 +156,51 @@ fn unit_columns(j: &mut DMatrix<f64>) -> Vec<f64> {
                 1.0
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Scale the columns of `j` to unit norm in place and return their norms (a zero or
+/// non-finite column keeps its entries and a factor 1).
+fn unit_columns(j: &mut DMatrix<f64>) -> Vec<f64> {
+    let norms = column_norms(j);
     for (k, d) in norms.iter().enumerate() {
         j.column_mut(k).unscale_mut(*d);
     }
     norms
+}
+
+/// Jacobians of more entries than this (1M: 8 MB) are reduced to the `p × p` triangular
+/// factor of their unit-column form before the SVD ([`reduced_unit_columns`]): no copy of
+/// a big fit's `n × p` matrix. Smaller ones are copied and decomposed as they are.
+const REDUCE_ABOVE: usize = 1 << 20;
+
+/// Rows of the unit-column Jacobian stacked under the running factor per QR step.
+const REDUCE_BLOCK: usize = 4096;
+
+/// The column norms of `j` (as [`unit_columns`] takes them) and the `p × p` upper
+/// triangular `R` of `Ĵ = Q R` for the unit-column `Ĵ`, accumulated block by block of rows
+/// (the QR of `[R; next rows of Ĵ]` each time), so at most [`REDUCE_BLOCK`] rows are
+/// copied at once. `R` has the singular values and right singular vectors of `Ĵ` (to
+/// rounding: both are backward stable). `j` must have at least `p` rows.
+fn reduced_unit_columns(j: &DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>) {
+    let (n, p) = j.shape();
+    let norms = column_norms(j);
+    let mut r = DMatrix::<f64>::zeros(0, p);
+    let mut first = 0;
+    while first < n {
+        let rows = REDUCE_BLOCK.min(n - first);
+        let top = r.nrows();
+        let stacked = DMatrix::from_fn(top + rows, p, |i, k| {
+            if i < top {
+                r[(i, k)]
+            } else {
+                j[(first + i - top, k)] / norms[k]
+            }
+        });
+        r = stacked.qr().r();
+        first += rows;
+    }
+    (r, norms)
 }
 
 /// A null direction `v` of the unit-column Jacobian taken back to the parameters,
@@ -385,5 +429,46 @@ mod tests {
             "scatter {sd:e} vs stderr {se_mean:e}"
         );
         assert!((mean - b).abs() < 3.0 * sd / (trials as f64).sqrt() + 1e-3);
+    }
+
+    #[test]
+    fn a_big_jacobian_reduced_to_its_r_factor_gives_the_same_uncertainty() {
+        // J repeats a 6 × 3 block k times (3·6k > 2^20 entries: the reduced path), so
+        // JᵀJ = k J₀ᵀJ₀: the unit-column singular values are J₀'s, the covariance at the
+        // same s² is J₀'s over k.
+        let j0 = DMatrix::from_row_slice(
+            6,
+            3,
+            &[
+                1.0, 0.5, -2.0, 0.3, 1.2, 0.7, -0.4, 2.0, 1.1, 2.2, -0.1, 0.4, 0.9, 0.8, -1.3,
+                -1.5, 0.6, 0.2,
+            ],
+        );
+        let k = 60_000;
+        let big = DMatrix::from_fn(6 * k, 3, |i, c| j0[(i % 6, c)]);
+        assert!(big.len() > REDUCE_ABOVE);
+        let (n, cost) = (6 * k, 0.5 * 6.0 * k as f64);
+        let ub = uncertainty(&big, cost, n, 1e-12);
+        let s2 = 2.0 * cost / (n - 3) as f64;
+        let u0 = uncertainty(&j0, 0.5 * s2 * 3.0, 6, 1e-12);
+        for c in 0..3 {
+            assert_relative_eq!(
+                ub.singular_values[c],
+                u0.singular_values[c],
+                max_relative = 1e-12
+            );
+            assert_relative_eq!(
+                ub.covariance[(c, c)] * k as f64,
+                u0.covariance[(c, c)],
+                max_relative = 1e-12
+            );
+        }
+        assert_relative_eq!(ub.condition, u0.condition, max_relative = 1e-12);
+        assert_relative_eq!(
+            ub.correlation[(0, 2)],
+            u0.correlation[(0, 2)],
+            max_relative = 1e-11
+        );
+        assert_eq!(ub.rank, 3);
     }
 }

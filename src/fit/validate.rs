@@ -65,7 +65,7 @@ fn hold_rough_sigma(layout: &mut ParamLayout, given: &mut [Option<f64>], input: 
     let Some(&ks) = layout.find("sigma").first() else {
         return;
     };
-    let held = given[ks].unwrap_or_else(|| stats::median(&input.geo.wavelength));
+    let held = given[ks].unwrap_or_else(|| input.geo.wavelength.median());
     layout.params[ks].fixed = Some(held);
     given[ks] = Some(held);
 }
@@ -194,7 +194,7 @@ pub(super) fn at_kbs_edge(layout: &ParamLayout, input: &FitInput, p: &[f64]) -> 
     let (Some(ks), Some(kt)) = (first("sigma"), first("T")) else {
         return false;
     };
-    let lambda = stats::median(&input.geo.wavelength);
+    let lambda = input.geo.wavelength.median();
     let k_t = 2.0 * std::f64::consts::PI * p[kt] / lambda;
     below(p[kt] / p[ks], MIN_T_OVER_SIGMA) || below(k_t, MIN_KT)
 }
@@ -216,7 +216,7 @@ pub(super) fn degeneracy(
     let first = |name: &str| layout.find(name).first().copied();
     if let (Some(ks), Some(kt)) = (first("sigma"), first("T")) {
         let (sigma, t) = (p[ks], p[kt]);
-        let lambda = stats::median(&input.geo.wavelength);
+        let lambda = input.geo.wavelength.median();
         if below(t / sigma, MIN_T_OVER_SIGMA) {
             return Some(format!(
                 "the data shows no specular lobe beyond the diffuse term: T/σ ran below {MIN_T_OVER_SIGMA} (T/σ = {:.3e}, rms slope 2σ/T = {:.3e}), far outside the surfaces KBS describes",

@@ -8,6 +8,7 @@
 //! `weight` column is taken as given (it states the weight of the residual itself).
 
 use super::problem::ResidualKind;
+use crate::geometry::PerSample;
 
 /// Where the weights came from, and how they were transformed.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -20,14 +21,14 @@ pub struct WeightsInfo {
 
 /// The weights wᵢ of the residuals of kind `kind` (see the module doc), and their
 /// description. `weight`: a weight column (used as given); `sigma_l`: an uncertainty column;
-/// neither: all weights 1. `floor` is the residual floor (relative, log).
+/// neither: all weights 1 (one value for every sample). `floor` is the residual floor (relative, log).
 pub fn residual_weights(
     weight: Option<&[f64]>,
     sigma_l: Option<&[f64]>,
     y: &[f64],
     kind: ResidualKind,
     floor: f64,
-) -> (Vec<f64>, WeightsInfo) {
+) -> (PerSample, WeightsInfo) {
     let info = |source: &str, transform: &str| WeightsInfo {
         source: source.into(),
         transform: transform.into(),
@@ -39,7 +40,7 @@ pub fn residual_weights(
                 ResidualKind::Relative => y[i].abs().max(floor),
                 ResidualKind::Log => y[i].max(floor),
             };
-            let w = (0..y.len()).map(|i| (scale(i) / s[i]).powi(2)).collect();
+            let w: PerSample = (0..y.len()).map(|i| (scale(i) / s[i]).powi(2)).collect();
             let transform = match kind {
                 ResidualKind::Absolute => "1/sigma_L²",
                 ResidualKind::Relative => {
@@ -49,8 +50,14 @@ pub fn residual_weights(
             };
             (w, info("sigma_L column", transform))
         }
-        (None, Some(w)) => (w.to_vec(), info("weight column", "as given")),
-        (None, None) => (vec![1.0; y.len()], info("none", "1 for every sample")),
+        (None, Some(w)) => (w.to_vec().into(), info("weight column", "as given")),
+        (None, None) => (
+            PerSample::One {
+                value: 1.0,
+                len: y.len(),
+            },
+            info("none", "1 for every sample"),
+        ),
     }
 }
 
@@ -74,12 +81,19 @@ mod tests {
         let s = [0.02, 0.01, 0.01];
         let (w, info) = residual_weights(None, Some(&s), &y, ResidualKind::Relative, 0.1);
         // σ_r = σ_L/ŷ: 0.01, 0.02, 0.1 (the last ŷ is the floor).
-        assert_eq!(w, vec![1e4, 2500.0, 100.0]);
+        assert_eq!(w.iter().collect::<Vec<_>>(), vec![1e4, 2500.0, 100.0]);
         assert_eq!(info.source, "sigma_L column");
         let (w, _) = residual_weights(None, Some(&s), &y, ResidualKind::Absolute, 0.1);
-        assert_eq!(w, vec![2500.0, 1e4, 1e4]);
+        assert_eq!(w.iter().collect::<Vec<_>>(), vec![2500.0, 1e4, 1e4]);
         let (w, _) = residual_weights(Some(&[3.0, 1.0, 2.0]), None, &y, ResidualKind::Log, 0.1);
-        assert_eq!(w, vec![3.0, 1.0, 2.0]);
+        assert_eq!(w.iter().collect::<Vec<_>>(), vec![3.0, 1.0, 2.0]);
+        let (w, info) = residual_weights(None, None, &y, ResidualKind::Log, 0.1);
+        assert_eq!(
+            w,
+            PerSample::One { value: 1.0, len: 3 },
+            "none stored per sample"
+        );
+        assert_eq!((w[2], info.source.as_str()), (1.0, "none"));
         assert_eq!(floor_raised(&y, ResidualKind::Log, 0.1), 1);
         assert_eq!(floor_raised(&[-0.05, 0.2], ResidualKind::Relative, 0.1), 1);
         assert_eq!(floor_raised(&[-0.05, 0.2], ResidualKind::Log, 0.1), 1);

@@ -25,6 +25,7 @@
 use crate::error::{Error, Result};
 use crate::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
 use crate::fit::lm::{LmConfig, Termination};
+use crate::fit::problem::Channels;
 use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
 use crate::model::{self, ModelOptions};
@@ -307,8 +308,8 @@ pub fn scene_input(scene: &Scene) -> Result<FitInput> {
     Ok(FitInput {
         geo,
         y: data.value.into(),
-        weight,
-        channel: vec![0; data.samples.len()],
+        weight: weight.into(),
+        channel: Channels::single(data.samples.len()),
         channel_names: vec![String::new()],
     })
 }

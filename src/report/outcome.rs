@@ -107,7 +107,7 @@ pub fn setting(
     );
     let mut values: Vec<f64> = Vec::new();
     if source.wavelength_source != "none" {
-        for &l in &input.geo.wavelength {
+        for l in input.geo.wavelength.iter() {
             if !values.contains(&l) {
                 values.push(l);
             }

@@ -11,7 +11,7 @@ pub mod intervals;
 
 use super::driver::{self, FitConfig, FitInput, FitResult};
 use super::lm::Stop;
-use super::problem::ResidualKind;
+use super::problem::{Channels, ResidualKind};
 use super::weights::residual_weights;
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Quantity};
@@ -91,6 +91,8 @@ impl DatasetFit {
 pub struct Outcome {
     /// What the reports call the dataset (a file name, `file [group]`, a Python group).
     pub label: String,
+    /// The dataset; after a one-channel fit without its samples, lines and values (the
+    /// input holds them), and a wavelength column of one value kept as that value once.
     pub dataset: Dataset,
     pub input: FitInput,
     /// One result per candidate model fitted, in [`DatasetFit::candidates`] order (a stop
@@ -202,8 +204,11 @@ pub fn fit_input(
         floor,
     );
     let (channel, channel_names) = match &ds.channel {
-        Some(labels) => channel_index(labels),
-        None => (vec![0; n], vec![String::new()]),
+        Some(labels) => {
+            let (index, names) = channel_index(labels);
+            (index.into(), names)
+        }
+        None => (Channels::single(n), vec![String::new()]),
     };
     Ok(FitInput {
         geo,
@@ -262,6 +267,13 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         ds.samples = Vec::new();
         ds.lines = Vec::new();
         ds.value = None;
+        // A wavelength column of one value (the geometry holds it): that value once.
+        if let Some(w) = ds.wavelength.as_mut() {
+            if w.iter().all(|l| l.to_bits() == w[0].to_bits()) {
+                w.truncate(1);
+                w.shrink_to_fit();
+            }
+        }
     }
     let stop = match &spec.config.lm.stop {
         Some(stop) => stop.clone(),
