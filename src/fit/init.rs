@@ -417,11 +417,10 @@ pub fn search_input(input: &FitInput, max: usize) -> FitInput {
     idx.dedup();
     let mut sub = input.subset(&idx);
     let share = m as f64 / (n - near) as f64;
-    for (w, &i) in sub.weight.iter_mut().zip(&idx) {
-        if is_near[i] {
-            *w *= share;
-        }
-    }
+    let weight = &sub.weight;
+    sub.weight = (0..idx.len())
+        .map(|j| weight[j] * if is_near[idx[j]] { share } else { 1.0 })
+        .collect();
     sub
 }
 
