@@ -56,31 +56,10 @@ pub(super) fn assemble(
     let p = &run.values;
     let n_free = free.len();
     let dof = (n - n_free).max(1) as f64;
-    let stop = config.lm.stop.as_ref().filter(|_| !quick(&run.lm));
-    let gof = goodness(
-        &problem,
-        input,
-        p,
-        n_free,
-        config.weights_are_uncertainties,
-        stop,
-    );
+    let (gof, sample_modes, fitted_computed) =
+        fitted_at_point(&problem, input, &run.lm, p, config, &mut notes);
     let params = param_results(layout, specs, p, &unc, verdict, &mut notes);
     let derived = derived_quantities(layout, specs, p, &unc, verdict);
-    let sample_modes = gof.as_ref().and_then(|_| problem.modes_until(p, stop));
-    let (gof, sample_modes, fitted_computed) = match (gof, sample_modes) {
-        (Some(g), Some(m)) => (g, m, true),
-        (gof, _) => {
-            notes.push(if gof.is_some() {
-                SAMPLES_NOT_COMPUTED.to_string()
-            } else {
-                FITTED_NOT_COMPUTED.to_string()
-            });
-            let mut g = gof.unwrap_or_else(|| from_cost(&problem, run.lm.cost, n_free));
-            (g.fitted, g.residuals, g.std_residuals) = (Vec::new(), Vec::new(), Vec::new());
-            (g, Vec::new(), false)
-        }
-    };
     let mut modes = BTreeMap::new();
     for m in &sample_modes {
         *modes.entry(m.name().to_string()).or_insert(0) += 1;
@@ -140,6 +119,39 @@ pub(super) fn assemble(
     result
 }
 
+/// The fitted values, goodness of fit and per-sample evaluation modes at the reported point
+/// `p` (`lm`: the solve that reached it), and whether they were computed: a stop request
+/// cuts them between blocks of samples when the solver's evaluations were slow
+/// ([`quick`]); cut, the figures the solver's cost gives stand ([`from_cost`]), without
+/// fitted values, residuals or modes, and `notes` says what was not computed.
+fn fitted_at_point(
+    problem: &FitProblem,
+    input: &FitInput,
+    lm: &super::lm::LmReport,
+    p: &[f64],
+    config: &FitConfig,
+    notes: &mut Vec<String>,
+) -> (Goodness, Vec<crate::model::Mode>, bool) {
+    let stop = config.lm.stop.as_ref().filter(|_| !quick(lm));
+    let n_free = problem.layout.free().len();
+    let weights_are_uncertainties = config.weights_are_uncertainties;
+    let gof = goodness(problem, input, p, n_free, weights_are_uncertainties, stop);
+    let sample_modes = gof.as_ref().and_then(|_| problem.modes_until(p, stop));
+    match (gof, sample_modes) {
+        (Some(g), Some(m)) => (g, m, true),
+        (gof, _) => {
+            notes.push(if gof.is_some() {
+                SAMPLES_NOT_COMPUTED.to_string()
+            } else {
+                FITTED_NOT_COMPUTED.to_string()
+            });
+            let mut g = gof.unwrap_or_else(|| from_cost(problem, lm.cost, n_free));
+            (g.fitted, g.residuals, g.std_residuals) = (Vec::new(), Vec::new(), Vec::new());
+            (g, Vec::new(), false)
+        }
+    }
+}
+
 /// The note of a fit whose stop request cut the evaluation of its fitted values at the
 /// reported point (after the solve; a fit whose evaluations are slower than
 /// [`QUICK_EVALUATION_SECONDS`] checks the stop between blocks of samples there).
@@ -163,8 +175,7 @@ fn quick(lm: &super::lm::LmReport) -> bool {
 /// values (see [`FITTED_NOT_COMPUTED`]): χ² = 2·cost under the linear loss, AIC and BIC
 /// from the objective 2·cost; rms, max |residual| and R² NaN (never printed as numbers).
 fn from_cost(problem: &FitProblem, cost: f64, n_free: usize) -> Goodness {
-    let nf = problem.len() as f64;
-    let objective = (2.0 * cost).max(f64::MIN_POSITIVE);
+    let (aic, bic) = information_criteria(2.0 * cost, problem.len() as f64, n_free);
     let linear = problem.loss().is_linear();
     Goodness {
         fitted: Vec::new(),
@@ -176,9 +187,20 @@ fn from_cost(problem: &FitProblem, cost: f64, n_free: usize) -> Goodness {
         rms: f64::NAN,
         max_abs_residual: f64::NAN,
         r2: f64::NAN,
-        aic: nf * (objective / nf).ln() + 2.0 * n_free as f64,
-        bic: nf * (objective / nf).ln() + n_free as f64 * nf.ln(),
+        aic,
+        bic,
     }
+}
+
+/// (AIC, BIC) of a fit with `n_free` parameters on `nf` samples from its objective (χ², or
+/// 2·cost under a robust loss; floored at the smallest positive number so that a perfect
+/// fit gives finite values).
+fn information_criteria(objective: f64, nf: f64, n_free: usize) -> (f64, f64) {
+    let log_mean = (objective.max(f64::MIN_POSITIVE) / nf).ln();
+    (
+        nf * log_mean + 2.0 * n_free as f64,
+        nf * log_mean + n_free as f64 * nf.ln(),
+    )
 }
 
 /// Residuals, cost, χ², rms, R², AIC and BIC at `p`; None when `stop` was requested before
@@ -229,10 +251,7 @@ fn goodness(
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     let r2 = r_squared(problem, input, &fitted);
-    let nf = n as f64;
-    let chi2_safe = objective.max(f64::MIN_POSITIVE);
-    let aic = nf * (chi2_safe / nf).ln() + 2.0 * n_free as f64;
-    let bic = nf * (chi2_safe / nf).ln() + n_free as f64 * nf.ln();
+    let (aic, bic) = information_criteria(objective, n as f64, n_free);
     Some(Goodness {
         fitted,
         residuals,

@@ -157,6 +157,8 @@ pub(super) fn starting_point(
     let grid_model = loose_model(model, config, GRID_TOL, None)?;
     let refine_model = loose_model(model, config, REFINE_TOL, None)?;
     let sigma_k = layout.find("sigma").first().copied();
+    // Layout indices of σ and T (KBS models).
+    let ridge = sigma_k.zip(layout.find("T").first().copied());
     let rough_model = sigma_k
         .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Rough)))
         .transpose()?;
@@ -174,8 +176,7 @@ pub(super) fn starting_point(
         rough: rough_model.as_deref(),
         sigma_k,
         sub,
-        ridge_given: sigma_k.is_some_and(|k| given[k].is_some())
-            || layout.find("T").iter().any(|&k| given[k].is_some()),
+        ridge_given: ridge.is_some_and(|(ks, kt)| given[ks].is_some() || given[kt].is_some()),
     };
     // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
     let stop = config.lm.stop.as_ref();
@@ -204,7 +205,6 @@ pub(super) fn starting_point(
         show_refining(&bar, candidates.len(), refiners.sub.y.len());
         let refined = refine_candidates(&refiners, &candidates, &coarse, &inside, &bar);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
-        let ridge = sigma_k.zip(layout.find("T").first().copied());
         let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol, ridge);
         if let Some((values, start)) = chosen.start {
             p0 = values;

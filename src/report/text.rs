@@ -38,8 +38,13 @@ fn sci(v: f64) -> String {
 /// `v` with 8 significant digits; "not computed" when it is not a finite number and the
 /// fitted values it comes from were not `computed` (a stop request came first).
 pub fn sci7(v: f64, computed: bool) -> String {
-    if computed || v.is_finite() {
-        format!("{v:.7e}")
+    if_computed(computed || v.is_finite(), || format!("{v:.7e}"))
+}
+
+/// `text()` when a figure was `computed`, else [`NOT_COMPUTED`].
+pub fn if_computed(computed: bool, text: impl FnOnce() -> String) -> String {
+    if computed {
+        text()
     } else {
         NOT_COMPUTED.to_string()
     }
@@ -343,6 +348,30 @@ pub fn top_pairs(r: &FitResult, n: usize) -> Vec<(String, String, f64)> {
     pairs
 }
 
+/// The goodness-of-fit lines of [[Fit statistics]] after the cost: χ², rms, R², AIC, BIC,
+/// the g range and the evaluation modes. Without the fitted values (a stop after the solve)
+/// the figures they give say "not computed", never NaN.
+fn goodness_lines(s: &mut String, r: &FitResult) {
+    for (label, v) in [
+        ("chi-square     ", r.chi2),
+        ("reduced chi-sq ", r.reduced_chi2),
+        ("rms residual   ", r.rms),
+        ("max |residual| ", r.max_abs_residual),
+    ] {
+        let _ = writeln!(s, "    {label} = {}", sci7(v, r.fitted_computed));
+    }
+    let r2 = if_computed(r.fitted_computed, || fixed(r.r2, 7));
+    let _ = writeln!(s, "    R-squared       = {r2}");
+    let _ = writeln!(s, "    AIC             = {}", fixed(r.aic, 4));
+    let _ = writeln!(s, "    BIC             = {}", fixed(r.bic, 4));
+    if let Some((lo, hi)) = r.g_range {
+        let _ = writeln!(s, "    g range         = {lo:.3e} .. {hi:.3e}");
+    }
+    let modes: Vec<String> = r.modes.iter().map(|(k, v)| format!("{k}: {v}")).collect();
+    let modes = if_computed(r.fitted_computed, || modes.join(", "));
+    let _ = writeln!(s, "    evaluation modes= {modes}");
+}
+
 /// The report as text.
 pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let mut s = String::new();
@@ -398,34 +427,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
             );
         }
     }
-    // Without the fitted values (a stop after the solve) the figures they give are not
-    // computed: never printed as NaN.
-    for (label, v) in [
-        ("chi-square     ", r.chi2),
-        ("reduced chi-sq ", r.reduced_chi2),
-        ("rms residual   ", r.rms),
-        ("max |residual| ", r.max_abs_residual),
-    ] {
-        let _ = writeln!(s, "    {label} = {}", sci7(v, r.fitted_computed));
-    }
-    let r2 = if r.fitted_computed {
-        fixed(r.r2, 7)
-    } else {
-        NOT_COMPUTED.to_string()
-    };
-    let _ = writeln!(s, "    R-squared       = {r2}");
-    let _ = writeln!(s, "    AIC             = {}", fixed(r.aic, 4));
-    let _ = writeln!(s, "    BIC             = {}", fixed(r.bic, 4));
-    if let Some((lo, hi)) = r.g_range {
-        let _ = writeln!(s, "    g range         = {lo:.3e} .. {hi:.3e}");
-    }
-    let modes: Vec<String> = r.modes.iter().map(|(k, v)| format!("{k}: {v}")).collect();
-    let modes = if r.fitted_computed {
-        modes.join(", ")
-    } else {
-        NOT_COMPUTED.to_string()
-    };
-    let _ = writeln!(s, "    evaluation modes= {modes}");
+    goodness_lines(&mut s, r);
     variable_lines(&mut s, r, &info.setting.units);
     interval_lines(&mut s, r, info);
     let _ = writeln!(s, "[[Identifiability]]");
