@@ -15,7 +15,8 @@ Times: the fit's own run time (JSON `seconds`, per dataset) and each file's wall
 
 Usage: python3 benches/corpus.py EXE [--intervals] [--repeats N] [--json OUT]
 (standard library only; run from the repository root). Prints one line per MISS or
-degenerate fit, then the counts and the times (median and worst per dataset and per file).
+degenerate fit, then the counts and the times (median and worst per dataset and per file,
+the slowest fits by name, and how many Cornell channels take over 0.1 s).
 """
 import argparse
 import csv
@@ -38,6 +39,9 @@ FILES = [
     ("cornell", "data/cornell/krylon_blue.astm", []),
 ]
 REF = "tests/ref/corpus_reference.csv"
+# How many of the slowest fits to name, and the time a Cornell channel should stay under.
+SLOWEST = 5
+CHANNEL_BUDGET = 0.1
 
 
 def reference(path=REF):
@@ -115,6 +119,12 @@ def main():
     print(f"per dataset (fit's run time, median of {a.repeats}): Cornell channel median "
           f"{statistics.median(cornell):.4f} s, worst {max(cornell):.4f} s; CUReT sample "
           f"median {statistics.median(curet):.4f} s, worst {max(curet):.4f} s")
+    slow = sorted(fit_med.items(), key=lambda kv: -kv[1])[:SLOWEST]
+    print(f"slowest fits: " + ", ".join(f"{k[0]} {k[1]} {v:.3f} s" for k, v in slow)
+          + f"; Cornell channels over {CHANNEL_BUDGET} s: "
+          + str(sum(v > CHANNEL_BUDGET for v in cornell)) + f" of {len(cornell)}")
+    for r in rows:
+        r["seconds"] = fit_med[(r["file"], r["group"])]
     files = {k: statistics.median(v) for k, v in per_file.items()}
     print("per file (wall, median of %d): " % a.repeats
           + ", ".join(f"{k.rsplit('/', 1)[1]} {v:.3f} s" for k, v in files.items())

@@ -6,7 +6,7 @@
 //! geometry. Working with ln Q avoids the overflow of g^m/m! and the underflow of e^{−g}
 //! and e^{−a/m}.
 //!
-//! Three evaluations, and `auto` picks the cheapest that meets the tolerance per sample:
+//! Three evaluations (the series also on a stride), and `auto` picks the cheapest that meets the tolerance per sample:
 //!
 //! * [`series`]: the sum, from its largest term outward, stopped by rigorous tail bounds
 //!   (the term ratio t_{m+1}/t_m = g m/(m+1)² e^{a/(m(m+1))} decreases in m, so the upper
@@ -46,7 +46,12 @@
 //!   at moderate g).
 //!
 //! `auto`: smooth if its bound holds (possible only for g ≤ 2 tol); else the asymptotic
-//! completion if it is accepted; else the series.
+//! completion if it is accepted; else the series, and where the series' peak is wide
+//! (width W ≥ 18 terms: large g far from the specular direction, a ≳ 3 g^1.5) only every
+//! h-th term of it, h = ⌊W/1.5⌋, times h (module `strided`: ~31 terms instead of ~13 W,
+//! 50× faster at g = 7e5; the stride's error, ≈ 2 e^{−2π²·1.5²} = 5e-20 relative, is an
+//! estimate from Poisson summation, measured in 30 digits and tested against the mpmath
+//! grid and the plain sum).
 //!
 //! Batches ([`ln_q_batch`], what the models call): the same results bit for bit as one
 //! sample at a time; on x86-64 CPUs with AVX2 and FMA both run in a copy of this code
@@ -65,6 +70,8 @@
 
 use super::lanes::{F64x4, PortableNative};
 use super::{EvalMode, Mode};
+
+mod strided;
 
 /// ln Q(g, a) and its partial derivatives.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -179,7 +186,12 @@ fn series_body<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
         return series_from_one::<V>(g, a, tol);
     }
     let ln_g = g.ln();
-    let m0 = peak_index(g, ln_g, a);
+    series_from_peak::<V>(g, a, tol, ln_g, peak_index(g, ln_g, a))
+}
+
+/// The series summed outward from its largest term `m0` (from [`peak_index`]; `ln_g` = ln g).
+#[inline(always)]
+fn series_from_peak<V: F64x4>(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64) -> LnQ {
     // ln(e^{−g} t_{m0}).
     let ln_t0 = ln_poisson(m0, g, ln_g) - m0.ln() - a / m0;
     let eps = 0.1 * tol.max(1e-17);
@@ -974,7 +986,18 @@ fn auto_with<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
             return q;
         }
     }
-    series_body::<V>(g, a, tol)
+    if g < SMALL_G_MAX && a < SMALL_A_MAX {
+        return series_from_one::<V>(g, a, tol);
+    }
+    // A wide peak: every h-th term (module `strided`), else every term.
+    let ln_g = g.ln();
+    let m0 = peak_index(g, ln_g, a);
+    if let Some(h) = strided::stride(m0, a) {
+        if let Some(q) = strided::sum(g, a, tol, ln_g, m0, h) {
+            return q;
+        }
+    }
+    series_from_peak::<V>(g, a, tol, ln_g, m0)
 }
 
 /// ln Q for a batch of samples: `out[i]` = [`ln_q`]`(g[i], a[i], mode, tol)`, identical
