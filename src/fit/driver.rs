@@ -112,9 +112,10 @@ fn solve_checked(
         .reduce
         .then(|| solve::SigmaRange::rough_ridge(problem, input))
         .flatten();
+    let trail = solve::Trail::default();
     let solve = |p0: &[f64]| match &range {
-        Some(r) => solve::run_lm_in(problem, &r.project(p0), &config.lm, Some(r)),
-        None => solve::run_lm(problem, p0, &config.lm),
+        Some(r) => solve::run_lm_in(problem, &r.project(p0), &config.lm, Some(r), Some(&trail)),
+        None => solve::run_lm_in(problem, p0, &config.lm, None, Some(&trail)),
     };
     let first = solve(&start.p0);
     let layout = &problem.layout;
@@ -134,6 +135,7 @@ fn solve_checked(
     }
     let lowest = |edge: bool| {
         (0..runs.len())
+            .filter(|&i| !runs[i].joined)
             .filter(|&i| validate::at_kbs_edge(layout, input, &runs[i].values) == edge)
             .min_by(|&a, &b| runs[a].lm.cost.total_cmp(&runs[b].lm.cost))
     };
@@ -173,7 +175,7 @@ fn best_of_rivals(
         let rival = solve(p0);
         cut |= was_stopped(&rival);
         let other;
-        (kept, other) = if inside(&rival.values) && rival.lm.cost < kept.lm.cost {
+        (kept, other) = if !rival.joined && inside(&rival.values) && rival.lm.cost < kept.lm.cost {
             (rival, kept)
         } else {
             (kept, rival)
