@@ -140,11 +140,44 @@ fn ln_ratio(m: f64, ln_g: f64, a: f64) -> f64 {
 }
 
 /// The index of the largest term: the smallest m ≥ 1 with r_m < 1.
+///
+/// f(m) = ln r_m is decreasing for m > 1 and convex for m ≥ 3, and f(g − 3) ≥ 0 for g ≥ 6
+/// (g m/(m+1)² ≥ 1 there, and the a term is positive): Newton's iteration on f from
+/// m = g − 3 stays left of the root and converges to it from below (quadratically near it;
+/// ~4 steps), and the first integer with f < 0 is then found upward from the last iterate.
+/// Where that start does not apply, or the iteration is slow (a ≫ g², where the peak moves
+/// far above g), by bisection. Either way the same integer: the result does not depend on
+/// the search.
 fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
     if ln_ratio(1.0, ln_g, a) < 0.0 {
         return 1.0;
     }
-    // Bracket [lo, hi] with r_lo ≥ 1 > r_hi, starting near the a = 0 peak m ≈ g.
+    let mut m = g - 3.0;
+    if m >= 3.0 && ln_ratio(m, ln_g, a) >= 0.0 {
+        for _ in 0..PEAK_NEWTON_STEPS {
+            let f = ln_ratio(m, ln_g, a);
+            let mp1 = m + 1.0;
+            let df = 1.0 / m - 2.0 / mp1 - a * (2.0 * m + 1.0) / (m * m * mp1 * mp1);
+            let step = -f / df;
+            m += step;
+            if step < 0.5 {
+                let mut k = m.ceil();
+                while ln_ratio(k, ln_g, a) >= 0.0 {
+                    k += 1.0;
+                }
+                return k;
+            }
+        }
+    }
+    peak_by_bisection(g, ln_g, a)
+}
+
+/// Newton steps [`peak_index`] takes before it falls back to bisection.
+const PEAK_NEWTON_STEPS: usize = 12;
+
+/// [`peak_index`] by bisection: bracket [lo, hi] with r_lo ≥ 1 > r_hi from the a = 0
+/// peak m ≈ g upward by doubling, then halve it (r_1 ≥ 1 on entry).
+fn peak_by_bisection(g: f64, ln_g: f64, a: f64) -> f64 {
     let mut lo = 1.0f64;
     let mut hi = (g.floor()).max(2.0);
     if ln_ratio(hi, ln_g, a) >= 0.0 {
@@ -1251,6 +1284,26 @@ mod tests {
         }
         check::<Portable<true>>();
         check::<Portable<false>>();
+    }
+
+    /// The Newton search gives the bisection's integer over the whole domain (g 1e-12..1e6,
+    /// a 0..1e8), its edges (g = 6..9 where the Newton start begins to apply) included.
+    #[test]
+    fn peak_search_by_newton_equals_bisection() {
+        let (mut g, mut a) = random_g_a(20_000);
+        for k in 0..400 {
+            g.push(6.0 + 0.01 * k as f64);
+            a.push(if k % 2 == 0 { 0.0 } else { 10f64.powi(k % 9) });
+        }
+        for (&g, &a) in g.iter().zip(&a) {
+            let ln_g = g.ln();
+            let want = if ln_ratio(1.0, ln_g, a) < 0.0 {
+                1.0
+            } else {
+                peak_by_bisection(g, ln_g, a)
+            };
+            assert_eq!(peak_index(g, ln_g, a), want, "g={g} a={a}");
+        }
     }
 
     #[test]

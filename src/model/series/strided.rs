@@ -16,8 +16,8 @@
 //! and the code here against the 60-digit grid and against the plain sum at 3000 random
 //! (g, a) (tests below).
 //!
-//! Each term is computed on its own ([`ln_rel`]: no product of ratios), 3 logarithms and
-//! one `exp`; the sum stops by the plain sum's tail bounds applied to the strided terms
+//! Each term is computed on its own ([`ln_rel`]: no product of ratios), one `exp` and near
+//! the peak no logarithm; the sum stops by the plain sum's tail bounds applied to the strided terms
 //! (they fall geometrically beyond the peak, the ratios decreasing by log-concavity, and
 //! monotonically below it). About 31 terms at any g, against ~13 W for the plain sum at
 //! tol 1e-10; used where h ≥ [`STRIDE_MIN`] (W ≥ 18; below, the plain sum is as fast).
@@ -49,7 +49,8 @@ pub(super) fn sum(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64, h: f64) -> Optio
     let eps = 0.1 * tol.max(1e-17);
     let p0 = ln_poisson(m0, g, ln_g);
     let ln_m0 = m0.ln();
-    let rel = |m: f64| ln_rel(g, a, ln_g, m0, p0, ln_m0, m).exp();
+    let ln_m0_g = libm::log1p((m0 - g) / g);
+    let rel = |m: f64| ln_rel(g, a, ln_g, m0, p0, ln_m0, ln_m0_g, m).exp();
     let (mut s0, mut s_c, mut s_inv) = (1.0, m0 - 1.0 - g, 1.0 / m0);
     // Upward: with q = t_m/t_{m−h} < 1, the later strided terms are ≤ t_m q^k.
     let (mut m, mut prev) = (m0, 1.0f64);
@@ -105,13 +106,16 @@ pub(super) fn sum(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64, h: f64) -> Optio
 }
 
 /// ln(t_m/t_{m0}) with an absolute error of a few ulps times its size plus ~1e-15 (the
-/// peak's terms need it: the derivative sums cancel by ~W). With d = m − m0, x = d/m0 and
-/// Stirling's series for ln m! (m, m0 ≥ 30), ln(t_m/t_{m0}) = −d ln(m/g) − m0 (ln(1+x) − x)
-/// − 1.5 ln(1+x) − Δc + a d/(m m0), Δc the difference of Stirling's corrections; ln(1+x) − x
-/// from its series where small (as one difference it would lose d ulps). Below m = 30 (far
-/// down the peak's tail) from `ln_poisson` directly (`p0` = ln_poisson(m0), `ln_m0` = ln m0).
+/// peak's terms need it: the derivative sums cancel by ~W). With d = m − m0, x = d/m0,
+/// ℓ = ln(1+x) and Stirling's series for ln m! (m, m0 ≥ 30), ln(t_m/t_{m0}) =
+/// −d (ln(m0/g) + ℓ) − m0 (ℓ − x) − 1.5 ℓ − Δc + a d/(m m0), Δc the difference of Stirling's
+/// corrections; ℓ − x from its series where small (as one difference it would lose d ulps),
+/// so that near the peak no logarithm is taken per term. Below m = 30 (far down the peak's
+/// tail) from `ln_poisson` directly. `p0` = ln_poisson(m0), `ln_m0` = ln m0,
+/// `ln_m0_g` = ln(m0/g).
 #[inline]
-fn ln_rel(g: f64, a: f64, ln_g: f64, m0: f64, p0: f64, ln_m0: f64, m: f64) -> f64 {
+#[allow(clippy::too_many_arguments)]
+fn ln_rel(g: f64, a: f64, ln_g: f64, m0: f64, p0: f64, ln_m0: f64, ln_m0_g: f64, m: f64) -> f64 {
     let d = m - m0;
     if m < 30.0 {
         return ln_poisson(m, g, ln_g) - p0 - (m.ln() - ln_m0) + a * d / (m * m0);
@@ -122,11 +126,14 @@ fn ln_rel(g: f64, a: f64, ln_g: f64, m0: f64, p0: f64, ln_m0: f64, m: f64) -> f6
         let r2 = r * r;
         r * (1.0 / 12.0 - r2 * (1.0 / 360.0 - r2 * (1.0 / 1260.0 - r2 / 1680.0)))
     };
-    -d * libm::log1p((m - g) / g)
-        - m0 * log1pmx(x)
-        - 1.5 * libm::log1p(x)
-        - (stirling(m) - stirling(m0))
-        + a * d / (m * m0)
+    let (l, lx) = if x.abs() < 0.5 {
+        let lx = log1pmx(x);
+        (lx + x, lx)
+    } else {
+        let l = libm::log1p(x);
+        (l, l - x)
+    };
+    -d * (ln_m0_g + l) - m0 * lx - 1.5 * l - (stirling(m) - stirling(m0)) + a * d / (m * m0)
 }
 
 /// ln(1+x) − x for x > −1, with a relative error of a few ulps: for |x| < ½ from
