@@ -261,32 +261,36 @@ fn series_from_peak<V: F64x4>(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64) -> L
     }
     // Upward: after adding t_m (rel = t_m/t0) with r = r_m < 1, Σ_{j>m} t_j ≤ rel r/(1−r),
     // Σ_{j>m} |j−1−g| t_j ≤ rel [(m+g) r/(1−r) + r/(1−r)²], Σ_{j>m} t_j/j ≤ tail/(m+1).
+    // The bounds are tested once per eight terms, after the last (a few more terms than
+    // a test per term would add, each below the bound); 1/m and the downward 1/r_m are
+    // formed eight at a time, off the serial chain of products.
     let mut m = m0;
     let mut rel = 1.0f64;
     let mut rs = ratios_at::<V>(g, a, inline_exp, m0, 1.0);
-    'up: loop {
+    loop {
         let next = ratios_at::<V>(g, a, inline_exp, m + L as f64, 1.0);
+        let inv_m: [f64; L] = std::array::from_fn(|l| 1.0 / (m + (l + 1) as f64));
         for l in 0..L {
             rel *= rs[l];
             m += 1.0;
             s0 += rel;
             s_c += (m - 1.0 - g) * rel;
-            s_inv += rel / m;
-            let r = if l + 1 < L { rs[l + 1] } else { next[0] };
-            if r < 1.0 {
-                let q = r / (1.0 - r);
-                let tail = rel * q;
-                let tail_c = rel * ((m + g) * q + q / (1.0 - r));
-                if tail <= eps * s0
-                    && tail_c <= eps * (s0 + s_c.abs())
-                    && a * tail / (m + 1.0) <= eps * (s0 + a * s_inv)
-                {
-                    break 'up;
-                }
+            s_inv += rel * inv_m[l];
+        }
+        let r = next[0];
+        if r < 1.0 {
+            let q = r / (1.0 - r);
+            let tail = rel * q;
+            let tail_c = rel * ((m + g) * q + q / (1.0 - r));
+            if tail <= eps * s0
+                && tail_c <= eps * (s0 + s_c.abs())
+                && a * tail / (m + 1.0) <= eps * (s0 + a * s_inv)
+            {
+                break;
             }
-            if rel == 0.0 || !rel.is_finite() {
-                break 'up;
-            }
+        }
+        if rel == 0.0 || !rel.is_finite() {
+            break;
         }
         rs = next;
     }
@@ -297,23 +301,24 @@ fn series_from_peak<V: F64x4>(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64) -> L
     let mut rs = ratios_at::<V>(g, a, inline_exp, m0 - 1.0, -1.0);
     'down: while m > 1.0 {
         let next = ratios_at::<V>(g, a, inline_exp, m - 1.0 - L as f64, -1.0);
+        let inv_r: [f64; L] = std::array::from_fn(|l| 1.0 / rs[l]);
+        let inv_m: [f64; L] = std::array::from_fn(|l| 1.0 / (m - (l + 1) as f64).max(1.0));
         for l in 0..L {
-            rel /= rs[l];
+            rel *= inv_r[l];
             m -= 1.0;
             s0 += rel;
             s_c += (m - 1.0 - g) * rel;
-            s_inv += rel / m;
+            s_inv += rel * inv_m[l];
             if m <= 1.0 || rel == 0.0 {
                 break 'down;
             }
-            let r_below = if l + 1 < L { rs[l + 1] } else { next[0] };
-            let left = (m - 1.0) * (rel / r_below);
-            if left <= eps * s0
-                && left * (m + g) <= eps * (s0 + s_c.abs())
-                && a * left <= eps * (s0 + a * s_inv)
-            {
-                break 'down;
-            }
+        }
+        let left = (m - 1.0) * (rel / next[0]);
+        if left <= eps * s0
+            && left * (m + g) <= eps * (s0 + s_c.abs())
+            && a * left <= eps * (s0 + a * s_inv)
+        {
+            break;
         }
         rs = next;
     }
