@@ -244,7 +244,10 @@ fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
                 "reduced χ²",
                 super::text::sci7(r.reduced_chi2, r.fitted_computed),
             ),
-            ("R²", super::text::fixed(r.r2, 7)),
+            (
+                "R²",
+                super::text::if_computed(r.fitted_computed, || super::text::fixed(r.r2, 7)),
+            ),
             ("iterations", r.iterations.to_string()),
         ],
     );
