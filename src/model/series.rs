@@ -522,10 +522,40 @@ fn ln_q_with<V: F64x4>(g: f64, a: f64, mode: EvalMode, tol: f64) -> LnQ {
     }
 }
 
+/// What the tests of this module and its submodules share.
+#[cfg(test)]
+mod test_data {
+    /// The rows (g, a, ln Q, ∂lnQ/∂g, ∂lnQ/∂a) of the 60-digit mpmath grid
+    /// (`tests/ref/kbs_reference_q.csv`, made by `tests/ref/kbs_reference.py`).
+    pub(super) fn mpmath_grid() -> Vec<[f64; 5]> {
+        let text = include_str!("../../tests/ref/kbs_reference_q.csv");
+        let field = |s: &str| s.parse::<f64>().unwrap();
+        text.lines()
+            .skip(1)
+            .map(|line| {
+                let f: Vec<f64> = line.split(',').take(5).map(field).collect();
+                [f[0], f[1], f[2], f[3], f[4]]
+            })
+            .collect()
+    }
+
+    /// Uniform numbers in [0, 1) from a xorshift generator started at `seed` (≠ 0).
+    pub(super) fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::lanes::Portable;
     use super::asymptotic::ASYM;
+    use super::test_data::{mpmath_grid, uniform};
     use super::*;
 
     #[test]
@@ -550,13 +580,7 @@ mod tests {
     /// (g, a) spread over the domain: log-uniform g in [1e-12, 1e6], a zero, ~ g,
     /// up to g^1.5 (the asymptotic region) or log-uniform in [1e-3, 1e8].
     fn random_g_a(n: usize) -> (Vec<f64>, Vec<f64>) {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = uniform(0x2545_f491_4f6c_dd1d);
         let g: Vec<f64> = (0..n)
             .map(|_| 10f64.powf(-12.0 + 18.0 * uniform()))
             .collect();
@@ -650,14 +674,7 @@ mod tests {
             let tol = 1e-10;
             let eps = f64::EPSILON;
             let mut worst = 0.0f64;
-            let text = include_str!("../../tests/ref/kbs_reference_q.csv");
-            for line in text.lines().skip(1) {
-                let f: Vec<f64> = line
-                    .split(',')
-                    .take(5)
-                    .map(|s| s.parse().unwrap())
-                    .collect();
-                let (g, a, ln_q, d_g, d_a) = (f[0], f[1], f[2], f[3], f[4]);
+            for [g, a, ln_q, d_g, d_a] in mpmath_grid() {
                 let q = ln_q_with::<V>(g, a, mode, tol);
                 let rel = |x: f64, r: f64| (x - r).abs() / (1.0 + r.abs());
                 let round_d = 64.0 * eps * (1.0 + g.sqrt());

@@ -155,6 +155,7 @@ fn log1pmx(x: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_data::{mpmath_grid, uniform};
     use super::super::{peak_index, series_from_peak};
     use super::*;
     use crate::model::lanes::Portable;
@@ -174,14 +175,8 @@ mod tests {
     #[test]
     fn strided_sum_matches_mpmath() {
         let tol = 1e-12;
-        let text = include_str!("../../../tests/ref/kbs_reference_q.csv");
         let mut used = Vec::new();
-        for line in text.lines().skip(1) {
-            let f: Vec<f64> = line
-                .split(',')
-                .take(5)
-                .map(|s| s.parse().unwrap())
-                .collect();
+        for f in mpmath_grid() {
             let (g, a) = (f[0], f[1]);
             let Some((q, _)) = strided_and_plain(g, a, tol) else {
                 continue;
@@ -210,13 +205,7 @@ mod tests {
     /// range: g 1e2..1e6, a from 0 to 1e4 g^1.5.
     #[test]
     fn strided_sum_matches_every_term() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut uniform = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = uniform(0x9e37_79b9_7f4a_7c15);
         let (tol, mut n) = (1e-12, 0);
         for _ in 0..3000 {
             let g = 10f64.powf(2.0 + 4.0 * uniform());
