@@ -49,9 +49,9 @@
 //! completion if it is accepted; else the series, and where the series' peak is wide
 //! (width W ≥ 18 terms: large g far from the specular direction, a ≳ 3 g^1.5) only every
 //! h-th term of it, h = ⌊W/1.5⌋, times h (module `strided`: ~31 terms instead of ~13 W,
-//! ~60× faster at g = 7e5 (off_specular bench); the stride's error, ≈ 2 e^{−2π²·1.5²} = 5e-20 relative, is an
-//! estimate from Poisson summation, measured in 30 digits and tested against the mpmath
-//! grid and the plain sum).
+//! ~60× faster at g = 7e5 in the off_specular bench; the stride's error, ≈ 2 e^{−2π²·1.5²}
+//! = 5e-20 relative, is an estimate from Poisson summation, measured in 30 digits and
+//! tested against the mpmath grid and the plain sum).
 //!
 //! Batches ([`ln_q_batch`], what the models call): the same results bit for bit as one
 //! sample at a time; on x86-64 CPUs with AVX2 and FMA both run in a copy of this code
