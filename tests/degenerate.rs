@@ -97,8 +97,9 @@ fn auto_never_picks_a_degenerate_fit() {
         .unwrap();
     assert_eq!(spec["converged"], false);
     // The skipped fit is the truth's model. Since the start search samples the mirror
-    // direction, kbs+lambert may find a lobe as narrow (T/σ ≈ 1e3) and a lower BIC; auto
-    // says why it skipped lambert-specular when that would otherwise have won.
+    // direction, kbs+lambert finds a lobe as narrow (T/σ ≈ 1e3) and a lower BIC, and is
+    // skipped too (`kbs_lobe_narrower_than_the_sampling_is_degenerate`); auto says why it
+    // skipped lambert-specular when that would otherwise have won.
     let chosen = v["model"].as_str().unwrap();
     assert!(bic("lambert-specular").is_finite() && bic(chosen).is_finite());
     if bic("lambert-specular") < bic(chosen) {
@@ -111,4 +112,48 @@ fn auto_never_picks_a_degenerate_fit() {
             notes(&v)
         );
     }
+}
+
+/// kbs+lambert on the in-plane scan (1° steps) of a Lambertian + Gaussian lobe of
+/// w = 0.002 rad: the best optimum is a KBS lobe as narrow (T/σ ≈ 1e3, once reported
+/// converged with T/σ ± 6500 % and corr(T, scale) = −1): no sample lies on its flank, so
+/// the fit is degenerate, exit 3, and says so. The same model on the bundled scan of a
+/// resolved lobe (w = 0.12 rad) is not.
+#[test]
+fn kbs_lobe_narrower_than_the_sampling_is_degenerate() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("narrow.csv");
+    let synth = common::goniofit()
+        .args("synth --model lambert-specular --params scale=0.1,B=0.05,w=0.002 --layout inplane --noise 0.01 --seed 2 --out".split(' '))
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(synth.status.success());
+    let fit = |path: &str| {
+        run_json(&[
+            "fit",
+            "--model",
+            "kbs+lambert",
+            "--wavelength",
+            "1",
+            "--no-intervals",
+            path,
+        ])
+    };
+    let narrow = |v: &serde_json::Value| {
+        notes(v)
+            .iter()
+            .any(|n| n.contains("the specular lobe is narrower than the angular sampling"))
+    };
+    let (code, v) = fit(csv.to_str().unwrap());
+    let ratio = v["derived"]["T/sigma"]["value"].as_f64().unwrap();
+    assert!(ratio > 100.0, "T/σ = {ratio}: not the narrow lobe");
+    assert_eq!(code, Some(3));
+    assert_eq!(v["termination"], "degenerate");
+    assert_eq!(v["converged"], false);
+    assert!(narrow(&v), "{:?}", notes(&v));
+    let resolved = common::data("synthetic/lambert_specular.csv");
+    let (code, v) = fit(resolved.to_str().unwrap());
+    assert_eq!(code, Some(0), "{:?}", notes(&v));
+    assert!(!narrow(&v), "{:?}", notes(&v));
 }

@@ -230,6 +230,9 @@ pub(super) fn degeneracy(
                 "the data shows no specular lobe beyond the diffuse term: the correlation length T ran to 0 (2πT/λ = {kt_value:.3e} < {MIN_KT}), so the fitted lobe is flatter than the hemisphere"
             ));
         }
+        if let Some(why) = narrow_kbs_lobe(&input.geo, sigma, t) {
+            return Some(why);
+        }
     }
     if let Some(kw) = first("w") {
         let w = p[kw];
@@ -307,6 +310,37 @@ pub(super) fn accept(solved: &mut Solved, input: &FitInput) {
             solved.verdict = Verdict::Partial;
         }
     }
+}
+
+/// Why a KBS lobe is unresolved, if it is: narrower than the angular sampling. Each
+/// sample's lobe factor f (its attenuation off the mirror direction at its own g: ln f =
+/// −a/max(g, 1), the rough limit e^{−a/g} for g ≥ 1 and the smooth one e^{−a} below; the
+/// intermediate regime's mixture of the two is between them) places it inside the lobe
+/// (f > e^{−1/8}), on its flank (e^{−8} ≤ f ≤ e^{−1/8}, the flank of the Gaussian lobe's
+/// test) or beyond it; the lobe is unresolved when fewer than [`MIN_FLANK_SAMPLES`] lie on
+/// its flank and more lie beyond it than inside (a lobe flatter than the hemisphere is
+/// T → 0, caught before). Its width, T/σ (T in the smooth regime), and its scale are then
+/// not measured separately: only the level of the samples nearest the mirror direction
+/// (synthetic Gaussian lobe w = 0.002 rad, 1° sampling, fitted by kbs+lambert: T/σ ≈ 900
+/// ± 6500 %, corr(T, scale) = −1).
+fn narrow_kbs_lobe(geo: &Geometry, sigma: f64, t: f64) -> Option<String> {
+    let (mut inside, mut flank, mut beyond) = (0usize, 0usize, 0usize);
+    for i in 0..geo.len() {
+        let ln_f = -geo.a(i, t) / geo.g(i, sigma).max(1.0);
+        if ln_f > -0.125 {
+            inside += 1;
+        } else if ln_f >= -8.0 {
+            flank += 1;
+        } else {
+            beyond += 1;
+        }
+    }
+    (flank < MIN_FLANK_SAMPLES && beyond > inside).then(|| {
+        format!(
+            "the specular lobe is narrower than the angular sampling: {inside} samples lie inside it, {flank} on its flank ({MIN_FLANK_SAMPLES} are needed to measure its width) and {beyond} beyond it, so its width (T/σ = {:.3e}) and its scale are not measured, only the level of the samples nearest the mirror direction",
+            t / sigma
+        )
+    })
 }
 
 /// Whether `v` is below `limit` or not a number (NaN counts as past the edge).
