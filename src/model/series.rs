@@ -233,27 +233,65 @@ fn series_body<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
 fn series_from_peak<V: F64x4>(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64) -> LnQ {
     // ln(e^{−g} t_{m0}).
     let ln_t0 = ln_poisson(m0, g, ln_g) - m0.ln() - a / m0;
-    let eps = 0.1 * tol.max(1e-17);
-    // Sums relative to the peak term: s0 = Σ t/t0, s_c = Σ (m−1−g) t/t0 (centred so that
-    // g ∂lnQ/∂g = s_c/s0 has no cancellation at large g), s_inv = Σ (t/m)/t0.
-    let (mut s0, mut s_c, mut s_inv) = (1.0, m0 - 1.0 - g, 1.0 / m0);
-    // The inline exp (≤ 2 ulp) is used while the accumulated rounding of the ratio
-    // products over the O(√g) terms stays far below tol; the libm exp otherwise.
-    let inline_exp = tol >= 1e-12 && g < 1e4;
-    // The ratios r_m for eight consecutive m at a time, in independent lanes (the `exp`s
-    // vectorise in the AVX2 copy); m below 1 (past the bottom of the sum) gives unused lanes.
-    const L: usize = 8;
-    // A function inlined into the caller rather than a closure: compiled on its own it
-    // would miss the caller's FMA (and `exp_poly`'s fused multiply-adds become calls).
+    let sum = PeakSum {
+        g,
+        a,
+        m0,
+        eps: 0.1 * tol.max(1e-17),
+        // The inline exp (≤ 2 ulp) is used while the accumulated rounding of the ratio
+        // products over the O(√g) terms stays far below tol; the libm exp otherwise.
+        inline_exp: tol >= 1e-12 && g < 1e4,
+    };
+    let mut s = Sums {
+        s0: 1.0,
+        s_c: m0 - 1.0 - g,
+        s_inv: 1.0 / m0,
+    };
+    sum.upward::<V>(&mut s);
+    sum.downward::<V>(&mut s);
+    LnQ {
+        ln_q: ln_t0 + s.s0.ln() - ln_g,
+        d_g: s.s_c / (g * s.s0),
+        d_a: -s.s_inv / s.s0,
+        mode: Mode::Series,
+    }
+}
+
+/// The plain sum's sums relative to the peak term: s0 = Σ t/t0, s_c = Σ (m−1−g) t/t0
+/// (centred so that g ∂lnQ/∂g = s_c/s0 has no cancellation at large g), s_inv = Σ (t/m)/t0.
+struct Sums {
+    s0: f64,
+    s_c: f64,
+    s_inv: f64,
+}
+
+/// The plain sum outward from its peak `m0`: its arguments, the relative bound `eps` its
+/// tails must meet, and which `exp` the ratios use.
+struct PeakSum {
+    g: f64,
+    a: f64,
+    m0: f64,
+    eps: f64,
+    inline_exp: bool,
+}
+
+/// Terms per block of the plain sum.
+const L: usize = 8;
+
+impl PeakSum {
+    /// The ratios r_m for eight consecutive m (`m_first`, then by `step`), in independent
+    /// lanes (the `exp`s vectorise in the AVX2 copy); m below 1 (past the bottom of the sum)
+    /// gives unused lanes. Inlined into the caller (compiled on its own it would miss the
+    /// caller's FMA, and `exp_poly`'s fused multiply-adds would become calls).
     #[inline(always)]
-    fn ratios_at<V: F64x4>(g: f64, a: f64, inline_exp: bool, m_first: f64, step: f64) -> [f64; L] {
+    fn ratios_at<V: F64x4>(&self, m_first: f64, step: f64) -> [f64; L] {
         let mut e = [0.0f64; L];
         let mut rs = [0.0f64; L];
         for l in 0..L {
-            (rs[l], e[l]) = ratio_parts(g, a, (m_first + step * l as f64).max(1.0));
+            (rs[l], e[l]) = ratio_parts(self.g, self.a, (m_first + step * l as f64).max(1.0));
         }
-        if a != 0.0 {
-            if inline_exp {
+        if self.a != 0.0 {
+            if self.inline_exp {
                 for l in 0..L {
                     rs[l] *= exp_poly::<V>(e[l]);
                 }
@@ -265,74 +303,79 @@ fn series_from_peak<V: F64x4>(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64) -> L
         }
         rs
     }
-    // Upward: after adding t_m (rel = t_m/t0) with r = r_m < 1, Σ_{j>m} t_j ≤ rel r/(1−r),
-    // Σ_{j>m} |j−1−g| t_j ≤ rel [(m+g) r/(1−r) + r/(1−r)²], Σ_{j>m} t_j/j ≤ tail/(m+1).
-    // The bounds are tested once per eight terms, after the last (a few more terms than
-    // a test per term would add, each below the bound); 1/m and the downward 1/r_m are
-    // formed eight at a time, off the serial chain of products.
-    let mut m = m0;
-    let mut rel = 1.0f64;
-    let mut rs = ratios_at::<V>(g, a, inline_exp, m0, 1.0);
-    loop {
-        let next = ratios_at::<V>(g, a, inline_exp, m + L as f64, 1.0);
-        let inv_m: [f64; L] = std::array::from_fn(|l| 1.0 / (m + (l + 1) as f64));
-        for l in 0..L {
-            rel *= rs[l];
-            m += 1.0;
-            s0 += rel;
-            s_c += (m - 1.0 - g) * rel;
-            s_inv += rel * inv_m[l];
+
+    /// Add the terms above the peak. After adding t_m (rel = t_m/t0) with r = r_m < 1,
+    /// Σ_{j>m} t_j ≤ rel r/(1−r), Σ_{j>m} |j−1−g| t_j ≤ rel [(m+g) r/(1−r) + r/(1−r)²],
+    /// Σ_{j>m} t_j/j ≤ tail/(m+1). The bounds are tested once per eight terms, after the
+    /// last (a few more terms than a test per term would add, each below the bound); 1/m is
+    /// formed eight at a time, off the serial chain of products.
+    #[inline(always)]
+    fn upward<V: F64x4>(&self, s: &mut Sums) {
+        let (g, a, eps) = (self.g, self.a, self.eps);
+        let mut m = self.m0;
+        let mut rel = 1.0f64;
+        let mut rs = self.ratios_at::<V>(m, 1.0);
+        loop {
+            let next = self.ratios_at::<V>(m + L as f64, 1.0);
+            let inv_m: [f64; L] = std::array::from_fn(|l| 1.0 / (m + (l + 1) as f64));
+            for l in 0..L {
+                rel *= rs[l];
+                m += 1.0;
+                s.s0 += rel;
+                s.s_c += (m - 1.0 - g) * rel;
+                s.s_inv += rel * inv_m[l];
+            }
+            let r = next[0];
+            if r < 1.0 {
+                let q = r / (1.0 - r);
+                let tail = rel * q;
+                let tail_c = rel * ((m + g) * q + q / (1.0 - r));
+                if tail <= eps * s.s0
+                    && tail_c <= eps * (s.s0 + s.s_c.abs())
+                    && a * tail / (m + 1.0) <= eps * (s.s0 + a * s.s_inv)
+                {
+                    return;
+                }
+            }
+            if rel == 0.0 || !rel.is_finite() {
+                return;
+            }
+            rs = next;
         }
-        let r = next[0];
-        if r < 1.0 {
-            let q = r / (1.0 - r);
-            let tail = rel * q;
-            let tail_c = rel * ((m + g) * q + q / (1.0 - r));
-            if tail <= eps * s0
-                && tail_c <= eps * (s0 + s_c.abs())
-                && a * tail / (m + 1.0) <= eps * (s0 + a * s_inv)
+    }
+
+    /// Add the terms below the peak: they fall monotonically; after adding t_m, the m−1
+    /// terms left are each ≤ t_{m−1} = rel/r_{m−1} (tested once per eight terms; 1/r_m
+    /// and 1/m formed eight at a time).
+    #[inline(always)]
+    fn downward<V: F64x4>(&self, s: &mut Sums) {
+        let (g, a, eps) = (self.g, self.a, self.eps);
+        let mut m = self.m0;
+        let mut rel = 1.0f64;
+        let mut rs = self.ratios_at::<V>(m - 1.0, -1.0);
+        while m > 1.0 {
+            let next = self.ratios_at::<V>(m - 1.0 - L as f64, -1.0);
+            let inv_r: [f64; L] = std::array::from_fn(|l| 1.0 / rs[l]);
+            let inv_m: [f64; L] = std::array::from_fn(|l| 1.0 / (m - (l + 1) as f64).max(1.0));
+            for l in 0..L {
+                rel *= inv_r[l];
+                m -= 1.0;
+                s.s0 += rel;
+                s.s_c += (m - 1.0 - g) * rel;
+                s.s_inv += rel * inv_m[l];
+                if m <= 1.0 || rel == 0.0 {
+                    return;
+                }
+            }
+            let left = (m - 1.0) * (rel / next[0]);
+            if left <= eps * s.s0
+                && left * (m + g) <= eps * (s.s0 + s.s_c.abs())
+                && a * left <= eps * (s.s0 + a * s.s_inv)
             {
-                break;
+                return;
             }
+            rs = next;
         }
-        if rel == 0.0 || !rel.is_finite() {
-            break;
-        }
-        rs = next;
-    }
-    // Downward: terms fall monotonically below the peak; after adding t_m, the m−1 terms
-    // left are each ≤ t_{m−1} = rel/r_{m−1}.
-    let mut m = m0;
-    let mut rel = 1.0f64;
-    let mut rs = ratios_at::<V>(g, a, inline_exp, m0 - 1.0, -1.0);
-    'down: while m > 1.0 {
-        let next = ratios_at::<V>(g, a, inline_exp, m - 1.0 - L as f64, -1.0);
-        let inv_r: [f64; L] = std::array::from_fn(|l| 1.0 / rs[l]);
-        let inv_m: [f64; L] = std::array::from_fn(|l| 1.0 / (m - (l + 1) as f64).max(1.0));
-        for l in 0..L {
-            rel *= inv_r[l];
-            m -= 1.0;
-            s0 += rel;
-            s_c += (m - 1.0 - g) * rel;
-            s_inv += rel * inv_m[l];
-            if m <= 1.0 || rel == 0.0 {
-                break 'down;
-            }
-        }
-        let left = (m - 1.0) * (rel / next[0]);
-        if left <= eps * s0
-            && left * (m + g) <= eps * (s0 + s_c.abs())
-            && a * left <= eps * (s0 + a * s_inv)
-        {
-            break;
-        }
-        rs = next;
-    }
-    LnQ {
-        ln_q: ln_t0 + s0.ln() - ln_g,
-        d_g: s_c / (g * s0),
-        d_a: -s_inv / s0,
-        mode: Mode::Series,
     }
 }
 
