@@ -76,13 +76,23 @@ fn timeout_ends_a_joint_fit_with_its_report_and_exit_3() {
         // cayman's whole joint fit takes ~1.1 s unloaded since the start search finds its
         // valley directly: a fit that ends all its work at the limit is complete (exit 0).
         // Its wall time then shows that no stop was ignored.
+        // Since the series got faster acryl_blue's joint fit also ends within ~1.5 s,
+        // `degenerate` (exit 3: one channel's lobe amplitude at 0): complete too.
         let (out, wall) = run_timed(goniofit().args(&args).arg("--json"));
-        if out.status.code() == Some(0) {
-            let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("a report");
-            assert_eq!(v["converged"], true, "{paint}");
+        let finished = serde_json::from_slice::<serde_json::Value>(&out.stdout)
+            .ok()
+            .filter(|v| v["termination"] != "timeout");
+        if let Some(v) = finished {
+            if out.status.code() == Some(0) {
+                assert_eq!(v["converged"], true, "{paint}");
+            } else {
+                assert_eq!(out.status.code(), Some(3), "{paint}");
+                assert_eq!(v["termination"], "degenerate", "{paint}");
+                assert!(!v["notes"].as_array().unwrap().is_empty(), "{paint}");
+            }
             assert!(
                 wall < 2.0,
-                "{paint}: exit 0 after {wall:.2} s with --timeout 1"
+                "{paint}: a complete fit after {wall:.2} s with --timeout 1"
             );
             continue;
         }
