@@ -4,7 +4,8 @@
 //! acceptance rule and the checks are in the parent module's doc.
 
 use super::super::lanes::F64x4;
-use super::{with_lanes, LanesFn, LnQ, Mode};
+use super::super::Mode;
+use super::terms::LnQ;
 
 /// Highest order of the asymptotic expansion tabulated.
 pub const ASYM_ORDERS: usize = 18;
@@ -148,20 +149,6 @@ const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
 
 /// Smallest g for which `auto` tries the asymptotic expansion.
 pub(super) const ASYM_G_MIN: f64 = 40.0;
-
-/// The asymptotic completion of the rough approximation (module doc), or `None` when its
-/// error estimate does not reach `tol` within [`ASYM_ORDERS`] orders.
-pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
-    struct Call(f64, f64, f64);
-    impl LanesFn for Call {
-        type Out = Option<LnQ>;
-        #[inline(always)]
-        fn call<V: F64x4>(self) -> Option<LnQ> {
-            asymptotic_body::<V>(self.0, self.1, self.2)
-        }
-    }
-    with_lanes(Call(g, a, tol))
-}
 
 #[inline(always)]
 pub(super) fn asymptotic_body<V: F64x4>(g: f64, a: f64, tol: f64) -> Option<LnQ> {

@@ -3,7 +3,8 @@
 //! sum, its tail bounds and its accuracy).
 
 use super::super::lanes::F64x4;
-use super::{exp_poly, ratio_parts, LnQ, Mode};
+use super::super::Mode;
+use super::terms::{exp_poly, ratio_parts, LnQ};
 
 /// Below these g and a the series is summed upward from m = 1 ([`series_from_one`]).
 pub(super) const SMALL_G_MAX: f64 = 60.0;

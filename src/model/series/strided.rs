@@ -22,7 +22,8 @@
 //! monotonically below it). About 31 terms at any g, against ~13 W for the plain sum at
 //! tol 1e-10; used where h ≥ [`STRIDE_MIN`] (W ≥ 18; below, the plain sum is as fast).
 
-use super::{ln_poisson, LnQ, Mode};
+use super::super::Mode;
+use super::terms::{ln_poisson, LnQ};
 
 /// Stride over the width: h = ⌊W / WIDTH_PER_STRIDE⌋ (aliasing ≈ 2 e^{−2π²·1.5²} = 5e-20).
 const WIDTH_PER_STRIDE: f64 = 1.5;
