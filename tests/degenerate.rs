@@ -59,19 +59,26 @@ fn kbs_lobe_flattened_to_the_diffuse_term_is_degenerate() {
     }
 }
 
-/// `--model auto` never picks a degenerate fit: on an in-plane scan (1° steps) of a
-/// Lambertian + Gaussian lobe of w = 0.002 rad, lambert-specular has the lowest BIC but its
-/// lobe is narrower than the sampling; auto skips it and says why.
-#[test]
-fn auto_never_picks_a_degenerate_fit() {
-    let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("narrow.csv");
+/// An in-plane scan (1° steps, 1 % noise) of a Lambertian + Gaussian lobe of w = 0.002 rad,
+/// written into `dir`: a lobe narrower than the sampling.
+fn narrow_lobe_scan(dir: &std::path::Path) -> std::path::PathBuf {
+    let csv = dir.join("narrow.csv");
     let synth = common::goniofit()
         .args("synth --model lambert-specular --params scale=0.1,B=0.05,w=0.002 --layout inplane --noise 0.01 --seed 2 --out".split(' '))
         .arg(&csv)
         .output()
         .unwrap();
     assert!(synth.status.success());
+    csv
+}
+
+/// `--model auto` never picks a degenerate fit: on an in-plane scan (1° steps) of a
+/// Lambertian + Gaussian lobe of w = 0.002 rad, lambert-specular has the lowest BIC but its
+/// lobe is narrower than the sampling; auto skips it and says why.
+#[test]
+fn auto_never_picks_a_degenerate_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = narrow_lobe_scan(dir.path());
     let path = csv.to_str().unwrap();
     let (code, v) = run_json(&[
         "fit",
@@ -122,13 +129,7 @@ fn auto_never_picks_a_degenerate_fit() {
 #[test]
 fn kbs_lobe_narrower_than_the_sampling_is_degenerate() {
     let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("narrow.csv");
-    let synth = common::goniofit()
-        .args("synth --model lambert-specular --params scale=0.1,B=0.05,w=0.002 --layout inplane --noise 0.01 --seed 2 --out".split(' '))
-        .arg(&csv)
-        .output()
-        .unwrap();
-    assert!(synth.status.success());
+    let csv = narrow_lobe_scan(dir.path());
     let fit = |path: &str| {
         run_json(&[
             "fit",
