@@ -80,7 +80,7 @@ pub use asymptotic::ASYM_ORDERS;
 use asymptotic::{asymptotic_body, ASYM_G_MIN};
 use small::{series_from_one, SMALL_A_MAX, SMALL_G_MAX};
 pub use terms::LnQ;
-use terms::{exp_poly, ln_poisson, ln_ratio, ratio_parts};
+use terms::{exp_poly, ln_poisson, ln_ratio, ratio_parts, Sums};
 
 /// Smooth approximation (eq. 42): only the m = 1 term, Q = e^{−g} e^{−a}.
 #[inline]
@@ -118,9 +118,9 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
         return 1.0;
     }
     let mut m = g - 3.0;
-    if m >= 3.0 && ln_ratio(m, ln_g, a) >= 0.0 {
+    let mut f = if m >= 3.0 { ln_ratio(m, ln_g, a) } else { -1.0 };
+    if f >= 0.0 {
         for _ in 0..PEAK_NEWTON_STEPS {
-            let f = ln_ratio(m, ln_g, a);
             let mp1 = m + 1.0;
             let df = 1.0 / m - 2.0 / mp1 - a * (2.0 * m + 1.0) / (m * m * mp1 * mp1);
             let step = -f / df;
@@ -132,6 +132,7 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
                 }
                 return k;
             }
+            f = ln_ratio(m, ln_g, a);
         }
     }
     peak_by_bisection(g, ln_g, a)
@@ -193,27 +194,10 @@ fn series_from_peak<V: F64x4>(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64) -> L
         // products over the O(√g) terms stays far below tol; the libm exp otherwise.
         inline_exp: tol >= 1e-12 && g < 1e4,
     };
-    let mut s = Sums {
-        s0: 1.0,
-        s_c: m0 - 1.0 - g,
-        s_inv: 1.0 / m0,
-    };
+    let mut s = Sums::at_peak(g, m0);
     sum.upward::<V>(&mut s);
     sum.downward::<V>(&mut s);
-    LnQ {
-        ln_q: ln_t0 + s.s0.ln() - ln_g,
-        d_g: s.s_c / (g * s.s0),
-        d_a: -s.s_inv / s.s0,
-        mode: Mode::Series,
-    }
-}
-
-/// The plain sum's sums relative to the peak term: s0 = Σ t/t0, s_c = Σ (m−1−g) t/t0
-/// (centred so that g ∂lnQ/∂g = s_c/s0 has no cancellation at large g), s_inv = Σ (t/m)/t0.
-struct Sums {
-    s0: f64,
-    s_c: f64,
-    s_inv: f64,
+    s.ln_q(ln_t0, 1.0, g, ln_g)
 }
 
 /// The plain sum outward from its peak `m0`: its arguments, the relative bound `eps` its
@@ -277,16 +261,8 @@ impl PeakSum {
                 s.s_inv += rel * inv_m[l];
             }
             let r = next[0];
-            if r < 1.0 {
-                let q = r / (1.0 - r);
-                let tail = rel * q;
-                let tail_c = rel * ((m + g) * q + q / (1.0 - r));
-                if tail <= eps * s.s0
-                    && tail_c <= eps * (s.s0 + s.s_c.abs())
-                    && a * tail / (m + 1.0) <= eps * (s.s0 + a * s.s_inv)
-                {
-                    return;
-                }
+            if r < 1.0 && s.upper_tail_below(rel, r, m, 1.0, g, a, eps) {
+                return;
             }
             if rel == 0.0 || !rel.is_finite() {
                 return;
@@ -319,10 +295,7 @@ impl PeakSum {
                 }
             }
             let left = (m - 1.0) * (rel / next[0]);
-            if left <= eps * s.s0
-                && left * (m + g) <= eps * (s.s0 + s.s_c.abs())
-                && a * left <= eps * (s.s0 + a * s.s_inv)
-            {
+            if s.lower_tail_below(left, m, g, a, eps) {
                 return;
             }
             rs = next;

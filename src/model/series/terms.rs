@@ -31,16 +31,98 @@ pub(super) fn ln_poisson(m: f64, g: f64, ln_g: f64) -> f64 {
     // error < 1/(1188 m⁹) < 1e-16 for m ≥ 30. Then with δ = (g − m)/m:
     // m ln g − g − (m ln m − m) = m (ln(1+δ) − δ).
     let delta = (g - m) / m;
-    let r = 1.0 / m;
-    let r2 = r * r;
-    let stirling = r * (1.0 / 12.0 - r2 * (1.0 / 360.0 - r2 * (1.0 / 1260.0 - r2 / 1680.0)));
     let ln_m = m.ln();
     let main = if delta.abs() < 0.5 {
         m * (libm::log1p(delta) - delta)
     } else {
         m * (ln_g - ln_m) + (m - g)
     };
-    main - 0.5 * ln_m - HALF_LN_2PI - stirling
+    main - 0.5 * ln_m - HALF_LN_2PI - stirling(m)
+}
+
+/// Stirling's correction ln m! − ((m+½) ln m − m + ½ ln 2π) = 1/(12m) − 1/(360m³) +
+/// 1/(1260m⁵) − 1/(1680m⁷), error < 1/(1188 m⁹) < 1e-16 for m ≥ 30.
+#[inline(always)]
+pub(super) fn stirling(m: f64) -> f64 {
+    let r = 1.0 / m;
+    let r2 = r * r;
+    r * (1.0 / 12.0 - r2 * (1.0 / 360.0 - r2 * (1.0 / 1260.0 - r2 / 1680.0)))
+}
+
+/// The sums of a summation outward from the peak term t0 = t_{m0}, relative to it:
+/// s0 = Σ t/t0, s_c = Σ (m−1−g) t/t0 (centred so that g ∂lnQ/∂g = s_c/s0 has no
+/// cancellation at large g), s_inv = Σ (t/m)/t0; and the tests of the tail bounds the plain
+/// and the strided sums stop by (each omitted part below `eps` of its sum).
+pub(super) struct Sums {
+    pub(super) s0: f64,
+    pub(super) s_c: f64,
+    pub(super) s_inv: f64,
+}
+
+impl Sums {
+    /// The peak term alone.
+    #[inline(always)]
+    pub(super) fn at_peak(g: f64, m0: f64) -> Self {
+        Sums {
+            s0: 1.0,
+            s_c: m0 - 1.0 - g,
+            s_inv: 1.0 / m0,
+        }
+    }
+
+    /// Add the term at m (`t` = t_m/t0).
+    #[inline(always)]
+    pub(super) fn add(&mut self, m: f64, t: f64, g: f64) {
+        self.s0 += t;
+        self.s_c += (m - 1.0 - g) * t;
+        self.s_inv += t / m;
+    }
+
+    /// Upward, after adding the term at m (`rel` = t_m/t0), the terms m + step, m + 2 step,
+    /// … each at most `r` < 1 times the one before: Σ t ≤ rel r/(1−r), Σ |j−1−g| t ≤
+    /// rel [(m+g) r/(1−r) + step r/(1−r)²], Σ t/j ≤ that first bound/(m + step). Whether all
+    /// three are below `eps` of their sums.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn upper_tail_below(
+        &self,
+        rel: f64,
+        r: f64,
+        m: f64,
+        step: f64,
+        g: f64,
+        a: f64,
+        eps: f64,
+    ) -> bool {
+        let q = r / (1.0 - r);
+        let tail = rel * q;
+        let tail_c = rel * ((m + g) * q + step * q / (1.0 - r));
+        tail <= eps * self.s0
+            && tail_c <= eps * (self.s0 + self.s_c.abs())
+            && a * tail / (m + step) <= eps * (self.s0 + a * self.s_inv)
+    }
+
+    /// Downward, with at most `left` in all the terms below m together (each term ≤ t1 and
+    /// fewer than m of them: left = count × t1 bounds Σ t, (m+g) left bounds Σ |j−1−g| t,
+    /// and left bounds Σ t/j as j ≥ 1): whether all three are below `eps` of their sums.
+    #[inline(always)]
+    pub(super) fn lower_tail_below(&self, left: f64, m: f64, g: f64, a: f64, eps: f64) -> bool {
+        left <= eps * self.s0
+            && left * (m + g) <= eps * (self.s0 + self.s_c.abs())
+            && a * left <= eps * (self.s0 + a * self.s_inv)
+    }
+
+    /// ln Q and its derivatives from the sums of terms taken `step` apart (1: every term),
+    /// `ln_t0` = ln(e^{−g} t_{m0}).
+    #[inline(always)]
+    pub(super) fn ln_q(&self, ln_t0: f64, step: f64, g: f64, ln_g: f64) -> LnQ {
+        LnQ {
+            ln_q: ln_t0 + (step * self.s0).ln() - ln_g,
+            d_g: self.s_c / (g * self.s0),
+            d_a: -self.s_inv / self.s0,
+            mode: Mode::Series,
+        }
+    }
 }
 
 /// ln r_m, r_m = t_{m+1}/t_m = g m/(m+1)² e^{a/(m(m+1))}, decreasing in m.
