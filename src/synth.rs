@@ -156,6 +156,16 @@ impl Layout {
         }
     }
 
+    /// The CSV file `--layout` text names, when it names one (not a built-in layout).
+    pub fn file_of(text: &str) -> Option<&Path> {
+        let first = text.split_whitespace().next().unwrap_or("");
+        let builtin = ["inplane", "in-plane", "hemisphere", "grazing"]
+            .iter()
+            .any(|k| first.eq_ignore_ascii_case(k));
+        let path = Path::new(text);
+        (!builtin && path.is_file()).then_some(path)
+    }
+
     /// A layout by name, with optional sizes in the form [`Layout::describe`] writes, or else
     /// the path of a CSV file of angles ([`Layout::read_csv`]). Names are case-insensitive
     /// and win over a file of the same name (write `./hemisphere` for the file):

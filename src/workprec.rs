@@ -533,9 +533,12 @@ impl crate::plot::Picture for WorkPrecisionPlot {
     }
 }
 
+/// The name of the plot's files without the extension: `work-precision.png`, `.svg`.
+pub const PLOT_STEM: &str = "work-precision";
+
 /// Write the plot as `dir/work-precision.png` and `.svg`; returns the paths.
 pub fn write_plot(wp: &WorkPrecision, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
-    crate::plot::write_png_svg(&WorkPrecisionPlot::new(wp), dir, "work-precision")
+    crate::plot::write_png_svg(&WorkPrecisionPlot::new(wp), dir, PLOT_STEM)
 }
 
 #[cfg(test)]

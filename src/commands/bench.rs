@@ -2,6 +2,7 @@
 
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
+use goniofit::io::FileSet;
 use goniofit::workprec::{self, WorkPrecisionConfig};
 use std::path::PathBuf;
 
@@ -37,6 +38,17 @@ pub struct WorkPrecisionArgs {
     /// Directory for the plot (work-precision.png and .svg).
     #[arg(long, default_value = "work-precision")]
     pub out: PathBuf,
+}
+
+impl BenchArgs {
+    /// The plot in the `--out` folder, and the table on standard output.
+    pub fn files(&self) -> FileSet {
+        match &self.command {
+            BenchCommand::WorkPrecision(a) => FileSet::new()
+                .pictures("--out", &a.out, &[workprec::PLOT_STEM])
+                .stdout(),
+        }
+    }
 }
 
 /// Run `goniofit bench ...`.

@@ -14,7 +14,7 @@ use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::Args;
 use goniofit::geometry::Geometry;
-use goniofit::io::{self, ReadOptions};
+use goniofit::io::{self, FileSet, ReadOptions};
 use goniofit::model::{self, ModelOptions};
 use std::path::PathBuf;
 
@@ -63,6 +63,17 @@ pub struct EvalArgs {
     pub file: PathBuf,
 }
 
+impl EvalArgs {
+    /// The input file; the table to `--out` or standard output.
+    pub fn files(&self) -> FileSet {
+        let set = FileSet::new().input("input", &self.file);
+        match &self.out {
+            Some(out) => set.output("--out", out),
+            None => set.stdout(),
+        }
+    }
+}
+
 pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let mut columns = Vec::new();
     for c in &args.columns {
@@ -84,7 +95,6 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let params = model::parse_params(model.as_ref(), &args.params)?;
 
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
-    io::check_distinct(&[("input", &args.file)], &[("--out", &out)])?;
     let ds = io::read_dataset(&args.file, &opts)?;
 
     let needs_wavelength =

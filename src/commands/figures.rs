@@ -2,6 +2,7 @@
 
 use anyhow::Context;
 use clap::Args;
+use goniofit::io::FileSet;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -9,6 +10,15 @@ pub struct FiguresArgs {
     /// Output folder (created if needed); writes figure4.png, figure4.svg, … figure7.svg.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+impl FiguresArgs {
+    /// The figures in the `--out` folder, and their names on standard output.
+    pub fn files(&self) -> FileSet {
+        FileSet::new()
+            .pictures("--out", &self.out, &goniofit::plot::figures::FIGURES)
+            .stdout()
+    }
 }
 
 pub fn run(args: FiguresArgs) -> anyhow::Result<u8> {

@@ -10,7 +10,7 @@ use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
-use goniofit::io::{self, Dataset, ReadOptions};
+use goniofit::io::{self, Dataset, FileSet, ReadOptions};
 use goniofit::model::{parse_assignments, ModelOptions};
 use goniofit::report::outcome::SettingSource;
 use goniofit::report::{self, RunInfo};
@@ -169,6 +169,24 @@ pub struct FitArgs {
 }
 
 impl FitArgs {
+    /// The measurement files; the report on standard output, `--residuals`, `--html`,
+    /// `--summary` and the pictures in the `--plot` folder.
+    pub fn files(&self) -> FileSet {
+        let mut set = FileSet::new();
+        for f in &self.file {
+            set = set.input("input", f);
+        }
+        set = set
+            .stdout()
+            .output_opt("--residuals", self.residuals.as_deref())
+            .output_opt("--html", self.html.as_deref())
+            .output_opt("--summary", self.summary.as_deref());
+        match &self.plot {
+            Some(dir) => set.pictures("--plot", dir, &goniofit::plot::fit::PICTURES),
+            None => set,
+        }
+    }
+
     /// Whether progress is drawn: on a terminal unless `--quiet` (indicatif draws nothing
     /// when standard error is not a terminal, so `--progress` cannot force it there).
     pub fn show_progress(&self) -> bool {
@@ -341,10 +359,6 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // fitted, exit 3), a fit reports its best point (exit 3).
     let stop = Stop::new(args.timeout.map(std::time::Duration::from_secs_f64), None);
     let opts = args.read_options()?;
-    if let Some(r) = &args.residuals {
-        let inputs: Vec<(&str, &Path)> = args.file.iter().map(|f| ("input", f.as_path())).collect();
-        io::check_distinct(&inputs, &[("--residuals", r)])?;
-    }
     // Every input is read (and checked) before any fit starts.
     let (jobs, files) = read_jobs(&args, &opts, &stop)?;
     let single = jobs.len() == 1;
@@ -653,7 +667,7 @@ fn reading_bar(file: &Path, show: bool) -> indicatif::ProgressBar {
     bar.set_style(super::recover::bar_style(
         "reading {msg} [{bar:30}] {bytes}/{total_bytes} {elapsed} (eta {eta})",
     ));
-    bar.set_message(file.display().to_string());
+    bar.set_message(io::shown(file));
     bar
 }
 
@@ -689,7 +703,7 @@ fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyho
     io::write_bytes(path, page.as_bytes())?;
     eprintln!(
         "goniofit: wrote {} (one page, {} pictures inline)",
-        path.display(),
+        io::shown(path),
         pictures.len()
     );
     Ok(())

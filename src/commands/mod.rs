@@ -1,4 +1,6 @@
-//! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code).
+//! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code)
+//! and lists every file it reads and writes (`files`), which [`run`] checks together
+//! before the command starts ([`goniofit::io::FileSet`]).
 
 pub mod args;
 pub mod bench;
@@ -11,9 +13,29 @@ pub mod render;
 pub mod synth;
 
 use crate::cli::{Cli, Command};
+use goniofit::io::FileSet;
 
-/// Run the parsed command line.
+impl Command {
+    /// Every file the command reads and writes, with the option naming it.
+    fn files(&self) -> anyhow::Result<FileSet> {
+        Ok(match self {
+            Command::Eval(a) => a.files(),
+            Command::Fit(a) => a.files(),
+            Command::Plot(a) => a.files(),
+            Command::Synth(a) => a.files(),
+            Command::Recover(_) => FileSet::new().stdout(),
+            Command::Bench(a) => a.files(),
+            Command::Render(a) => a.files(),
+            Command::Figures(a) => a.files(),
+        })
+    }
+}
+
+/// Run the parsed command line, once its files passed [`FileSet::check`] (no output is an
+/// input or another output, every output path can be written): nothing is read or written
+/// before.
 pub fn run(cli: Cli) -> anyhow::Result<u8> {
+    cli.command.files()?.check()?;
     match cli.command {
         Command::Eval(a) => eval::run(a),
         Command::Fit(a) => fit::run(*a),

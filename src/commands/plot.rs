@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::{Args, Parser};
 use goniofit::fit::driver::{self, FitConfig, FitInput, Verdict};
 use goniofit::fit::problem::ParamLayout;
-use goniofit::io;
+use goniofit::io::{self, FileSet};
 use goniofit::Error;
 use std::path::{Path, PathBuf};
 
@@ -19,6 +19,29 @@ pub struct PlotArgs {
     /// Folder for the pictures (PNG and SVG).
     #[arg(long, default_value = "fit-plots")]
     pub out: PathBuf,
+}
+
+impl PlotArgs {
+    /// The report and the measurement file it names; the pictures in the `--out` folder.
+    pub fn files(&self) -> FileSet {
+        let mut set = FileSet::new().input("report", &self.report);
+        let data = std::fs::read_to_string(&self.report)
+            .ok()
+            .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
+            .and_then(|json| saved_input(&json));
+        if let Some(data) = data {
+            set = set.input("the report's input", &data);
+        }
+        set.pictures("--out", &self.out, &goniofit::plot::fit::PICTURES)
+    }
+}
+
+/// The absolute path of the fitted file a report names (reports before it had one: None).
+fn saved_input(json: &serde_json::Value) -> Option<PathBuf> {
+    json["setting"]["input"]["path"]
+        .as_str()
+        .filter(|p| !p.is_empty())
+        .map(PathBuf::from)
 }
 
 pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
@@ -48,8 +71,8 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     let opts = fa.read_options()?;
     // The report's absolute input path (reports before it had one: the path as typed).
     let saved = &json["setting"]["input"];
-    let file = match saved["path"].as_str().filter(|p| !p.is_empty()) {
-        Some(p) => PathBuf::from(p),
+    let file = match saved_input(&json) {
+        Some(p) => p,
         None => fa.file.first().ok_or_else(|| bad("no input file"))?.clone(),
     };
     let ds = io::read_dataset(&file, &opts).with_context(|| {

@@ -2,6 +2,7 @@
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
+use goniofit::io::FileSet;
 use goniofit::model::{by_name, parse_params, ModelOptions};
 use goniofit::plot::sphere::{sphere_radiance, SpherePicture};
 use goniofit::plot::write_picture;
@@ -47,6 +48,15 @@ pub struct SphereArgs {
     /// Output file, .png or .svg.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+impl RenderArgs {
+    /// The picture at `--out`, and its name printed on standard output.
+    pub fn files(&self) -> FileSet {
+        match &self.what {
+            RenderWhat::Sphere(a) => FileSet::new().output("--out", &a.out).stdout(),
+        }
+    }
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<u8> {

@@ -9,7 +9,7 @@ use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::geometry::Quantity;
-use goniofit::io;
+use goniofit::io::{self, FileSet};
 use goniofit::model::{by_name, parse_params, ModelOptions};
 use goniofit::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
 use std::path::{Path, PathBuf};
@@ -229,11 +229,7 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     data.write_csv(&mut csv_bytes, &csv_opts)
         .context("formatting the CSV")?;
 
-    let truth_file = a
-        .truth
-        .clone()
-        .or_else(|| a.out.as_deref().map(synth::truth_path));
-    check_outputs(&a, &layout, truth_file.as_deref())?;
+    let truth_file = a.truth_file();
     let truth = Truth {
         model: model.name().to_string(),
         params: Truth::params_by_name(model.as_ref(), &params),
@@ -280,27 +276,31 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     Ok(0)
 }
 
-/// Refuse outputs that are the layout file or each other (`--out s.csv --truth s.csv`).
-fn check_outputs(a: &SynthArgs, layout: &Layout, truth: Option<&Path>) -> anyhow::Result<()> {
-    let layout_file = PathBuf::from(&a.layout);
-    let mut inputs: Vec<(&str, &Path)> = Vec::new();
-    if matches!(layout, Layout::Angles(_)) {
-        inputs.push(("--layout", &layout_file));
+impl SynthArgs {
+    /// The truth JSON's path: `--truth`, else beside `--out` (none without either).
+    fn truth_file(&self) -> Option<PathBuf> {
+        self.truth
+            .clone()
+            .or_else(|| self.out.as_deref().map(synth::truth_path))
     }
-    let mut outputs: Vec<(&str, &Path)> = Vec::new();
-    if let Some(o) = &a.out {
-        outputs.push(("--out", o));
+
+    /// The layout file (when `--layout` names one); the CSV to `--out` or standard output,
+    /// and the truth JSON.
+    pub fn files(&self) -> FileSet {
+        let mut set = FileSet::new();
+        if let Some(layout) = Layout::file_of(&self.layout) {
+            set = set.input("--layout", layout);
+        }
+        set = match &self.out {
+            Some(out) => set.output("--out", out),
+            None => set.stdout(),
+        };
+        let truth = self.truth_file();
+        let option = if self.truth.is_some() {
+            "--truth"
+        } else {
+            "the truth file"
+        };
+        set.output_opt(option, truth.as_deref())
     }
-    if let Some(t) = truth {
-        outputs.push((
-            if a.truth.is_some() {
-                "--truth"
-            } else {
-                "the truth file"
-            },
-            t,
-        ));
-    }
-    io::check_distinct(&inputs, &outputs)?;
-    Ok(())
 }

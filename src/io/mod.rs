@@ -12,7 +12,8 @@
 //! Writing ([`output`]): [`write_atomic`] replaces a regular file through a temporary in
 //! its folder and a rename, so a failed or interrupted write leaves nothing behind, and
 //! writes devices, FIFOs and `-` (stdout) straight through; [`write_csv`] writes a table
-//! that way; [`check_distinct`] refuses an output that is also an input.
+//! that way; [`FileSet`] checks every file of a command together before anything is
+//! written (no output is an input or another output).
 //!
 //! ```
 //! use goniofit::io::{read_dataset, ReadOptions};
@@ -31,9 +32,11 @@
 pub mod arrays;
 pub mod astm;
 pub mod csv;
+pub mod files;
 pub mod output;
 
-pub use output::{check_distinct, print_stdout, write_atomic, write_bytes};
+pub use files::FileSet;
+pub use output::{print_stdout, write_atomic, write_bytes};
 
 use crate::error::{Error, Result};
 use crate::geometry::{Quantity, Sample};

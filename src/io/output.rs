@@ -5,7 +5,7 @@
 //! * `-` is standard output.
 //! * A regular file, a path that does not exist yet, or a symlink to either is replaced
 //!   atomically: the bytes go to a hidden temporary (`.goniofit-*.tmp`) in the folder of the
-//!   final target (a symlink's target, not the link), which is renamed over the target only
+//!   final target (a symlink's target, not the link; see below), which is renamed over the target only
 //!   when everything was written and synced. An error leaves the old file untouched and no
 //!   temporary behind; so does an interrupt (Ctrl-C, SIGTERM: see [`remove_temporaries`]).
 //! * Anything else (a character device such as `/dev/null` or `/dev/full`, a FIFO, a
@@ -14,7 +14,13 @@
 //!   own standard streams.
 //!
 //! New files get mode 0o666 less the umask (0644 under the usual umask 022), the mode of a
-//! file made by `>` in a shell; a replaced file gets the same, whatever it had.
+//! file made by `>` in a shell; a replaced file keeps its permission bits, and its owner
+//! and group where we may set them (a group that cannot be kept loses its permissions).
+//!
+//! Symlinks are followed as the kernel follows them on open: at most 40 in a row (a loop
+//! is an [`Error::File`], never replaced by a file), and a link in a sticky world-writable
+//! folder (`/tmp`) only when it belongs to us or to the folder's owner
+//! (`fs.protected_symlinks`; otherwise an [`Error::File`]).
 //!
 //! Faults, the same for every command: a path that cannot be created (no such folder,
 //! permission denied, a folder, a read-only file system) is an [`Error::File`] (exit code 2:
@@ -23,9 +29,9 @@
 //! reader went away) is not an error: the rest of that output is dropped and the command
 //! goes on (its exit code is its own).
 //!
-//! [`check_distinct`] refuses an output that is one of the inputs or another output (same
-//! file after following symlinks, or the same path yet to be created), before anything is
-//! written.
+//! Before anything is written, every command checks all its files together
+//! ([`super::files::FileSet`]): no output is an input or another output, and every output
+//! path is usable (the same symlink rules, a name the file system takes).
 
 use super::shown;
 use crate::error::{Error, Result};
@@ -166,25 +172,29 @@ pub enum Sink {
     Through(PathBuf),
 }
 
-/// Decide how `path` is written (see the module docs).
-pub fn sink_of(path: &Path) -> Sink {
+/// Decide how `path` is written (see the module docs). A symlink the kernel would not
+/// follow (see [`resolve_symlinks`]) or a loop of symlinks is an [`Error::File`].
+pub fn sink_of(path: &Path) -> Result<Sink> {
     if path.as_os_str() == "-" {
-        return Sink::Stdout;
+        return Ok(Sink::Stdout);
     }
     let s = path.to_string_lossy();
     match s.as_ref() {
-        "/dev/stdout" | "/dev/fd/1" | "/proc/self/fd/1" => return Sink::Stdout,
-        "/dev/stderr" | "/dev/fd/2" | "/proc/self/fd/2" => return Sink::Stderr,
+        "/dev/stdout" | "/dev/fd/1" | "/proc/self/fd/1" => return Ok(Sink::Stdout),
+        "/dev/stderr" | "/dev/fd/2" | "/proc/self/fd/2" => return Ok(Sink::Stderr),
         _ => {}
     }
-    let target = follow_symlinks(path);
-    if under_system_folder(path) || under_system_folder(&target) {
-        return Sink::Through(path.to_path_buf());
+    if under_system_folder(path) {
+        return Ok(Sink::Through(path.to_path_buf()));
     }
-    match std::fs::metadata(&target) {
+    let target = resolve_symlinks(path)?;
+    if under_system_folder(&target) {
+        return Ok(Sink::Through(path.to_path_buf()));
+    }
+    Ok(match std::fs::metadata(&target) {
         Ok(m) if !m.is_file() && !m.is_dir() => Sink::Through(path.to_path_buf()),
         _ => Sink::Replace(target),
-    }
+    })
 }
 
 /// Whether `path` (absolute) lies under `/dev` or `/proc`, whose entries alias devices and
@@ -195,30 +205,83 @@ fn under_system_folder(path: &Path) -> bool {
         && matches!(c.next(), Some(Component::Normal(n)) if n == "dev" || n == "proc")
 }
 
-/// `path` with every symlink of its last component followed (at most 40, as the kernel);
-/// the result may not exist (a dangling link names the file to create).
-fn follow_symlinks(path: &Path) -> PathBuf {
+/// Symlinks followed in a row before giving up, as the kernel (`ELOOP`).
+const MAX_SYMLINKS: usize = 40;
+
+/// `path` with every symlink of its last component followed, as the kernel follows them
+/// when it opens a file: at most [`MAX_SYMLINKS`] (more, or a loop, is an [`Error::File`]),
+/// and a link in a sticky world-writable folder (such as `/tmp`) only when it belongs to
+/// us or to the folder's owner (the `fs.protected_symlinks` rule; otherwise an
+/// [`Error::File`]), so that a link planted there by another user cannot make goniofit
+/// replace a file that user could not touch. The result may not exist (a dangling link
+/// names the file to create).
+fn resolve_symlinks(path: &Path) -> Result<PathBuf> {
     let mut p = path.to_path_buf();
-    for _ in 0..40 {
-        match std::fs::symlink_metadata(&p) {
-            Ok(m) if m.file_type().is_symlink() => match std::fs::read_link(&p) {
-                Ok(t) if t.is_absolute() => p = t,
-                Ok(t) => {
-                    p = p.parent().map_or_else(|| t.clone(), |d| d.join(&t));
-                }
-                Err(_) => break,
-            },
-            _ => break,
+    for _ in 0..=MAX_SYMLINKS {
+        let link = match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => m,
+            _ => return Ok(p),
+        };
+        check_protected_link(path, &p, &link)?;
+        match std::fs::read_link(&p) {
+            Ok(t) if t.is_absolute() => p = t,
+            Ok(t) => p = p.parent().map_or_else(|| t.clone(), |d| d.join(&t)),
+            Err(_) => return Ok(p),
         }
     }
-    p
+    Err(Error::File {
+        path: path.to_path_buf(),
+        message: "too many levels of symbolic links (a loop of links?)".into(),
+    })
+}
+
+/// Refuse to follow the symlink `link` (met resolving `path`; `meta`: the link's own
+/// metadata) where the kernel's `fs.protected_symlinks` rule forbids it: the link lies in
+/// a sticky world-writable folder, and neither we nor that folder's owner own it.
+fn check_protected_link(path: &Path, link: &Path, meta: &std::fs::Metadata) -> Result<()> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let dir = match link.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let Ok(folder) = std::fs::metadata(dir) else {
+            return Ok(());
+        };
+        const STICKY_WORLD_WRITABLE: u32 = 0o1002;
+        // SAFETY: geteuid has no preconditions and cannot fail.
+        let euid = unsafe { libc::geteuid() };
+        if folder.mode() & STICKY_WORLD_WRITABLE == STICKY_WORLD_WRITABLE
+            && meta.uid() != euid
+            && meta.uid() != folder.uid()
+        {
+            return Err(Error::File {
+                path: path.to_path_buf(),
+                message: format!(
+                    "not followed: the symlink {} lies in a sticky world-writable folder and belongs to another user (uid {}), as the kernel's protected_symlinks rule refuses; name the file itself",
+                    shown(link),
+                    meta.uid()
+                ),
+            });
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = (path, link, meta);
+    Ok(())
 }
 
 /// Whether an I/O error means the path itself is unusable (the user's choice of output,
 /// exit 2) rather than a failure while writing (exit 1).
-fn is_path_fault(kind: ErrorKind) -> bool {
+/// A name too long for the file system (`ENAMETOOLONG`) or a loop of symlinks (`ELOOP`) is
+/// a path fault too.
+fn is_path_fault(e: &std::io::Error) -> bool {
+    #[cfg(unix)]
+    if matches!(e.raw_os_error(), Some(libc::ENAMETOOLONG | libc::ELOOP)) {
+        return true;
+    }
     matches!(
-        kind,
+        e.kind(),
         ErrorKind::NotFound
             | ErrorKind::PermissionDenied
             | ErrorKind::IsADirectory
@@ -230,7 +293,7 @@ fn is_path_fault(kind: ErrorKind) -> bool {
 
 /// The error for a failure to open or create `path` (`dir`: the folder it goes in).
 fn open_error(path: &Path, dir: Option<&Path>, e: std::io::Error) -> Error {
-    if !is_path_fault(e.kind()) {
+    if !is_path_fault(&e) {
         return Error::Write {
             path: path.to_path_buf(),
             source: e,
@@ -238,12 +301,8 @@ fn open_error(path: &Path, dir: Option<&Path>, e: std::io::Error) -> Error {
     }
     let why = match dir {
         Some(d) if !d.is_dir() => format!("no such directory: {}", shown(d)),
-        Some(d) => format!(
-            "cannot create a file in directory {}: {}",
-            shown(d),
-            e.kind()
-        ),
-        None => format!("cannot open: {}", e.kind()),
+        Some(d) => format!("cannot create a file in directory {}: {e}", shown(d)),
+        None => format!("cannot open: {e}"),
     };
     Error::File {
         path: path.to_path_buf(),
@@ -273,7 +332,7 @@ pub fn write_atomic(
         let name = name.to_path_buf();
         move |source| Error::Write { path: name, source }
     };
-    match sink_of(path) {
+    match sink_of(path)? {
         Sink::Stdout => {
             let mut w = std::io::BufWriter::new(std::io::stdout().lock());
             pour(&mut w, f).map_err(write_err(Path::new("<standard output>")))
@@ -315,14 +374,44 @@ fn replace(
         });
     }
     let tmp = Registered::create_in(&dir).map_err(|e| open_error(path, Some(&dir), e))?;
+    keep_attributes(&tmp.file, target);
     {
         let mut w = std::io::BufWriter::new(&tmp.file);
         f(&mut w).map_err(write_err)?;
         w.flush().map_err(write_err)?;
     }
     tmp.file.sync_all().map_err(write_err)?;
-    tmp.persist(target).map_err(write_err)?;
+    tmp.persist(target).map_err(|e| {
+        if is_path_fault(&e) {
+            open_error(path, Some(&dir), e)
+        } else {
+            write_err(e)
+        }
+    })?;
     Ok(())
+}
+
+/// Give the new file `tmp` the mode (permission bits) and, where we may, the owner and
+/// group of the file `target` it is about to replace (nothing when there is none): a
+/// private file stays private. A group that cannot be kept takes the group's permission
+/// bits with it, so the new group cannot read what the old one could not.
+fn keep_attributes(tmp: &std::fs::File, target: &Path) {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::{fchown, MetadataExt, PermissionsExt};
+        let Ok(old) = std::fs::metadata(target) else {
+            return;
+        };
+        let mut mode = old.mode() & 0o777;
+        if fchown(tmp, Some(old.uid()), Some(old.gid())).is_err()
+            && fchown(tmp, None, Some(old.gid())).is_err()
+        {
+            mode &= !0o070;
+        }
+        let _ = tmp.set_permissions(std::fs::Permissions::from_mode(mode));
+    }
+    #[cfg(not(unix))]
+    let _ = (tmp, target);
 }
 
 /// [`write_atomic`] of bytes already in memory.
@@ -334,63 +423,4 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
 /// any other failure (a full disk behind a redirection) is an [`Error::Write`].
 pub fn print_stdout(text: &str) -> Result<()> {
     write_atomic(Path::new("-"), |w| w.write_all(text.as_bytes()))
-}
-
-/// Identity of a file for [`check_distinct`]: device and inode when it exists (after
-/// symlinks), otherwise the absolute path it would be created at.
-#[derive(Debug, PartialEq, Eq)]
-enum Identity {
-    #[cfg(unix)]
-    Inode(u64, u64),
-    Path(PathBuf),
-}
-
-fn identity(path: &Path) -> Option<Identity> {
-    if path.as_os_str() == "-" {
-        return None;
-    }
-    #[cfg(unix)]
-    if let Ok(m) = std::fs::metadata(path) {
-        use std::os::unix::fs::MetadataExt;
-        // Devices and FIFOs (`/dev/null` twice) are not files that could be destroyed.
-        return m.is_file().then(|| Identity::Inode(m.dev(), m.ino()));
-    }
-    let target = follow_symlinks(path);
-    let name = target.file_name()?;
-    let dir = match target.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let dir = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
-    Some(Identity::Path(dir.join(name)))
-}
-
-/// Refuse (a usage error, exit code 2) when two of the named files are the same file:
-/// `inputs` are read, `outputs` written; each comes with the option that named it
-/// (`"input"`, `"--out"`, ...). Checked before anything is written, so that
-/// `goniofit eval X.csv -o X.csv` cannot destroy X.csv.
-pub fn check_distinct(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> Result<()> {
-    let ids: Vec<(bool, &str, &Path, Option<Identity>)> = inputs
-        .iter()
-        .map(|&(o, p)| (false, o, p, identity(p)))
-        .chain(outputs.iter().map(|&(o, p)| (true, o, p, identity(p))))
-        .collect();
-    for (j, b) in ids.iter().enumerate() {
-        if !b.0 {
-            continue;
-        }
-        for a in &ids[..j] {
-            if a.3.is_some() && a.3 == b.3 {
-                return Err(Error::Usage(format!(
-                    "{} {} and {} {} are the same file: writing it would destroy {}; name another output",
-                    a.1,
-                    a.2.display(),
-                    b.1,
-                    b.2.display(),
-                    if a.0 { "the other output" } else { "the input" },
-                )));
-            }
-        }
-    }
-    Ok(())
 }

@@ -508,17 +508,21 @@ pub fn figure7() -> Result<ContourPlot> {
     })
 }
 
-/// Write Figures 4–7 into `dir` as PNG and SVG (`figure4.png`, `figure4.svg`, …); the
-/// folder is created if needed. Returns the written paths.
+/// The names of the figures' files without the extension (each as `.png` and `.svg`).
+pub const FIGURES: [&str; 4] = ["figure4", "figure5", "figure6", "figure7"];
+
+/// Write Figures 4–7 into `dir` as PNG and SVG (`figure4.png`, `figure4.svg`, …, named
+/// by [`FIGURES`]); the folder is created if needed. Returns the written paths.
 pub fn write_all(dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|source| crate::Error::Io {
         path: dir.to_path_buf(),
         source,
     })?;
-    let mut paths = write_png_svg(&Figure4::new()?, dir, "figure4")?;
-    paths.extend(write_png_svg(&figure5()?, dir, "figure5")?);
-    paths.extend(write_png_svg(&figure6()?, dir, "figure6")?);
-    paths.extend(write_png_svg(&figure7()?, dir, "figure7")?);
+    let [f4, f5, f6, f7] = FIGURES;
+    let mut paths = write_png_svg(&Figure4::new()?, dir, f4)?;
+    paths.extend(write_png_svg(&figure5()?, dir, f5)?);
+    paths.extend(write_png_svg(&figure6()?, dir, f6)?);
+    paths.extend(write_png_svg(&figure7()?, dir, f7)?);
     Ok(paths)
 }
 

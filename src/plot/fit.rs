@@ -888,7 +888,18 @@ pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
     })
 }
 
-/// Writes into `dir` (PNG and SVG each): fit_linear, fit_log (measured vs fitted over
+/// The names of [`write_fit_plots`]'s pictures without the extension (each as `.png` and
+/// `.svg`), in the order written.
+pub const PICTURES: [&str; 6] = [
+    "fit_linear",
+    "fit_log",
+    "residuals_theta",
+    "residuals_phi",
+    "polar",
+    "contour",
+];
+
+/// Writes into `dir` (PNG and SVG each, named by [`PICTURES`]): fit_linear, fit_log (measured vs fitted over
 /// signed θr for each θi, in-plane samples only, or nearest-to-plane), residuals_theta
 /// (standardized residuals vs θr), residuals_phi (vs φr), polar (fitted lobe at the θi with
 /// most samples, in the plane of incidence), contour (fitted model over (θr, φr) at that
@@ -899,20 +910,13 @@ pub fn write_fit_plots(dir: &Path, input: &FitPlotInput) -> Result<Vec<PathBuf>>
         path: dir.to_path_buf(),
         source,
     })?;
-    let mut paths = write_png_svg(&fit_chart(input, false)?, dir, "fit_linear")?;
-    paths.extend(write_png_svg(&fit_chart(input, true)?, dir, "fit_log")?);
-    paths.extend(write_png_svg(
-        &residual_chart(input, false)?,
-        dir,
-        "residuals_theta",
-    )?);
-    paths.extend(write_png_svg(
-        &residual_chart(input, true)?,
-        dir,
-        "residuals_phi",
-    )?);
-    paths.extend(write_png_svg(&polar_plot(input)?, dir, "polar")?);
-    paths.extend(write_png_svg(&contour_plot(input)?, dir, "contour")?);
+    let [linear, log, theta, phi, polar, contour] = PICTURES;
+    let mut paths = write_png_svg(&fit_chart(input, false)?, dir, linear)?;
+    paths.extend(write_png_svg(&fit_chart(input, true)?, dir, log)?);
+    paths.extend(write_png_svg(&residual_chart(input, false)?, dir, theta)?);
+    paths.extend(write_png_svg(&residual_chart(input, true)?, dir, phi)?);
+    paths.extend(write_png_svg(&polar_plot(input)?, dir, polar)?);
+    paths.extend(write_png_svg(&contour_plot(input)?, dir, contour)?);
     Ok(paths)
 }
 
