@@ -117,7 +117,11 @@ fn every_other_command_checks_its_outputs() {
     refused(d, &format!("eval {kbs} h.csv -o link.csv"), same);
     refused(d, &format!("eval {kbs} h.csv -o ./hard.csv"), same);
     refused(d, &format!("synth {kbs} --out s.csv --truth ./s.csv"), same);
-    refused(d, &format!("synth {kbs} --layout h.csv --out link.csv"), same);
+    refused(
+        d,
+        &format!("synth {kbs} --layout h.csv --out link.csv"),
+        same,
+    );
     refused(d, "figures --out h.csv", "not a folder");
     refused(d, "bench work-precision --out h.csv", "not a folder");
     refused(d, "plot h.csv --out h.csv", "not a folder");
@@ -146,7 +150,10 @@ fn with_stdout_to(dir: &Path, args: &str, file: &Path) -> (Option<i32>, String) 
         .stdout(out)
         .output()
         .unwrap();
-    (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -224,4 +231,66 @@ fn wrote_lines_escape_control_and_bidi_characters() {
     assert!(err.contains("wrote x\\n\\u{202e}y.html"), "{err}");
     assert!(!err.contains('\u{202e}'), "{err}");
     assert!(d.join(&name).is_file());
+}
+
+#[test]
+fn a_replaced_file_keeps_its_mode() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = workspace();
+    let d = dir.path();
+    for mode in [0o600, 0o640, 0o604] {
+        let out = d.join(format!("out{mode:o}.csv"));
+        std::fs::write(&out, "old").unwrap();
+        std::fs::set_permissions(&out, std::fs::Permissions::from_mode(mode)).unwrap();
+        goniofit()
+            .current_dir(d)
+            .args(["eval", "--model", "lambert", "--params", "scale=1", "h.csv"])
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success();
+        let m = std::fs::metadata(&out).unwrap();
+        assert_eq!(m.permissions().mode() & 0o777, mode);
+        assert!(std::fs::read_to_string(&out).unwrap().contains("L_model"));
+    }
+}
+
+/// `link` made to belong to user `uid` (needs the right to change owners: root).
+fn chown_link(link: &Path, uid: u32) -> bool {
+    std::os::unix::fs::lchown(link, Some(uid), None).is_ok()
+}
+
+#[test]
+fn a_symlink_is_followed_only_where_the_kernel_would_follow_it() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = workspace();
+    let d = dir.path();
+    let tmp = d.join("public");
+    std::fs::create_dir(&tmp).unwrap();
+    std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    let secret = d.join("secret");
+    std::fs::write(&secret, "private").unwrap();
+    std::fs::set_permissions(&secret, std::fs::Permissions::from_mode(0o600)).unwrap();
+    let link = tmp.join("link.csv");
+    std::os::unix::fs::symlink(&secret, &link).unwrap();
+    let nobody = 65534;
+    if !chown_link(&link, nobody) {
+        eprintln!("skipped: cannot give a symlink to another user here");
+        return;
+    }
+    let eval = "eval --model lambert --params scale=1 h.csv -o public/link.csv";
+    refused(d, eval, "protected_symlinks");
+    assert_eq!(std::fs::read_to_string(&secret).unwrap(), "private");
+    // The folder's owner's link is followed, as the kernel does.
+    std::os::unix::fs::lchown(&tmp, Some(nobody), None).unwrap();
+    goniofit()
+        .current_dir(d)
+        .args(eval.split(' '))
+        .assert()
+        .success();
+    let m = std::fs::metadata(&secret).unwrap();
+    assert_eq!(m.permissions().mode() & 0o777, 0o600);
+    assert!(std::fs::read_to_string(&secret)
+        .unwrap()
+        .contains("L_model"));
 }
