@@ -1,6 +1,7 @@
 //! A seeded small recovery run: coverage of the reported uncertainties in a sensible band,
 //! and small recovery errors in the quantities the fits say the data determines.
 
+use goniofit::fit::lm::Stop;
 use goniofit::recover::{self, RecoverConfig, Regime};
 
 /// Every scored quantity of `r` within `max_rel` of its truth.
@@ -24,7 +25,7 @@ fn seeded_recovery_is_calibrated_and_accurate() {
         seed: 11,
         ..RecoverConfig::default()
     };
-    let report = recover::run(&config, &|_| {});
+    let report = recover::run(&config, &Stop::new(None, None), &|_| {}).unwrap();
     assert_eq!(report.scenes, 16);
     assert_eq!(report.errors, 0, "{}", report.table());
     assert!(report.converged >= 15, "{}", report.table());
@@ -82,7 +83,7 @@ fn seeded_recovery_is_calibrated_and_accurate() {
 fn scoring_follows_the_verdict() {
     let scenes = recover::draw_scenes(4, 11, 0.01);
     for s in &scenes {
-        let r = recover::run_scene(s, &RecoverConfig::default());
+        let r = recover::run_scene(s, &RecoverConfig::default(), &Stop::new(None, None)).unwrap();
         let names: Vec<&str> = r.checks.iter().map(|c| c.name.as_str()).collect();
         match r.verdict.unwrap() {
             goniofit::fit::driver::Verdict::Full => {
@@ -117,7 +118,7 @@ fn issue_17_wrong_optimum_scenes_converge_at_the_truth() {
             only: Some(ids.to_vec()),
             ..RecoverConfig::default()
         };
-        let report = recover::run(&config, &|_| {});
+        let report = recover::run(&config, &Stop::new(None, None), &|_| {}).unwrap();
         assert_eq!(report.scenes, ids.len());
         assert_eq!(report.wrong_converged, 0, "{}", report.table());
         for r in &report.results {
@@ -150,7 +151,8 @@ fn smooth_scenes_error_bars_match_the_scatter_over_noise_draws() {
         for k in 0..40 {
             let mut scene = scenes[id].clone();
             scene.noise.seed = 1000 + k;
-            let r = recover::run_scene(&scene, &RecoverConfig::default());
+            let r = recover::run_scene(&scene, &RecoverConfig::default(), &Stop::new(None, None))
+                .unwrap();
             for (q, name) in names.iter().enumerate() {
                 let c = r
                     .checks
@@ -182,7 +184,7 @@ fn outliers_name_their_scenes_with_reproducing_commands() {
         seed: 5,
         ..RecoverConfig::default()
     };
-    let mut result = recover::run_scene(&scenes[2], &config);
+    let mut result = recover::run_scene(&scenes[2], &config, &Stop::new(None, None)).unwrap();
     assert!(result.converged && !result.checks.is_empty());
     let truth = result.checks[0].truth;
     // Move the first scored value 30 % off, with a standard error 100 times smaller.

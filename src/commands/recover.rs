@@ -2,6 +2,7 @@
 //! uncertainties.
 
 use clap::Args;
+use goniofit::fit::lm::Stop;
 use goniofit::recover::{self, RecoverConfig};
 use std::io::IsTerminal as _;
 use std::time::Duration;
@@ -74,8 +75,18 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     };
     let fitted = args.only.as_ref().map_or(args.scenes, Vec::len);
     let bar = progress_bar(fitted as u64, "fitting scenes");
-    let report = recover::run(&config, &|_r| bar.inc(1));
+    // One stop request for the whole run: a signal ends it (exit 130, nothing printed)
+    // instead of being taken by the scenes being fitted as their own time limit.
+    let stop = Stop::new(None, None);
+    let report = recover::run(&config, &stop, &|_r| bar.inc(1));
     bar.finish_and_clear();
+    let report = match report {
+        Err(e @ goniofit::Error::Stopped(_)) => {
+            eprintln!("goniofit: stopped: {e}");
+            return Ok(SIGNALLED);
+        }
+        r => r?,
+    };
     if args.json {
         goniofit::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report)?))?;
     } else {
@@ -83,6 +94,9 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     }
     Ok(0)
 }
+
+/// The exit code of a run ended by a signal (as an unhandled SIGINT's; README).
+const SIGNALLED: u8 = 130;
 
 /// A progress bar on stderr, hidden when stderr is not a terminal.
 pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {

@@ -112,12 +112,18 @@ pub fn check(surface: &Surface, theta_i: &[f64], theta_r: &[f64]) -> Validity {
 fn curvature(s: &Surface) -> Check {
     let value = s.corr_len * s.corr_len / (12f64.sqrt() * s.sigma) / s.wavelength;
     let satisfied = s.both_determined.then_some(value >= MIN_CURVATURE_RADIUS);
+    // T = 1e300 λ overflows T²: said in words, never printed as "inf".
+    let shown = if value.is_finite() {
+        format!("{value:.3e}")
+    } else {
+        format!("above {:.1e}", f64::MAX)
+    };
     let text = match satisfied {
         None => format!(
-            "not determined: the rms radius of curvature T²/(√12 σ) = (T/σ)² σ/√12 needs σ itself, which the data does not determine (at the fitted values it would be {value:.3e} λ)"
+            "not determined: the rms radius of curvature T²/(√12 σ) = (T/σ)² σ/√12 needs σ itself, which the data does not determine (at the fitted values it would be {shown} λ)"
         ),
         Some(ok) => format!(
-            "{}: rms radius of curvature T²/(√12 σ) = {value:.3e} λ {} λ (the Kirchhoff approximation needs it ≫ λ)",
+            "{}: rms radius of curvature T²/(√12 σ) = {shown} λ {} λ (the Kirchhoff approximation needs it ≫ λ)",
             if ok { "satisfied" } else { "violated" },
             if ok { "≥" } else { "<" },
         ),

@@ -124,7 +124,10 @@ impl Kbs {
         // product can be normal when a factor is not). s enters linearly (it may be ≤ 0
         // inside a fit's linear solve), outside the logarithm.
         let pref = (PI * t * t / area) * (h * k_sigma) * (h * k_sigma);
-        let unit = if pref.is_normal() && q.ln_q.abs() < 700.0 {
+        let unit = if q.ln_q == f64::NEG_INFINITY {
+            // Q = 0 (the flat-surface limit): so is the radiance, whatever the prefactor.
+            0.0
+        } else if pref.is_normal() && q.ln_q.abs() < 700.0 {
             pref * q.ln_q.exp()
         } else {
             let ln_pref = if pref.is_normal() {

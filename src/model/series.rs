@@ -53,6 +53,13 @@
 //! = 5e-20 relative, is an estimate from Poisson summation, measured in 30 digits and
 //! tested against the mpmath grid and the plain sum).
 //!
+//! Work is bounded at every (g, a), so that an evaluation ends at any parameter value: the
+//! peak search takes a bounded number of steps (also above 2⁵³, where unit steps no longer
+//! advance); the forced series, too, sums every h-th term where h ≥ 4096 (a peak wider than
+//! ~6000 terms); a strided side stops after 1000 terms; and far from the specular
+//! direction on a surface with T ≳ 1e6 λ (a ≥ 1e12, a ≥ 64 g²) Q is below e^{−999 999}
+//! (proof at [`beyond_sums`]) and is returned as 0, with NaN only for NaN arguments.
+//!
 //! Batches ([`ln_q_batch`], what the models call): the same results bit for bit as one
 //! sample at a time; on x86-64 CPUs with AVX2 and FMA both run in a copy of this code
 //! compiled for them, chosen at run time, which gives the same bits as the portable code
@@ -113,6 +120,12 @@ pub fn rough(g: f64, a: f64) -> LnQ {
 /// Where that start does not apply, or the iteration is slow (a ≫ g², where the peak moves
 /// far above g), by bisection. Either way the same integer: the result does not depend on
 /// the search.
+///
+/// Bounded work at every (g, a): at most [`PEAK_NEWTON_STEPS`] Newton steps and
+/// [`PEAK_UPWARD_STEPS`] unit steps, and a bisection of at most ~2100 halvings. Above 2⁵³,
+/// where consecutive integers are no longer all doubles, the result is the double nearest
+/// the crossing that bisection reaches (only the strided sum, which needs no integer peak,
+/// is summed from such a peak).
 fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
     if ln_ratio(1.0, ln_g, a) < 0.0 {
         return 1.0;
@@ -127,10 +140,13 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
             m += step;
             if step < 0.5 {
                 let mut k = m.ceil();
-                while ln_ratio(k, ln_g, a) >= 0.0 {
+                for _ in 0..PEAK_UPWARD_STEPS {
+                    if ln_ratio(k, ln_g, a) < 0.0 {
+                        return k;
+                    }
                     k += 1.0;
                 }
-                return k;
+                break;
             }
             f = ln_ratio(m, ln_g, a);
         }
@@ -141,8 +157,13 @@ fn peak_index(g: f64, ln_g: f64, a: f64) -> f64 {
 /// Newton steps [`peak_index`] takes before it falls back to bisection.
 const PEAK_NEWTON_STEPS: usize = 12;
 
+/// Unit steps [`peak_index`] takes upward from the converged Newton iterate (one or two
+/// where the iterate is exact; many only where m + 1 rounds to m) before bisection.
+const PEAK_UPWARD_STEPS: usize = 64;
+
 /// [`peak_index`] by bisection: bracket [lo, hi] with r_lo ≥ 1 > r_hi from the a = 0
-/// peak m ≈ g upward by doubling, then halve it (r_1 ≥ 1 on entry).
+/// peak m ≈ g upward by doubling, then halve it (r_1 ≥ 1 on entry) until no double lies
+/// between lo + 1 and hi (so that it ends above 2⁵³ too).
 fn peak_by_bisection(g: f64, ln_g: f64, a: f64) -> f64 {
     let mut lo = 1.0f64;
     let mut hi = (g.floor()).max(2.0);
@@ -156,6 +177,9 @@ fn peak_by_bisection(g: f64, ln_g: f64, a: f64) -> f64 {
     }
     while hi - lo > 1.0 {
         let mid = (0.5 * (lo + hi)).floor();
+        if mid <= lo || mid >= hi {
+            break;
+        }
         if ln_ratio(mid, ln_g, a) >= 0.0 {
             lo = mid;
         } else {
@@ -173,11 +197,80 @@ pub fn series(g: f64, a: f64, tol: f64) -> LnQ {
 
 #[inline(always)]
 fn series_body<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
+    if let Some(q) = beyond_sums(g, a) {
+        return q;
+    }
     if g < SMALL_G_MAX && a < SMALL_A_MAX {
         return series_from_one::<V>(g, a, tol);
     }
     let ln_g = g.ln();
-    series_from_peak::<V>(g, a, tol, ln_g, peak_index(g, ln_g, a))
+    let m0 = peak_index(g, ln_g, a);
+    from_peak::<V>(g, a, tol, ln_g, m0, PLAIN_STRIDE_MAX)
+}
+
+/// The sum from its peak `m0`: every h-th term (module `strided`) where the stride h is at
+/// least `min_stride`, else (or where the strided sum cannot be formed) every term. Every
+/// term is summed only where the stride is below [`PLAIN_STRIDE_MAX`], so that the work is
+/// bounded at every (g, a): ≲ 14 · 1.5 · PLAIN_STRIDE_MAX terms for the plain sum, a few
+/// dozen for the strided one. (A peak so wide that the strided sum fails there has no
+/// finite sum: NaN.)
+#[inline(always)]
+fn from_peak<V: F64x4>(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64, min_stride: f64) -> LnQ {
+    let h = strided::stride(m0, a);
+    if let Some(h) = h.filter(|&h| h >= min_stride) {
+        if let Some(q) = strided::sum(g, a, tol, ln_g, m0, h) {
+            return q;
+        }
+    }
+    if h.is_some_and(|h| h >= PLAIN_STRIDE_MAX) || !m0.is_finite() {
+        return LnQ {
+            ln_q: f64::NAN,
+            d_g: f64::NAN,
+            d_a: f64::NAN,
+            mode: Mode::Series,
+        };
+    }
+    series_from_peak::<V>(g, a, tol, ln_g, m0)
+}
+
+/// Stride from which even the forced series (`--mode series`) sums the strided terms: a
+/// peak of width W ≥ 1.5 × 4096 (beyond g ≈ 4e7 near the specular direction, or a ≫ g²
+/// far from it, T ≳ 1e4 λ there) would need ~14 W terms per sample, and where the peak
+/// index passes 2⁵³ the unit steps of the plain sum no longer advance. The strided sum
+/// meets the same accuracy (module `strided`).
+const PLAIN_STRIDE_MAX: f64 = 4096.0;
+
+/// Smallest a of the flat-surface limit (see [`beyond_sums`]): √a = 1e6.
+const FLAT_A_MIN: f64 = 1e12;
+
+/// ln Q where no sum is formed, None where the sums apply: NaN for a NaN argument; the
+/// rough limit for g = ∞ (Q = e^{−a/g}/g² = 0); and the flat-surface limit, Q = 0
+/// (ln Q = −∞, derivatives 0), where a ≥ [`FLAT_A_MIN`] and a ≥ 64 g² (a = ∞ included:
+/// far from the specular direction on a surface whose correlation length is ≳ 1e6 λ).
+/// There, with M = √a ≥ 8 g, the terms m ≤ M carry e^{−a/m} ≤ e^{−√a} and sum (with
+/// e^{−g}/g) to at most e^{−√a}, and those above M to at most g^{M−1}/M! ≤ e^{−M}: so
+/// Q ≤ 2 e^{−√a} < e^{−999 999}, and s π (T/λ)² h² (kσ)² Q, the prefactor below e^{710},
+/// is 0 in double precision, as the sums themselves give there (where rounding would
+/// spoil them: the peak index passes 2⁵³ near a = 1e33).
+#[inline(always)]
+fn beyond_sums(g: f64, a: f64) -> Option<LnQ> {
+    if g.is_nan() || a.is_nan() || (g.is_infinite() && a.is_infinite()) {
+        return Some(LnQ {
+            ln_q: f64::NAN,
+            d_g: f64::NAN,
+            d_a: f64::NAN,
+            mode: Mode::Series,
+        });
+    }
+    if g.is_infinite() {
+        return Some(rough(g, a));
+    }
+    (a >= FLAT_A_MIN && a >= 64.0 * g * g).then_some(LnQ {
+        ln_q: f64::NEG_INFINITY,
+        d_g: 0.0,
+        d_a: 0.0,
+        mode: Mode::Series,
+    })
 }
 
 /// The series summed outward from its largest term `m0` (from [`peak_index`]; `ln_g` = ln g).
@@ -344,7 +437,7 @@ pub fn auto(g: f64, a: f64, tol: f64) -> LnQ {
 
 #[inline(always)]
 fn auto_with<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
-    if g > G_DOMAIN_MAX {
+    if g > G_DOMAIN_MAX && a.is_finite() && g.is_finite() {
         // Beyond the stated domain (a fit's trial step can go there): no O(√g) series;
         // the asymptotic expansion where it applies, else the rough approximation, whose
         // relative error is O(1/g) < 1e-6 here. Best effort, not held to `tol`.
@@ -354,6 +447,9 @@ fn auto_with<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
             }
         }
         return rough(g, a);
+    }
+    if let Some(q) = beyond_sums(g, a) {
+        return q;
     }
     // u = (g/4) e^{a/2} ≥ g/4, so smooth can only pass when g ≤ 2 tol.
     if g <= 2.0 * tol {
@@ -371,12 +467,7 @@ fn auto_with<V: F64x4>(g: f64, a: f64, tol: f64) -> LnQ {
     // A wide peak: every h-th term (module `strided`), else every term.
     let ln_g = g.ln();
     let m0 = peak_index(g, ln_g, a);
-    if let Some(h) = strided::stride(m0, a) {
-        if let Some(q) = strided::sum(g, a, tol, ln_g, m0, h) {
-            return q;
-        }
-    }
-    series_from_peak::<V>(g, a, tol, ln_g, m0)
+    from_peak::<V>(g, a, tol, ln_g, m0, strided::STRIDE_MIN)
 }
 
 /// ln Q for a batch of samples: `out[i]` = [`ln_q`]`(g[i], a[i], mode, tol)`, identical

@@ -24,7 +24,7 @@
 
 use crate::error::{Error, Result};
 use crate::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
-use crate::fit::lm::{LmConfig, Termination};
+use crate::fit::lm::{LmConfig, Stop, Termination};
 use crate::fit::problem::Channels;
 use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
@@ -381,8 +381,17 @@ pub fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
     out
 }
 
-/// Fit one scene.
-pub fn run_scene(scene: &Scene, config: &RecoverConfig) -> SceneResult {
+/// Fit one scene (its solver limited by `config.fit_timeout`), stopped by `stop` too: a
+/// fit that a signal or the caller's flag cut short (`stop` requested as
+/// [`Termination::Interrupted`]) is no result of the scene's and gives None.
+pub fn run_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> Option<SceneResult> {
+    let stop = stop.part(config.fit_timeout);
+    let result = fit_scene(scene, config, &stop);
+    (stop.requested() != Some(Termination::Interrupted)).then_some(result)
+}
+
+/// Fit one scene under `stop` (the scene's own limit and the run's signals).
+fn fit_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> SceneResult {
     let fail = |n: usize, e: Error| SceneResult {
         scene: scene.clone(),
         n,
@@ -402,6 +411,7 @@ pub fn run_scene(scene: &Scene, config: &RecoverConfig) -> SceneResult {
         weights_are_uncertainties: true,
         lm: LmConfig {
             timeout: config.fit_timeout,
+            stop: Some(stop.clone()),
             ..FitConfig::default().lm
         },
         ..FitConfig::default()
@@ -536,23 +546,43 @@ pub fn summarize(
 }
 
 /// Run a recovery: draw the scenes, fit them in parallel (rayon), summarise. `on_done` is
-/// called once per finished scene (e.g. to advance a progress bar).
-pub fn run(config: &RecoverConfig, on_done: &(dyn Fn(&SceneResult) + Sync)) -> RecoverReport {
+/// called once per finished scene (e.g. to advance a progress bar). Once `stop` is
+/// requested as an interrupt (a signal, or its flag) no scene is started, the running fits
+/// end at their next step, and the run is [`Error::Stopped`] (saying how many scenes were
+/// fitted): a recovery cut short has no summary, and its interrupted scenes are no errors.
+/// `stop`'s deadline, if any, limits each scene's fit like `config.fit_timeout`.
+pub fn run(
+    config: &RecoverConfig,
+    stop: &Stop,
+    on_done: &(dyn Fn(&SceneResult) + Sync),
+) -> Result<RecoverReport> {
     let t0 = std::time::Instant::now();
     let mut scenes = draw_scenes(config.scenes, config.seed, config.noise);
     if let Some(only) = &config.only {
         scenes.retain(|s| only.contains(&s.id));
     }
-    let mut results: Vec<SceneResult> = scenes
+    let interrupted = || stop.requested() == Some(Termination::Interrupted);
+    let results: Vec<Option<SceneResult>> = scenes
         .par_iter()
         .map(|s| {
-            let r = run_scene(s, config);
+            if interrupted() {
+                return None;
+            }
+            let r = run_scene(s, config, stop)?;
             on_done(&r);
-            r
+            Some(r)
         })
         .collect();
+    let mut results: Vec<SceneResult> = results.into_iter().flatten().collect();
+    if interrupted() || results.len() < scenes.len() {
+        return Err(Error::Stopped(format!(
+            "interrupted after {} of {} scenes were fitted: no summary",
+            results.len(),
+            scenes.len()
+        )));
+    }
     results.sort_by_key(|r| r.scene.id);
-    summarize(results, config, t0.elapsed().as_secs_f64())
+    Ok(summarize(results, config, t0.elapsed().as_secs_f64()))
 }
 
 /// Format a number for the table: 3 significant digits, or `-`.

@@ -102,6 +102,24 @@ impl Stop {
         }))
     }
 
+    /// A stop request for one part of this piece of work with a time limit of its own: it
+    /// is requested when this one is (the same signals and flag, from this one's start), or
+    /// once `timeout` from now has passed (or this one's deadline, if sooner). A timeout too
+    /// large for the clock is no limit.
+    pub fn part(&self, timeout: Option<Duration>) -> Stop {
+        let own = timeout.and_then(|t| Instant::now().checked_add(t));
+        let deadline = match (self.0.deadline, own) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        Stop(Arc::new(StopInner {
+            deadline,
+            generation: self.0.generation,
+            flag: self.0.flag.clone(),
+            _active: Active::start(),
+        }))
+    }
+
     /// Why the work must stop, if it must: [`Termination::Interrupted`] (a signal or the
     /// flag; it wins over a deadline that passed too) or [`Termination::Timeout`].
     pub fn requested(&self) -> Option<Termination> {

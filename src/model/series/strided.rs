@@ -43,10 +43,15 @@ pub(super) fn stride(m0: f64, a: f64) -> Option<f64> {
     (h >= STRIDE_MIN).then_some(h)
 }
 
+/// Most strided terms [`sum`] adds on either side of the peak (a Gaussian peak needs ~10;
+/// the bound keeps the work finite where rounding makes the tail bounds fail).
+const STRIDES_MAX: usize = 1000;
+
 /// ln Q and its derivatives from the terms m0 + j h (j ∈ ℤ, m ≥ 1), stopped where the
 /// bounds on the omitted strided terms are below `tol`/10 relative to each sum; `None`
 /// when the sum reaches m < 1 before that (the peak is not clear of the sum's start: the
-/// caller sums every term). `ln_g` = ln g; `m0` the peak index, `h` from [`stride`].
+/// caller sums every term), or when a side needs more than [`STRIDES_MAX`] terms.
+/// `ln_g` = ln g; `m0` the peak index, `h` from [`stride`].
 pub(super) fn sum(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64, h: f64) -> Option<LnQ> {
     let eps = 0.1 * tol.max(1e-17);
     let p0 = ln_poisson(m0, g, ln_g);
@@ -56,7 +61,9 @@ pub(super) fn sum(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64, h: f64) -> Optio
     let mut s = Sums::at_peak(g, m0);
     // Upward: with q = t_m/t_{m−h} < 1, the later strided terms are ≤ t_m q^k.
     let (mut m, mut prev) = (m0, 1.0f64);
+    let mut steps = 0..STRIDES_MAX;
     loop {
+        steps.next()?;
         m += h;
         let t = rel(m);
         s.add(m, t, g);
@@ -72,7 +79,9 @@ pub(super) fn sum(g: f64, a: f64, tol: f64, ln_g: f64, m0: f64, h: f64) -> Optio
     // Downward: the terms fall monotonically below the peak; after t_m, the ⌊(m−1)/h⌋
     // strided terms left are each ≤ t_m.
     let mut m = m0;
+    let mut steps = 0..STRIDES_MAX;
     loop {
+        steps.next()?;
         m -= h;
         if m < 1.0 {
             return None;
