@@ -2,7 +2,8 @@
 """Convert the CUReT BRDF database (abrdf.dat, table.txt; see SOURCE.txt) to one CSV that
 goniofit reads: group = CUReT sample number (1-61), angles in degrees in goniofit's
 convention (theta_i, theta_r from the normal; phi_r from the plane of incidence, 0 = the
-forward/specular side), L = the BRDF value as CUReT gives it (mean of R, G, B; 1/sr).
+forward/specular side), L = the BRDF value as CUReT gives it (mean of R, G, B; 1/sr); the
+comment line `# quantity: brdf` tells goniofit that L is a BRDF.
 
 CUReT's azimuths are those of direction vectors pointing away from the surface, so the mirror
 of the source at phi_i is phi_v = phi_i + pi: theta_r = theta_v,
@@ -38,6 +39,7 @@ def main(abrdf_path, table_path):
     out = sys.stdout
     out.write("# CUReT BRDF database (Dana et al. 1999), converted by data/curet/convert.py;\n")
     out.write("# see data/curet/SOURCE.txt. Angles in degrees, goniofit's convention.\n")
+    out.write("# quantity: brdf\n")
     out.write("group,theta_i,theta_r,phi_r,L\n")
     n_rows = 0
     with open(abrdf_path) as f:

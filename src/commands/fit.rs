@@ -568,6 +568,7 @@ fn print_reports(
             serde_json::json!({
                 "fits": values,
                 "datasets": outcomes.len(),
+                "not_converged": rows.iter().filter(|r| !r.converged).count(),
                 "not_fitted": skipped,
                 "seconds": wall,
                 "threads": threads,
@@ -588,8 +589,11 @@ fn print_reports(
         io::print_stdout(&text)?;
     }
     if let Some(path) = &args.summary {
-        let headers: Vec<String> = report::summary::CSV_HEADER.map(String::from).to_vec();
-        io::write_csv(path, &headers, &report::summary::csv_rows(&rows))?;
+        io::write_csv(
+            path,
+            &report::summary::csv_header(),
+            &report::summary::csv_rows(&rows),
+        )?;
     }
     if !skipped.is_empty() {
         eprintln!(
@@ -600,8 +604,10 @@ fn print_reports(
         );
     }
     if !single && !args.quiet {
+        let failed =
+            report::summary::not_converged(&rows).map_or(String::new(), |t| format!("; {t}"));
         eprintln!(
-            "goniofit: fitted {} datasets in {:.3} s ({:.1} datasets/s) on {} threads",
+            "goniofit: fitted {} datasets in {:.3} s ({:.1} datasets/s) on {} threads{failed}",
             outcomes.len(),
             wall,
             outcomes.len() as f64 / wall,
@@ -699,7 +705,8 @@ fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyho
         pictures.push((title, svg));
     }
     let text = report::outcome::to_text(o, info);
-    let page = report::html::page(&o.result, info, &text, &pictures);
+    let comparison = report::outcome::comparison(o);
+    let page = report::html::page(&o.result, info, &text, &comparison, &pictures);
     io::write_bytes(path, page.as_bytes())?;
     eprintln!(
         "goniofit: wrote {} (one page, {} pictures inline)",
@@ -715,10 +722,10 @@ fn summary_json(rows: &[report::summary::Row]) -> serde_json::Value {
     serde_json::Value::Array(
         csv.into_iter()
             .map(|r| {
-                let m: serde_json::Map<String, serde_json::Value> = report::summary::CSV_HEADER
-                    .iter()
+                let m: serde_json::Map<String, serde_json::Value> = report::summary::csv_header()
+                    .into_iter()
                     .zip(r)
-                    .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
+                    .map(|(k, v)| (k, serde_json::Value::String(v)))
                     .collect();
                 serde_json::Value::Object(m)
             })

@@ -7,7 +7,7 @@
 //! | `theta_i` | `theta_i` | incidence angle from the normal |
 //! | `theta_r` | `theta_r` | view angle from the normal |
 //! | `phi_r` | `phi_r` | view azimuth from the plane of incidence, 0 = forward/specular side |
-//! | `L` | `L` or `value` | measured radiance (or BRDF) |
+//! | `L` | `L`, `value` or `brdf` | measured radiance (or BRDF: a column named `brdf`, or a `# quantity: brdf` comment before the header, states a BRDF; see [`super::quantity`]) |
 //! | `weight` | `weight` | per-sample weight w > 0 |
 //! | `sigma_L` | `sigma_L` | standard uncertainty of L (> 0); w = 1/σ² |
 //! | `wavelength` | `wavelength` | per-sample wavelength (> 0), unit of σ and T |
@@ -61,7 +61,7 @@ const ROLES: [(Role, &str, &[&str]); 8] = [
     (Role::ThetaI, "theta_i", &["theta_i"]),
     (Role::ThetaR, "theta_r", &["theta_r"]),
     (Role::PhiR, "phi_r", &["phi_r"]),
-    (Role::Value, "L", &["l", "value"]),
+    (Role::Value, "L", &["l", "value", "brdf"]),
     (Role::Weight, "weight", &["weight"]),
     (Role::SigmaL, "sigma_L", &["sigma_l"]),
     (Role::Wavelength, "wavelength", &["wavelength"]),
@@ -321,7 +321,7 @@ fn parse_records(
     if opts.require_value && cols.get(Role::Value).is_none() {
         return Err(missing(
             "L",
-            " (the measured value: name it L or value, or map it with --columns L=NAME)",
+            " (the measured value: name it L, value or brdf, or map it with --columns L=NAME)",
         ));
     }
     if cols.get(Role::Weight).is_some() && cols.get(Role::SigmaL).is_some() {
@@ -353,8 +353,12 @@ fn parse_records(
             && cols.get(Role::Wavelength).is_some())
         .then(|| "µm".to_string()),
         channel: cols.get(Role::Group).map(|_| Vec::with_capacity(n)),
-        quantity: (nist.is_some() && !mapped[Role::Value as usize])
-            .then_some(crate::geometry::Quantity::Brdf),
+        quantity: if nist.is_some() && !mapped[Role::Value as usize] {
+            Some(crate::geometry::Quantity::Brdf)
+        } else {
+            cols.get(Role::Value)
+                .and_then(|i| super::quantity::from_column_name(&headers[i]))
+        },
     };
     for record in records {
         let (line, fields) = record?;

@@ -34,6 +34,7 @@ pub mod astm;
 pub mod csv;
 pub mod files;
 pub mod output;
+mod quantity;
 
 pub use files::FileSet;
 pub use output::{print_stdout, write_atomic, write_bytes};
@@ -88,7 +89,8 @@ pub struct Dataset {
     pub wavelength_unit: Option<String>,
     /// Per-sample channel/group label (ASTM channel, or a `group` column).
     pub channel: Option<Vec<String>>,
-    /// The measured quantity the file states (ASTM `MEAS_NAME BRDF`, NIST `f_r11`), if any.
+    /// The measured quantity the file states (ASTM `MEAS_NAME BRDF`, NIST `f_r11`, a CSV
+    /// `# quantity: brdf` comment or `brdf` value column), if any.
     pub quantity: Option<Quantity>,
 }
 
@@ -229,6 +231,7 @@ fn read_file(
     let head = reader.fill_buf().map_err(io_err)?;
     if !astm_by_extension(path) && surely_csv(head) {
         let rows_hint = estimate_rows(head, len);
+        let stated = quantity::from_comments(path, head)?;
         let stopped = std::cell::Cell::new(None);
         let counted = std::io::BufReader::new(Counting {
             inner: reader,
@@ -248,7 +251,8 @@ fn read_file(
                 len as f64 / 1e6
             )));
         }
-        if let Ok(ds) = parsed {
+        if let Ok(mut ds) = parsed {
+            ds.quantity = stated.or(ds.quantity);
             return select_csv_channel(ds, opts.channel.as_deref());
         }
         let bytes = std::fs::read(path).map_err(io_err)?;
@@ -330,7 +334,10 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Datas
     if is_astm(path, text) {
         astm::parse(path, text, opts)
     } else {
-        select_csv_channel(csv::parse(path, text, opts)?, opts.channel.as_deref())
+        let stated = quantity::from_comments(path, text.as_bytes())?;
+        let mut ds = csv::parse(path, text, opts)?;
+        ds.quantity = stated.or(ds.quantity);
+        select_csv_channel(ds, opts.channel.as_deref())
     }
 }
 

@@ -94,8 +94,41 @@ fn quantity_tables(s: &mut String, r: &FitResult, info: &RunInfo) {
     s.push_str("</table>\n");
 }
 
-/// The page. `text` is the plain-text report; `pictures` are (title, SVG document) pairs.
-pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, String)]) -> String {
+/// The model comparison of `--model auto` (nothing for a single model): each candidate's
+/// BIC, ΔBIC to the chosen fit, what became of its fit (converged, degenerate, not
+/// converged: the last two not usable) and its part in the choice (chosen, tie).
+fn comparison_table(s: &mut String, rows: &[super::outcome::Candidate]) {
+    if rows.is_empty() {
+        return;
+    }
+    s.push_str("<h2>Model comparison</h2>\n<p>The lowest BIC among the usable fits wins; ΔBIC &lt; 2 is a tie.</p>\n<table>\n<tr><th>model</th><th>BIC</th><th>ΔBIC</th><th>AIC</th><th>cost</th><th>fit</th><th>choice</th></tr>\n");
+    for c in rows {
+        let r = c.result;
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td class=num>{:.4}</td><td class=num>{:.2}</td><td class=num>{:.4}</td><td class=num>{:.6e}</td><td class={}>{}</td><td>{}</td></tr>",
+            escape(&r.model),
+            r.bic,
+            c.delta_bic,
+            r.aic,
+            r.cost,
+            if r.converged() { "yes" } else { "no" },
+            escape(&c.state()),
+            c.role()
+        );
+    }
+    s.push_str("</table>\n");
+}
+
+/// The page. `text` is the plain-text report; `comparison` the model comparison of
+/// `--model auto` (empty for one model); `pictures` are (title, SVG document) pairs.
+pub fn page(
+    r: &FitResult,
+    info: &RunInfo,
+    text: &str,
+    comparison: &[super::outcome::Candidate],
+    pictures: &[(String, String)],
+) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -114,6 +147,7 @@ pub fn page(r: &FitResult, info: &RunInfo, text: &str, pictures: &[(String, Stri
     let _ = writeln!(s, "<pre id=\"command\">{}</pre>", escape(&info.command));
     s.push_str("<h2>Setting</h2>\n");
     setting_table(&mut s, info);
+    comparison_table(&mut s, comparison);
     results(&mut s, r, info);
     s.push_str("<h2>Pictures</h2>\n");
     for (title, svg) in pictures {

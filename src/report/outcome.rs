@@ -7,41 +7,124 @@ use crate::fit::dataset::Outcome;
 use crate::fit::driver::FitResult;
 use serde_json::Value;
 
+/// One candidate of a model comparison (`--model auto`), as every report shows it.
+pub struct Candidate<'a> {
+    pub result: &'a FitResult,
+    /// Its BIC minus the chosen fit's.
+    pub delta_bic: f64,
+    pub chosen: bool,
+    /// A usable fit within ΔBIC < 2 of the chosen one (`fit::dataset::BIC_TIE`).
+    pub tie: bool,
+}
+
+impl Candidate<'_> {
+    /// What became of the fit: `converged`, `degenerate (not usable)` or `not converged
+    /// (TERMINATION; not usable)`.
+    pub fn state(&self) -> String {
+        let r = self.result;
+        if r.converged() {
+            "converged".into()
+        } else if r.termination == crate::fit::lm::Termination::Degenerate {
+            "degenerate (not usable)".into()
+        } else {
+            format!("not converged ({}; not usable)", termination_name(r))
+        }
+    }
+
+    /// Its part in the choice: `chosen`, `tie` or empty.
+    pub fn role(&self) -> &'static str {
+        match (self.chosen, self.tie) {
+            (true, _) => "chosen",
+            (false, true) => "tie",
+            _ => "",
+        }
+    }
+}
+
+/// The termination as JSON names it (`ftol`, `maxiterations`, `degenerate`, …).
+fn termination_name(r: &FitResult) -> String {
+    format!("{:?}", r.termination).to_lowercase()
+}
+
+/// The outcome's candidates with their ΔBIC to the chosen fit and the ties
+/// ([`crate::fit::dataset::tied_with`]); empty when only one model was fitted.
+pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
+    if o.candidates.len() < 2 {
+        return Vec::new();
+    }
+    let best = o
+        .candidates
+        .iter()
+        .position(|r| r.model == o.result.model)
+        .unwrap_or(0);
+    let tied: Vec<&str> = crate::fit::dataset::tied_with(&o.candidates, best)
+        .iter()
+        .map(|(r, _)| r.model.as_str())
+        .collect();
+    o.candidates
+        .iter()
+        .enumerate()
+        .map(|(i, r)| Candidate {
+            result: r,
+            delta_bic: r.bic - o.candidates[best].bic,
+            chosen: i == best,
+            tie: tied.contains(&r.model.as_str()),
+        })
+        .collect()
+}
+
 /// The outcome's report as one JSON object: [`json::to_json`] of the chosen fit, `replay`
-/// (see [`replay_json`]) and, for several candidates, `comparison` (model, bic, aic, cost,
-/// converged per candidate). `args` are the fit's command-line arguments (without the
-/// program name) that `goniofit plot` parses again.
+/// (see [`replay_json`]) and, for several candidates, `comparison` (per candidate: model,
+/// bic, aic, cost, converged, termination, delta_bic, chosen, tie). `args` are the fit's
+/// command-line arguments (without the program name) that `goniofit plot` parses again.
 pub fn to_json(o: &Outcome, info: &RunInfo, args: &[String]) -> Value {
     let mut v = json::to_json(&o.result, info);
     v["replay"] = replay_json(&o.result, args);
-    if o.candidates.len() > 1 {
-        v["comparison"] = serde_json::json!(o
-            .candidates
+    let rows = comparison(o);
+    if !rows.is_empty() {
+        let num = |x: f64| {
+            if x.is_finite() {
+                Value::from(x)
+            } else {
+                Value::Null
+            }
+        };
+        v["comparison"] = rows
             .iter()
-            .map(|r| serde_json::json!({"model": r.model, "bic": r.bic, "aic": r.aic, "cost": r.cost, "converged": r.converged()}))
-            .collect::<Vec<_>>());
+            .map(|c| {
+                let r = c.result;
+                serde_json::json!({"model": r.model, "bic": num(r.bic), "aic": num(r.aic),
+                    "cost": num(r.cost), "converged": r.converged(),
+                    "termination": termination_name(r), "delta_bic": num(c.delta_bic),
+                    "chosen": c.chosen, "tie": c.tie})
+            })
+            .collect();
     }
     v
 }
 
-/// The outcome's report as text: the model comparison (lowest BIC wins) when several
-/// candidates ran, then [`text::render`] of the chosen fit.
+/// The outcome's report as text: the model comparison (the lowest BIC among the usable
+/// fits wins; ΔBIC < 2 is a tie) when several candidates ran, each candidate marked with
+/// what became of its fit, then [`text::render`] of the chosen fit.
 pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
     let mut s = String::new();
-    if o.candidates.len() > 1 {
-        s += "[[Model comparison]] (lowest BIC wins)\n";
-        for r in &o.candidates {
+    let rows = comparison(o);
+    if !rows.is_empty() {
+        s += "[[Model comparison]] (lowest BIC among the usable fits wins; ΔBIC < 2 is a tie)\n";
+        for c in &rows {
+            let r = c.result;
+            let role = match c.role() {
+                "" => String::new(),
+                role => format!("  <- {role}"),
+            };
             s += &format!(
-                "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}{}\n",
+                "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}  ΔBIC = {:>10.2}  {}{role}\n",
                 r.model,
                 r.bic,
                 r.aic,
                 r.cost,
-                if r.model == o.result.model {
-                    "  <- chosen"
-                } else {
-                    ""
-                }
+                c.delta_bic,
+                c.state(),
             );
         }
     }

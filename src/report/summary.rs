@@ -13,6 +13,8 @@ pub struct Row {
     pub group: String,
     pub n: usize,
     pub converged: bool,
+    /// Why the solver stopped, as in JSON (`ftol`, `maxiterations`, `degenerate`, …).
+    pub termination: String,
     pub cost: f64,
     pub r2: f64,
     /// σ, T, T/σ: value and whether the data determines it (None: not in the model).
@@ -36,6 +38,7 @@ pub fn row(group: &str, r: &FitResult, units: &Units) -> Row {
         group: group.to_string(),
         n: r.n,
         converged: r.converged(),
+        termination: format!("{:?}", r.termination).to_lowercase(),
         cost: r.cost,
         r2: r.r2,
         sigma: param("sigma"),
@@ -71,16 +74,53 @@ fn cell(v: Option<(f64, bool)>) -> String {
     }
 }
 
+/// A column's cell of one row.
+type Cell = fn(&Row) -> String;
+
+/// The text table's columns between the group and the verdict: header, width (right
+/// aligned) and cell. A new column is one more entry here (and in [`CSV_COLUMNS`]).
+const TABLE_COLUMNS: [(&str, usize, Cell); 8] = [
+    ("n", 6, |r| r.n.to_string()),
+    ("conv", 5, |r| {
+        (if r.converged { "yes" } else { "NO" }).into()
+    }),
+    ("termination", 13, |r| r.termination.clone()),
+    ("cost", 12, |r| format!("{:.5e}", r.cost)),
+    ("R²", 10, |r| fixed(r.r2, 6)),
+    ("σ", 11, |r| cell(r.sigma)),
+    ("T", 11, |r| cell(r.t)),
+    ("T/σ", 11, |r| cell(r.ratio)),
+];
+
+/// How many fits did not converge and why, e.g. `2 did not converge (maxiterations 1,
+/// degenerate 1)`; None when every fit converged.
+pub fn not_converged(rows: &[Row]) -> Option<String> {
+    let mut why: Vec<(&str, usize)> = Vec::new();
+    for r in rows.iter().filter(|r| !r.converged) {
+        match why.iter_mut().find(|(t, _)| *t == r.termination) {
+            Some((_, k)) => *k += 1,
+            None => why.push((&r.termination, 1)),
+        }
+    }
+    let total: usize = why.iter().map(|(_, k)| k).sum();
+    (total > 0).then(|| {
+        let list: Vec<String> = why.iter().map(|(t, k)| format!("{t} {k}")).collect();
+        format!("{total} did not converge ({})", list.join(", "))
+    })
+}
+
 /// The summary as a text table (`[[Summary]]`), one line per fit; values the data does not
-/// determine are in parentheses.
+/// determine are in parentheses. The title counts the fits that did not converge, and each
+/// row gives its termination.
 pub fn table(rows: &[Row]) -> String {
     let mut s = String::new();
     let unit = rows
         .first()
         .map_or(String::new(), |r| r.length_unit.clone());
+    let failed = not_converged(rows).map_or(String::new(), |t| format!(", {t}"));
     let _ = writeln!(
         s,
-        "[[Summary]] ({} fits; σ, T in {unit}; values in parentheses are not determined by the data)",
+        "[[Summary]] ({} fits{failed}; σ, T in {unit}; values in parentheses are not determined by the data)",
         rows.len()
     );
     let gw = rows
@@ -89,78 +129,67 @@ pub fn table(rows: &[Row]) -> String {
         .max()
         .unwrap_or(5)
         .max(5);
-    let _ = writeln!(
-        s,
-        "    {:<gw$} {:>6} {:>5} {:>12} {:>10} {:>11} {:>11} {:>11}  verdict",
-        "group", "n", "conv", "cost", "R²", "σ", "T", "T/σ"
+    let mut line = |group: &str, cells: Vec<String>, verdict: &str| {
+        let _ = write!(s, "    {group:<gw$}");
+        for ((_, w, _), c) in TABLE_COLUMNS.iter().zip(cells) {
+            let _ = write!(s, " {c:>w$}");
+        }
+        let _ = writeln!(s, "  {verdict}");
+    };
+    line(
+        "group",
+        TABLE_COLUMNS.iter().map(|c| c.0.to_string()).collect(),
+        "verdict",
     );
     for r in rows {
-        let _ = writeln!(
-            s,
-            "    {:<gw$} {:>6} {:>5} {:>12} {:>10} {:>11} {:>11} {:>11}  {}",
-            r.group,
-            r.n,
-            if r.converged { "yes" } else { "NO" },
-            format!("{:.5e}", r.cost),
-            fixed(r.r2, 6),
-            cell(r.sigma),
-            cell(r.t),
-            cell(r.ratio),
-            verdict_word(r.verdict)
-        );
+        let cells = TABLE_COLUMNS.iter().map(|c| (c.2)(r)).collect();
+        line(&r.group, cells, verdict_word(r.verdict));
     }
     s
 }
 
-/// The CSV header of [`csv_rows`].
-pub const CSV_HEADER: [&str; 14] = [
-    "group",
-    "n",
-    "converged",
-    "cost",
-    "r2",
-    "sigma",
-    "sigma_determined",
-    "T",
-    "T_determined",
-    "T_over_sigma",
-    "T_over_sigma_determined",
-    "verdict",
-    "length_unit",
-    "verdict_text",
+/// A value with its determination as two CSV fields (full precision; empty fields where
+/// the model has no such parameter).
+fn split(v: Option<(f64, bool)>) -> (String, String) {
+    match v {
+        Some((x, d)) => (format!("{x:e}"), d.to_string()),
+        None => (String::new(), String::new()),
+    }
+}
+
+/// The CSV columns ([`csv_rows`]): name and cell. A new column is one more entry here.
+const CSV_COLUMNS: [(&str, Cell); 15] = [
+    ("group", |r| r.group.clone()),
+    ("n", |r| r.n.to_string()),
+    ("converged", |r| r.converged.to_string()),
+    ("termination", |r| r.termination.clone()),
+    ("cost", |r| format!("{:e}", r.cost)),
+    ("r2", |r| {
+        if r.r2.is_finite() {
+            format!("{:e}", r.r2)
+        } else {
+            String::new()
+        }
+    }),
+    ("sigma", |r| split(r.sigma).0),
+    ("sigma_determined", |r| split(r.sigma).1),
+    ("T", |r| split(r.t).0),
+    ("T_determined", |r| split(r.t).1),
+    ("T_over_sigma", |r| split(r.ratio).0),
+    ("T_over_sigma_determined", |r| split(r.ratio).1),
+    ("verdict", |r| format!("{:?}", r.verdict).to_lowercase()),
+    ("length_unit", |r| r.length_unit.clone()),
+    ("verdict_text", |r| verdict_word(r.verdict).to_string()),
 ];
+
+/// The CSV header of [`csv_rows`].
+pub fn csv_header() -> Vec<String> {
+    CSV_COLUMNS.iter().map(|c| c.0.to_string()).collect()
+}
 
 /// The rows as CSV fields (full precision; empty fields where the model has no σ or T).
 pub fn csv_rows(rows: &[Row]) -> Vec<Vec<String>> {
-    let split = |v: Option<(f64, bool)>| match v {
-        Some((x, d)) => (format!("{x:e}"), d.to_string()),
-        None => (String::new(), String::new()),
-    };
     rows.iter()
-        .map(|r| {
-            let (s, sd) = split(r.sigma);
-            let (t, td) = split(r.t);
-            let (q, qd) = split(r.ratio);
-            vec![
-                r.group.clone(),
-                r.n.to_string(),
-                r.converged.to_string(),
-                format!("{:e}", r.cost),
-                if r.r2.is_finite() {
-                    format!("{:e}", r.r2)
-                } else {
-                    String::new()
-                },
-                s,
-                sd,
-                t,
-                td,
-                q,
-                qd,
-                format!("{:?}", r.verdict).to_lowercase(),
-                r.length_unit.clone(),
-                verdict_word(r.verdict).to_string(),
-            ]
-        })
+        .map(|r| CSV_COLUMNS.iter().map(|c| (c.1)(r)).collect())
         .collect()
 }

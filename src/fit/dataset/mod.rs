@@ -340,6 +340,7 @@ fn chosen(results: &mut [FitResult], not_fitted: &[&str]) -> FitResult {
         r.take_samples();
     }
     result.notes.extend(skipped);
+    result.notes.extend(tie_note(results, best));
     if !not_fitted.is_empty() {
         result.notes.push(format!(
             "the fit was stopped before the candidates {} were fitted",
@@ -439,6 +440,53 @@ fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
         })
         .collect();
     (best, skipped)
+}
+
+/// ΔBIC below which two models' fits are a tie: the data do not prefer one (Kass &
+/// Raftery's "not worth more than a bare mention").
+pub const BIC_TIE: f64 = 2.0;
+
+/// The usable candidates (converged, other than `best`) whose BIC lies within
+/// [`BIC_TIE`] of the chosen one's, with their ΔBIC, lowest first; empty when the chosen
+/// fit is not usable itself.
+pub fn tied_with(results: &[FitResult], best: usize) -> Vec<(&FitResult, f64)> {
+    if !results[best].converged() {
+        return Vec::new();
+    }
+    let mut tied: Vec<(&FitResult, f64)> = results
+        .iter()
+        .enumerate()
+        .filter(|&(i, r)| i != best && r.converged())
+        .map(|(_, r)| (r, r.bic - results[best].bic))
+        .filter(|&(_, d)| d < BIC_TIE)
+        .collect();
+    tied.sort_by(|a, b| a.1.total_cmp(&b.1));
+    tied
+}
+
+/// The note naming a tie of the chosen fit with other usable candidates ([`tied_with`]),
+/// e.g. "tie: lambert-specular and kbs+lambert differ by ΔBIC = 0.5 < 2; the data do not
+/// prefer one".
+fn tie_note(results: &[FitResult], best: usize) -> Option<String> {
+    let tied = tied_with(results, best);
+    let chosen = &results[best].model;
+    match tied.as_slice() {
+        [] => None,
+        [(other, d)] => Some(format!(
+            "tie: {chosen} and {} differ by ΔBIC = {d:.2} < {BIC_TIE}; the data do not prefer one",
+            other.model
+        )),
+        more => {
+            let list: Vec<String> = more
+                .iter()
+                .map(|(r, d)| format!("{} (ΔBIC = {d:.2})", r.model))
+                .collect();
+            Some(format!(
+                "tie: {chosen} and {} lie within ΔBIC < {BIC_TIE} of each other; the data do not prefer one",
+                list.join(", ")
+            ))
+        }
+    }
 }
 
 /// For a joint fit: how much narrower σ, T and T/σ are than from the middle channel alone,
