@@ -76,7 +76,8 @@ pub fn solve(
         return exact_cost(problem, basis, p, linear);
     }
     let coef = linearised(problem, basis, &prep.d)?;
-    set(p, linear, &coef);
+    set(p, linear, &coef, &problem.layout);
+
     if problem.kind() != ResidualKind::Log {
         return exact_cost(problem, basis, p, linear);
     }
@@ -171,14 +172,41 @@ fn linearised_one(y: &[f64], basis: &PointBasis, d: &[f64]) -> Option<Vec<f64>> 
 /// active sets: solve the free unknowns (SVD, rank-safe), fix the most negative one at 0,
 /// repeat. Exact when at most one bound is active (every goniofit model has at most two
 /// amplitudes per channel, and the channels' columns do not overlap), otherwise a feasible
-/// point no worse than clamping. None when the normal equations or the solve are not
-/// finite, or the SVD does not converge within [`SVD_MAX_ITERS`] sweeps.
+/// point no worse than clamping. The solve runs on the equations with unit diagonal and
+/// right-hand side of largest entry 1 (columns and data in any unit, 10⁻⁹⁰ or 10⁹⁰, give
+/// the same amplitudes in that unit; an unknown whose column is zero is 0). None when the
+/// normal equations or the solve are not finite, or the SVD does not converge within
+/// [`SVD_MAX_ITERS`] sweeps.
 pub fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
     // nalgebra's unbounded SVD never returns on a matrix with an infinite or NaN entry
     // (AᵀA of finite columns can overflow): such a grid point has no amplitudes.
     if !ata.iter().chain(atb.iter()).all(|v| v.is_finite()) {
         return None;
     }
+    let k = atb.len();
+    let unit: Vec<f64> = (0..k)
+        .map(|j| {
+            let d = ata[(j, j)];
+            if d.is_normal() && d > 0.0 {
+                1.0 / d.sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let rhs = DVector::from_fn(k, |j, _| unit[j] * atb[j]);
+    let b0 = rhs.amax();
+    if !(b0.is_normal() && b0.is_finite()) {
+        return Some(vec![0.0; k]);
+    }
+    let a = DMatrix::from_fn(k, k, |i, j| unit[i] * ata[(i, j)] * unit[j]);
+    let x = nnls_unit(&a, &(rhs / b0))?;
+    let coef: Vec<f64> = (0..k).map(|j| x[j] * unit[j] * b0).collect();
+    coef.iter().all(|v| v.is_finite()).then_some(coef)
+}
+
+/// [`nnls`] of normal equations scaled to unit diagonal and right-hand side.
+fn nnls_unit(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
     let k = atb.len();
     if k == 1 {
         // One unknown: x = Aᵀb / AᵀA when AᵀA > 0 (what the SVD solve gives), else 0.
@@ -216,11 +244,16 @@ pub fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
     Some(coef)
 }
 
-/// Write amplitudes into `p`, each at least 10⁻³ of the largest (1e-3 when all are 0).
-fn set(p: &mut [f64], linear: &[usize], coef: &[f64]) {
+/// Write amplitudes into `p`, each at least 10⁻³ of the largest (10⁻³ of its unit, the
+/// data's scale, when all are 0: see [`super::layout::ParamLayout::set_amplitude_units`]).
+fn set(p: &mut [f64], linear: &[usize], coef: &[f64], layout: &super::layout::ParamLayout) {
     let largest = coef.iter().fold(0.0f64, |m, v| m.max(*v));
-    let tiny = if largest > 0.0 { 1e-3 * largest } else { 1e-3 };
     for (c, &k) in linear.iter().enumerate() {
+        let tiny = if largest > 0.0 {
+            1e-3 * largest
+        } else {
+            1e-3 * layout.params[k].transform.unit()
+        };
         p[k] = if coef[c] > tiny { coef[c] } else { tiny };
     }
 }

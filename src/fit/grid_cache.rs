@@ -113,6 +113,10 @@ pub fn basis(key: Key, compute: impl FnOnce() -> Option<GridBasis>) -> Option<Ar
 
 /// The basis at full parameters `p` (the linear parameters' values are ignored: they are
 /// set to 1), from one model pass with the Jacobian; None when the model is not finite.
+/// A rest within rounding of the model value (|rest| ≤ [`REST_ROUNDING`] · |f|) is exactly
+/// 0: it is the rounding of f − Σ columns, on the scale of the model at unit amplitudes,
+/// and the amplitude solve would otherwise fit data in a small unit (10⁻³⁰ of these
+/// values) to that rounding instead of to the data.
 pub fn point_basis(problem: &FitProblem, p: &[f64], linear: &[usize]) -> Option<PointBasis> {
     let mut p = p.to_vec();
     for &k in linear {
@@ -120,7 +124,7 @@ pub fn point_basis(problem: &FitProblem, p: &[f64], linear: &[usize]) -> Option<
     }
     let (f, jac) = problem.model_values(&p, !linear.is_empty());
     let n = f.len();
-    let mut rest = f;
+    let mut rest = f.clone();
     let mut columns = Vec::with_capacity(n * linear.len());
     if let Some(jac) = jac {
         for &k in linear {
@@ -131,5 +135,14 @@ pub fn point_basis(problem: &FitProblem, p: &[f64], linear: &[usize]) -> Option<
             columns.extend(col.iter());
         }
     }
+    for (r, fi) in rest.iter_mut().zip(&f) {
+        if r.abs() <= REST_ROUNDING * fi.abs() {
+            *r = 0.0;
+        }
+    }
     (rest.iter().chain(&columns).all(|v| v.is_finite())).then_some(PointBasis { rest, columns })
 }
+
+/// Relative size below which the rest of a [`PointBasis`] is rounding (a few ulps of the
+/// model value per amplitude).
+pub const REST_ROUNDING: f64 = 1e-12;

@@ -62,9 +62,56 @@ pub(super) fn identify(
     }
 }
 
-/// Uncertainty in log space (free parameters), from the Jacobian at the optimum.
+/// Uncertainty in the solver's variables (free parameters), from the Jacobian at the
+/// optimum. An amplitude held at its bound by the solve's active set (x = 0 exactly:
+/// [`super::bounds`]) is a constraint the optimum meets, not a direction the data leaves
+/// open: the uncertainty is that of the other parameters with it held, and its own
+/// standard error and covariances are 0 (the report says it is at its bound).
 pub(super) fn uncertainty_of(problem: &FitProblem, run: &Run) -> stats::Uncertainty {
-    stats::uncertainty(&run.lm.jacobian, run.lm.cost, problem.len(), RANK_THRESHOLD)
+    let layout = &problem.layout;
+    let free = layout.free();
+    let at_bound: Vec<usize> = (0..free.len())
+        .filter(|&j| layout.params[free[j]].transform.is_non_negative() && run.lm.x[j] == 0.0)
+        .collect();
+    let jac = &run.lm.jacobian;
+    if at_bound.is_empty() || jac.ncols() != free.len() {
+        return stats::uncertainty(jac, run.lm.cost, problem.len(), RANK_THRESHOLD);
+    }
+    let kept: Vec<usize> = (0..free.len()).filter(|j| !at_bound.contains(j)).collect();
+    let sub = jac.select_columns(&kept);
+    let u = stats::uncertainty(&sub, run.lm.cost, problem.len(), RANK_THRESHOLD);
+    let p = free.len();
+    let spread = |m: &DMatrix<f64>| {
+        let mut out = DMatrix::zeros(p, p);
+        for (a, &ja) in kept.iter().enumerate() {
+            for (b, &jb) in kept.iter().enumerate() {
+                out[(ja, jb)] = m[(a, b)];
+            }
+        }
+        out
+    };
+    let mut stderr = DVector::zeros(p);
+    for (a, &ja) in kept.iter().enumerate() {
+        stderr[ja] = u.stderr[a];
+    }
+    stats::Uncertainty {
+        covariance: spread(&u.covariance),
+        correlation: spread(&u.correlation),
+        stderr,
+        undetermined: u
+            .undetermined
+            .iter()
+            .map(|v| {
+                let mut w = DVector::zeros(p);
+                for (a, &ja) in kept.iter().enumerate() {
+                    w[ja] = v[a];
+                }
+                w
+            })
+            .collect(),
+        rank: u.rank + at_bound.len(),
+        ..u
+    }
 }
 
 /// The covariance of the free parameters in log space, from the solver's x-space

@@ -87,9 +87,13 @@ pub fn initial_values(
     stop: Option<&Stop>,
 ) -> Vec<(f64, Vec<f64>)> {
     let stopped = || stop.is_some_and(Stop::is_requested);
-    // Where a search without any usable grid point starts.
-    let fallback = || vec![(f64::INFINITY, vec![1.0; problem.layout.len()])];
     let layout = &problem.layout;
+    // Where a search without any usable grid point starts: 1, amplitudes at their unit
+    // (the data's scale).
+    let ones: Vec<f64> = (0..layout.len())
+        .map(|k| given[k].unwrap_or(layout.params[k].transform.unit()))
+        .collect();
+    let fallback = || vec![(f64::INFINITY, ones.clone())];
     let specs = problem.model.params();
     // Evenly spaced subsample.
     let sub_input = input.subset(&subsample(problem.len(), GRID_SAMPLES));
@@ -253,7 +257,9 @@ impl Grid {
             axes,
             nonlinear,
             linear,
-            base: given.iter().map(|g| g.unwrap_or(1.0)).collect(),
+            base: (0..layout.len())
+                .map(|k| given[k].unwrap_or(layout.params[k].transform.unit()))
+                .collect(),
             sigma_k: layout
                 .params
                 .iter()

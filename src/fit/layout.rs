@@ -2,9 +2,11 @@
 //!
 //! Free variables: every parameter that is not fixed, through a [`Transform`]: the positive
 //! nonlinear parameters (σ, T, w) as their logarithm, so the solver can never step to
-//! σ ≤ 0; the linear amplitudes (scales, lobe strength) through p = √(x² + 1) − 1 (lmfit's
-//! one-sided bound), which reaches the bound p = 0 at x = 0 instead of drifting towards
-//! ln 0 when the data shows no such component.
+//! σ ≤ 0; the linear amplitudes (scales, lobe strength) through p = u(√(x² + 1) − 1)
+//! (lmfit's one-sided bound), which reaches the bound p = 0 at x = 0 instead of drifting
+//! towards ln 0 when the data shows no such component. The amplitude's unit u is the
+//! largest |value| measured ([`ParamLayout::set_amplitude_units`]): x is then a number
+//! free of the unit of L, and a fit of the data in any unit takes the same steps.
 //!
 //! Joint multi-channel fits share every parameter except the linear scales (`scale`,
 //! `scale_d`), which get one copy per channel (named `scale[550nm]`, ...).
@@ -16,14 +18,15 @@ use nalgebra::DVector;
 pub const PER_CHANNEL: [&str; 2] = ["scale", "scale_d"];
 
 /// How a parameter p maps to the solver variable x.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Transform {
     /// x = p (unbounded).
     Identity,
     /// x = ln p (p > 0).
     Log,
-    /// p = √(x² + 1) − 1 ≥ 0, bounded below by 0.
-    NonNegative,
+    /// p = u(√(x² + 1) − 1) ≥ 0, bounded below by 0, in units of u > 0 (the data's
+    /// scale: see [`ParamLayout::set_amplitude_units`]).
+    NonNegative { unit: f64 },
 }
 
 /// Parameters that enter the model linearly: amplitudes, non-negative, and solved exactly
@@ -36,7 +39,7 @@ impl Transform {
     pub fn for_spec(spec: &crate::model::ParamSpec) -> Self {
         match (spec.positive, LINEAR.contains(&spec.name)) {
             (true, false) => Transform::Log,
-            (true, true) => Transform::NonNegative,
+            (true, true) => Transform::NonNegative { unit: 1.0 },
             _ => Transform::Identity,
         }
     }
@@ -46,8 +49,8 @@ impl Transform {
         match self {
             Transform::Identity => p,
             Transform::Log => p.max(f64::MIN_POSITIVE).ln(),
-            Transform::NonNegative => {
-                let p = p.max(0.0);
+            Transform::NonNegative { unit } => {
+                let p = (p / unit).max(0.0);
                 (p * (p + 2.0)).sqrt()
             }
         }
@@ -59,7 +62,20 @@ impl Transform {
             Transform::Identity => x,
             Transform::Log => x.exp(),
             // √(x²+1) − 1 without cancellation for small x.
-            Transform::NonNegative => x * x / ((x * x + 1.0).sqrt() + 1.0),
+            Transform::NonNegative { unit } => unit * (x * x / ((x * x + 1.0).sqrt() + 1.0)),
+        }
+    }
+
+    /// Whether this is the amplitudes' one-sided bound at 0.
+    pub fn is_non_negative(self) -> bool {
+        matches!(self, Transform::NonNegative { .. })
+    }
+
+    /// The unit of the parameter's solver variable: u for an amplitude, else 1.
+    pub fn unit(self) -> f64 {
+        match self {
+            Transform::NonNegative { unit } => unit,
+            _ => 1.0,
         }
     }
 
@@ -68,7 +84,7 @@ impl Transform {
         match self {
             Transform::Identity => 1.0,
             Transform::Log => x.exp(),
-            Transform::NonNegative => x / (x * x + 1.0).sqrt(),
+            Transform::NonNegative { unit } => unit * (x / (x * x + 1.0).sqrt()),
         }
     }
 }
@@ -134,6 +150,31 @@ impl ParamLayout {
             params,
             index,
             channel_names: channel_names.to_vec(),
+        }
+    }
+
+    /// Set the unit u of every amplitude ([`Transform::NonNegative`]) to the largest |y| of
+    /// its channel (`y`, `channel`: the fit's values and channel indices; a channel without
+    /// a non-zero value takes the largest over all, and a fit with none keeps 1). The
+    /// solver's variables are then the same numbers whatever the unit of L: a fit of the
+    /// data scaled by any factor scales the amplitudes by it and leaves the rest.
+    pub fn set_amplitude_units(&mut self, y: &[f64], channel: &super::channels::Channels) {
+        let mut largest = vec![0.0f64; self.index.len().max(1)];
+        for (i, v) in y.iter().enumerate() {
+            let c = channel[i].min(largest.len() - 1);
+            if v.is_finite() {
+                largest[c] = largest[c].max(v.abs());
+            }
+        }
+        let all = largest.iter().fold(0.0f64, |m, v| m.max(*v));
+        for fp in &mut self.params {
+            if let Transform::NonNegative { unit } = &mut fp.transform {
+                let u = fp.channel.map_or(all, |c| largest[c]);
+                *unit = [u, all, 1.0]
+                    .into_iter()
+                    .find(|v| v.is_normal())
+                    .unwrap_or(1.0);
+            }
         }
     }
 

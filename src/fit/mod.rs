@@ -22,6 +22,7 @@ pub mod validity;
 pub mod weights;
 
 mod assemble;
+mod bounds;
 mod config;
 mod identify;
 mod reduce;

@@ -32,11 +32,12 @@ pub(super) fn run_lm_in(
     trail: Option<&Trail>,
 ) -> Run {
     let x0 = problem.layout.to_x(p0);
+    let layout = &problem.layout;
     let lm = match (&config.stop, range, trail) {
-        (None, None, None) => lm::minimize(problem, x0, config),
+        (None, None, None) => super::bounds::minimize(layout, problem, x0, config),
         (stop, range, trail) => {
             let guarded = Guarded::new(problem, stop.as_ref(), range, trail);
-            lm::minimize(&guarded, x0, config)
+            super::bounds::minimize(layout, &guarded, x0, config)
         }
     };
     problem.forget_cached();

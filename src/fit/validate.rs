@@ -21,6 +21,7 @@ pub(super) fn prepare(
 ) -> Result<(ParamLayout, Vec<Option<f64>>)> {
     let n = input.geo.len();
     let mut layout = ParamLayout::new(model, &input.channel_names);
+    layout.set_amplitude_units(&input.y, &input.channel);
     let mut fixed = vec![None; layout.len()];
     assign(&layout, &config.fix, &mut fixed)?;
     for (k, f) in fixed.iter().enumerate() {
@@ -74,7 +75,7 @@ fn hold_rough_sigma(layout: &mut ParamLayout, given: &mut [Option<f64>], input: 
 /// lower bound 0 (within 10⁻³ standard errors, or exactly 0).
 pub(super) fn at_lower_bound(fp: &FitParam, value: f64, se: Option<f64>) -> bool {
     fp.fixed.is_none()
-        && fp.transform == Transform::NonNegative
+        && fp.transform.is_non_negative()
         && se.is_some_and(|e| value <= 1e-3 * e.max(f64::MIN_POSITIVE) || value == 0.0)
 }
 
@@ -120,7 +121,7 @@ fn assign(layout: &ParamLayout, pairs: &[(String, f64)], out: &mut [Option<f64>]
             let fp = &layout.params[k];
             if !v.is_finite()
                 || (fp.transform == Transform::Log && *v <= 0.0)
-                || *v < 0.0 && fp.transform == Transform::NonNegative
+                || *v < 0.0 && fp.transform.is_non_negative()
             {
                 return Err(Error::Param {
                     name: name.clone(),
