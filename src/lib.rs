@@ -12,6 +12,7 @@ pub mod model;
 pub mod plot;
 pub mod recover;
 pub mod report;
+pub mod settings;
 pub mod synth;
 pub mod workprec;
 

@@ -552,7 +552,7 @@ fn bad_input_exits_2_with_a_clear_message() {
         &[&KBS[..], &["--wavelength", "0"]].concat(),
         "'0' is not a positive length",
     );
-    fails(&[&KBS[..], &["--tol", "2"]].concat(), "tolerance 2");
+    fails(&[&KBS[..], &["--tol", "2"]].concat(), "--tol 2");
     fails(&[&KBS[..], &["--patch", "1"]].concat(), "--patch '1'");
     fails(&[&KBS[..], &["--noise-kind", "pink"]].concat(), "pink");
 

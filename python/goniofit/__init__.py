@@ -90,8 +90,20 @@ def _options(n: int, opts: Dict[str, Any]) -> Dict[str, Any]:
     return out
 
 
+def _is_missing(v: Any) -> bool:
+    """Whether a label is missing: None, NaN, NaT or pandas' NA (which is not equal to
+    itself, or cannot say whether it is)."""
+    if v is None:
+        return True
+    try:
+        return bool(v != v)
+    except (TypeError, ValueError):
+        return True
+
+
 def _factorize(group: Any, n: int):
-    """Group codes in first-appearance order and the original label of each group."""
+    """Group codes in first-appearance order and the original label of each group; a
+    missing label is an error, as in :func:`fit_frame`."""
     values = group.tolist() if hasattr(group, "tolist") else list(group)
     if len(values) != n:
         raise ValueError(
@@ -100,6 +112,8 @@ def _factorize(group: Any, n: int):
     index: Dict[Any, int] = {}
     codes = np.empty(n, dtype=np.int64)
     for i, v in enumerate(values):
+        if _is_missing(v):
+            raise ValueError(f"fit: missing group label (group[{i}])")
         codes[i] = index.setdefault(v, len(index))
     return codes, list(index)
 

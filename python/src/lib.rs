@@ -21,6 +21,7 @@ use convert::{json_to_py, to_py_err};
 use goniofit::geometry::Geometry;
 use goniofit::io::{self, arrays, ReadOptions};
 use goniofit::model;
+use goniofit::settings;
 use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray1};
 use options::{FitOptions, SampleArrays};
 use pyo3::prelude::*;
@@ -104,11 +105,12 @@ fn evaluate<'py>(
     jacobian: bool,
     radians: bool,
 ) -> PyResult<Py<PyAny>> {
-    let model_opts = model::ModelOptions {
-        mode: options::eval_mode(mode)?,
+    let model_opts = options::checked(settings::model_options(
+        options::PY,
+        options::eval_mode(mode)?,
         tol,
         patch,
-    };
+    ))?;
     let m = model::by_name(model, &model_opts).map_err(to_py_err)?;
     let p = options::param_vector(m.as_ref(), params)?;
     let quantity = options::quantity(quantity)?;
@@ -117,6 +119,9 @@ fn evaluate<'py>(
         None => vec![1.0],
         Some(w) => options::per_sample(w, ti.len(), "wavelength")?,
     };
+    for &l in &lambda {
+        options::checked(settings::length(options::PY, "wavelength", l))?;
+    }
     let cols = arrays::Columns {
         theta_i: ti,
         theta_r: tr,
@@ -125,15 +130,8 @@ fn evaluate<'py>(
         ..arrays::Columns::default()
     };
     let ds = arrays::dataset("arrays", &cols, radians, false).map_err(to_py_err)?;
-    let (values, jac) = run::guard(|| {
-        let geo = Geometry::new(&ds.samples, &lambda, quantity)?;
-        let n = geo.len();
-        let mut values = vec![0.0; n];
-        let mut jac = jacobian.then(|| vec![0.0; n * p.len()]);
-        m.eval(&geo, &p, &mut values, jac.as_deref_mut());
-        Ok::<_, goniofit::Error>((values, jac))
-    })?
-    .map_err(to_py_err)?;
+    let (values, jac) = run::guard(|| evaluated(m.as_ref(), &p, &ds, &lambda, quantity, jacobian))?
+        .map_err(to_py_err)?;
     let values = values.into_pyarray(py);
     match jac {
         None => Ok(values.into_any().unbind()),
@@ -145,6 +143,35 @@ fn evaluate<'py>(
             Ok((values, t).into_pyobject(py)?.into_any().unbind())
         }
     }
+}
+
+/// The model's values at `p` (and with `jacobian` its Jacobian, column-major n × p), every
+/// one finite: the CLI's `eval` check ([`model::domain::evaluate_checked`]), so that
+/// values the CLI refuses are refused here too.
+fn evaluated(
+    m: &dyn model::Model,
+    p: &[f64],
+    ds: &io::Dataset,
+    lambda: &[f64],
+    quantity: goniofit::geometry::Quantity,
+    jacobian: bool,
+) -> goniofit::Result<(Vec<f64>, Option<Vec<f64>>)> {
+    let geo = Geometry::new(&ds.samples, lambda, quantity)?;
+    let values = model::domain::evaluate_checked(m, p, &geo)?;
+    if !jacobian {
+        return Ok((values, None));
+    }
+    let mut again = vec![0.0; geo.len()];
+    let mut jac = vec![0.0; geo.len() * p.len()];
+    m.eval(&geo, p, &mut again, Some(&mut jac));
+    if jac.iter().any(|v| !v.is_finite()) {
+        return Err(goniofit::Error::Usage(format!(
+            "model {}: its Jacobian is not a finite number at {}: these parameters lie outside the range it can be evaluated in",
+            m.name(),
+            model::domain::describe_params(m, p)
+        )));
+    }
+    Ok((values, Some(jac)))
 }
 
 /// Read a measurement file (CSV, ASTM E1392, the NIST PTFE layout) into a dict of numpy

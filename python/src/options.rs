@@ -13,12 +13,16 @@ use goniofit::geometry::Quantity;
 use goniofit::io::arrays;
 use goniofit::model::{self, EvalMode, Model, ModelOptions};
 use goniofit::report::outcome::SettingSource;
+use goniofit::settings::{self, Front};
 use numpy::PyReadonlyArray1;
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyRuntimeWarning, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
+
+/// Options are named as Python spells them.
+pub const PY: Front = Front::Python;
 
 /// The option names the fit functions take (besides the four sample arrays).
 pub const OPTION_NAMES: [&str; 24] = [
@@ -281,14 +285,7 @@ impl FitOptions {
                 }
             }
             "wavelength" => match v.extract::<f64>() {
-                Ok(l) => {
-                    if !(l.is_finite() && l > 0.0) {
-                        return Err(PyValueError::new_err(format!(
-                            "wavelength {l} must be finite and positive"
-                        )));
-                    }
-                    self.wavelength = Some(l)
-                }
+                Ok(l) => self.wavelength = Some(checked(settings::length(PY, "wavelength", l))?),
                 Err(_) => self.wavelengths = Some(vector(v, "wavelength")?),
             },
             "quantity" => {
@@ -311,25 +308,32 @@ impl FitOptions {
                 self.mode_name = v.extract()?;
                 self.model_opts.mode = eval_mode(&self.mode_name)?;
             }
-            "tol" => self.model_opts.tol = positive(v, "tol")?,
+            "tol" => self.model_opts.tol = checked(settings::tol(PY, v.extract()?))?,
             "patch" => {
-                let (x, y): (f64, f64) = v.extract()?;
-                if !(x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0) {
-                    return Err(PyValueError::new_err(format!(
-                        "patch ({x}, {y}): expected two positive half-sizes (unit of λ)"
-                    )));
-                }
-                self.model_opts.patch = Some((x, y));
+                let opts = self.model_opts;
+                let patch = Some(v.extract::<(f64, f64)>()?);
+                self.model_opts = checked(settings::model_options(PY, opts.mode, opts.tol, patch))?;
             }
-            "floor" => self.floor = Some(positive(v, "floor")?),
+            "floor" => self.floor = checked(settings::floor(PY, Some(v.extract()?)))?,
             "max_iter" => self.max_iter = v.extract()?,
-            "timeout" => self.timeout = Some(positive(v, "timeout")?),
+            "timeout" => {
+                let t: f64 = v.extract()?;
+                checked(settings::timeout(PY, Some(t)))?;
+                self.timeout = Some(t);
+            }
             "reduce" => self.reduce = v.extract()?,
-            "threads" => self.threads = Some(v.extract()?),
+            "threads" => {
+                let (n, note) = checked(settings::threads(PY, Some(v.extract()?)))?;
+                if let Some(note) = note {
+                    let category = v.py().get_type::<PyRuntimeWarning>();
+                    PyErr::warn(v.py(), &category, &std::ffi::CString::new(note)?, 1)?;
+                }
+                self.threads = Some(n);
+            }
             "absolute_sigma" => self.absolute_sigma = v.extract()?,
             "intervals" => self.intervals = Some(v.extract()?),
             "loss" => self.loss = loss(&v.extract::<String>()?)?,
-            "f_scale" => self.f_scale = positive(v, "f_scale")?,
+            "f_scale" => self.f_scale = checked(settings::f_scale(PY, v.extract()?))?,
             _ => return Err(unknown(key)),
         }
         Ok(())
@@ -341,7 +345,8 @@ impl FitOptions {
     pub fn dataset_fit(&self, single: bool) -> DatasetFit {
         let lm = LmConfig {
             max_iters: self.max_iter,
-            timeout: self.timeout.map(std::time::Duration::from_secs_f64),
+            // Checked when set (settings::timeout), so the conversion cannot fail.
+            timeout: settings::timeout(PY, self.timeout).ok().flatten(),
             progress: false,
             interrupt: Some(Arc::new(AtomicBool::new(false))),
             install_signal_handler: false,
@@ -464,15 +469,10 @@ fn unknown(key: &str) -> PyErr {
     ))
 }
 
-fn positive(v: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
-    let x: f64 = v.extract()?;
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(PyValueError::new_err(format!(
-            "{name} {x} must be finite and positive"
-        )))
-    }
+/// A value checked by [`goniofit::settings`] (as the CLI checks its options), its refusal
+/// a `ValueError`.
+pub fn checked<T>(r: goniofit::Result<T>) -> PyResult<T> {
+    r.map_err(to_py_err)
 }
 
 /// The four sample arrays and the per-sample options of one call, owned.

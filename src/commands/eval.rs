@@ -15,7 +15,8 @@ use anyhow::Context;
 use clap::Args;
 use goniofit::geometry::Geometry;
 use goniofit::io::{self, FileSet, ReadOptions};
-use goniofit::model::{self, ModelOptions};
+use goniofit::model;
+use goniofit::settings::{self, Front};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -86,11 +87,8 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
         require_value: false,
         channel: args.channel.clone(),
     };
-    let mopts = ModelOptions {
-        mode: args.mode.into(),
-        tol: args.tol,
-        patch: args.patch.as_deref().map(parse_patch).transpose()?,
-    };
+    let patch = args.patch.as_deref().map(parse_patch).transpose()?;
+    let mopts = settings::model_options(Front::Cli, args.mode.into(), args.tol, patch)?;
     let model = model::by_name(&args.model, &mopts)?;
     let params = model::parse_params(model.as_ref(), &args.params)?;
 

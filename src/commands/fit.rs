@@ -11,9 +11,10 @@ use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::{self, Dataset, FileSet, ReadOptions};
-use goniofit::model::{parse_assignments, ModelOptions};
+use goniofit::model::parse_assignments;
 use goniofit::report::outcome::SettingSource;
 use goniofit::report::{self, RunInfo};
+use goniofit::settings::{self, Front};
 use goniofit::Error;
 use std::path::{Path, PathBuf};
 
@@ -33,6 +34,9 @@ impl From<ResidualArg> for ResidualKind {
         }
     }
 }
+
+/// Options are named as the command line spells them.
+const CLI: Front = Front::Cli;
 
 /// Examples shown by `goniofit fit --help`.
 const FIT_EXAMPLES: &str = "\
@@ -273,7 +277,8 @@ pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
     })
 }
 
-/// The fit configuration from the arguments, for a given model name.
+/// The fit configuration from the arguments, for a given model name; every numeric option
+/// checked ([`goniofit::settings`], as the Python package checks its keywords).
 pub fn fit_config(
     args: &FitArgs,
     model: &str,
@@ -281,26 +286,17 @@ pub fn fit_config(
 ) -> anyhow::Result<FitConfig> {
     let lm = LmConfig {
         max_iters: args.max_iter,
-        timeout: args.timeout.map(std::time::Duration::from_secs_f64),
+        timeout: settings::timeout(CLI, args.timeout)?,
         progress: args.show_progress(),
         ..FitConfig::default().lm
     };
+    let patch = args.patch.as_deref().map(parse_patch).transpose()?;
     Ok(FitConfig {
         model: model.to_string(),
-        model_opts: ModelOptions {
-            mode: args.mode.into(),
-            tol: args.tol,
-            patch: args.patch.as_deref().map(parse_patch).transpose()?,
-        },
+        model_opts: settings::model_options(CLI, args.mode.into(), args.tol, patch)?,
         residual: args.residual.into(),
-        loss: Loss::new(args.loss.into(), args.f_scale)
-            .map_err(|_| {
-                Error::Usage(format!(
-                    "--f-scale {}: the loss scale must be a finite number > 0, the size of a weighted residual beyond which a sample counts as an outlier (e.g. 0.03 for 3 % with --residual relative)",
-                    args.f_scale
-                ))
-            })?,
-        floor: args.floor,
+        loss: Loss::new(args.loss.into(), settings::f_scale(CLI, args.f_scale)?)?,
+        floor: settings::floor(CLI, args.floor)?,
         init: parse_assignments(args.init.as_deref().unwrap_or(""))?,
         fix: parse_assignments(args.fix.as_deref().unwrap_or(""))?,
         lm,
@@ -357,7 +353,12 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // From the start Ctrl-C, SIGTERM and SIGHUP stop the command instead of ending the
     // process, and `--timeout` counts from here: reading stops within a MiB (nothing
     // fitted, exit 3), a fit reports its best point (exit 3).
-    let stop = Stop::new(args.timeout.map(std::time::Duration::from_secs_f64), None);
+    let config = fit_config(&args, &args.model, false)?;
+    let stop = Stop::new(config.lm.timeout, None);
+    let (threads, note) = settings::threads(CLI, args.threads)?;
+    if let Some(note) = note {
+        eprintln!("goniofit: {note}");
+    }
     let opts = args.read_options()?;
     // Every input is read (and checked) before any fit starts.
     let (jobs, files) = read_jobs(&args, &opts, &stop)?;
@@ -371,7 +372,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     }
     let t0 = std::time::Instant::now();
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
+        .num_threads(threads)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
     let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, &pool)?;

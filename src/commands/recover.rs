@@ -53,11 +53,8 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
         ))
         .into());
     }
-    if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        return Err(
-            goniofit::Error::Usage(format!("--timeout {} must be positive", args.timeout)).into(),
-        );
-    }
+    let fit_timeout =
+        goniofit::settings::timeout(goniofit::settings::Front::Cli, Some(args.timeout))?;
     if let Some(bad) = args.only.iter().flatten().find(|&&id| id >= args.scenes) {
         return Err(goniofit::Error::Usage(format!(
             "--only {bad}: scene ids run from 0 to {} (--scenes {})",
@@ -70,7 +67,7 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
         scenes: args.scenes,
         seed: args.seed,
         noise: args.noise,
-        fit_timeout: Some(Duration::from_secs_f64(args.timeout)),
+        fit_timeout,
         only: args.only.clone(),
     };
     let fitted = args.only.as_ref().map_or(args.scenes, Vec::len);

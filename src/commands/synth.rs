@@ -10,7 +10,8 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::geometry::Quantity;
 use goniofit::io::{self, FileSet};
-use goniofit::model::{by_name, parse_params, ModelOptions};
+use goniofit::model::{by_name, parse_params};
+use goniofit::settings::{self, Front};
 use goniofit::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
 use std::path::{Path, PathBuf};
 
@@ -177,11 +178,7 @@ fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
 
 pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     let patch = a.patch.as_deref().map(parse_patch).transpose()?;
-    let opts = ModelOptions {
-        mode: a.mode.into(),
-        tol: a.tol,
-        patch,
-    };
+    let opts = settings::model_options(Front::Cli, a.mode.into(), a.tol, patch)?;
     let model = by_name(&a.model, &opts)?;
     let params = parse_params(model.as_ref(), &a.params)?;
     let layout = build_layout(&a)?;

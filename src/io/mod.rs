@@ -443,8 +443,8 @@ pub fn nm_per(unit: &str) -> f64 {
 }
 
 /// A positive length such as `633nm`, `633 nm`, `0.633um`, `0.633µm` or a bare `0.633`:
-/// the number and its unit (`nm`, `µm`; None for a bare number). The error says what is
-/// accepted.
+/// the number and its unit (`nm`, `µm`; None for a bare number), within
+/// [`crate::settings::LENGTH_RANGE`]. The error says what is accepted.
 pub fn parse_length(text: &str) -> Result<(f64, Option<&'static str>)> {
     let t = text.trim();
     let lower = t.to_lowercase();
@@ -458,8 +458,12 @@ pub fn parse_length(text: &str) -> Result<(f64, Option<&'static str>)> {
     } else {
         (lower.clone(), None)
     };
+    let (lo, hi) = crate::settings::LENGTH_RANGE;
     match num.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok((v, unit)),
+        Ok(v) if (lo..=hi).contains(&v) => Ok((v, unit)),
+        Ok(v) if v.is_finite() && v > 0.0 => Err(Error::Usage(format!(
+            "'{t}': a length must lie within [{lo:e}, {hi:e}] (in any unit)"
+        ))),
         _ => Err(Error::Usage(format!(
             "'{t}' is not a positive length: give a number with nm or um (633nm, 0.633um) or a bare number in the unit of the data's wavelength"
         ))),

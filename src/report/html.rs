@@ -296,7 +296,11 @@ fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
         let _ = writeln!(s, "<li>{}</li>", escape(n));
     }
     if !r.condition.is_nan() {
-        let _ = writeln!(s, "</ul>\n<p>condition number {:.3e}</p>", r.condition);
+        let _ = writeln!(
+            s,
+            "</ul>\n<p>condition number {}</p>",
+            super::text::condition_text(r.condition)
+        );
     } else {
         let _ = writeln!(s, "</ul>");
     }

@@ -25,13 +25,22 @@ fn value_se(v: f64, se: Option<f64>) -> String {
     }
 }
 
-/// A number in scientific notation with 3 decimals; `inf` for +∞ (a singular problem's
-/// condition), `n/a` for NaN (not computed).
+/// A number in scientific notation with 3 decimals; `n/a` for NaN (not computed).
 fn sci(v: f64) -> String {
     if v.is_nan() {
         "n/a".into()
     } else {
         format!("{v:.3e}")
+    }
+}
+
+/// The condition number of the Jacobian: [`sci`], or in words for a singular
+/// (rank-deficient) one, whose condition number is infinite.
+pub fn condition_text(v: f64) -> String {
+    if v.is_infinite() {
+        "singular (rank-deficient Jacobian: the data does not determine every parameter)".into()
+    } else {
+        sci(v)
     }
 }
 
@@ -444,7 +453,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         sv.join(", ")
     };
     let _ = writeln!(s, "    singular values = {sv}");
-    let _ = writeln!(s, "    condition       = {}", sci(r.condition));
+    let _ = writeln!(s, "    condition       = {}", condition_text(r.condition));
     for note in &r.notes {
         let _ = writeln!(s, "    note: {note}");
     }
@@ -477,7 +486,18 @@ fn validity_lines(s: &mut String, r: &FitResult) {
 
 #[cfg(test)]
 mod tests {
-    use super::fixed;
+    use super::{condition_text, fixed};
+
+    #[test]
+    fn a_singular_jacobian_s_condition_is_said_in_words() {
+        let text = condition_text(f64::INFINITY);
+        assert!(text.starts_with("singular (rank-deficient"), "{text}");
+        assert!(!text
+            .split(|c: char| !c.is_alphanumeric())
+            .any(|w| w == "inf"));
+        assert_eq!(condition_text(1234.5), "1.234e3");
+        assert_eq!(condition_text(f64::NAN), "n/a");
+    }
 
     #[test]
     fn no_negative_zero() {

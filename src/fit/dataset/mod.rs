@@ -195,6 +195,9 @@ pub fn fit_input(
         path: ds.path.clone(),
         message: "no measured value column (L)".into(),
     })?;
+    if let (Some(f), ResidualKind::Relative | ResidualKind::Log) = (floor, residual) {
+        crate::settings::check_floor(f, y.iter().fold(0.0f64, |m, v| m.max(v.abs())))?;
+    }
     let floor = floor_for(floor, &y);
     let (weight, _) = residual_weights(
         ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),

@@ -95,7 +95,8 @@ impl Stop {
     pub fn without_handler(timeout: Option<Duration>, flag: Option<Arc<AtomicBool>>) -> Stop {
         let active = Active::start();
         Stop(Arc::new(StopInner {
-            deadline: timeout.map(|t| Instant::now() + t),
+            // A limit beyond what the clock can represent is no limit.
+            deadline: timeout.and_then(|t| Instant::now().checked_add(t)),
             generation: INTERRUPTS.load(Ordering::SeqCst),
             flag,
             _active: active,
