@@ -62,7 +62,11 @@ pub fn evaluate_checked(model: &dyn Model, params: &[f64], geo: &Geometry) -> Re
                 "model {} is not a finite number ({}) at theta_i = {}°, theta_r = {}°, phi_r = {}°, wavelength {} for {}: \
                  these parameters lie outside the range the model can be evaluated in (double precision overflows)",
                 model.name(),
-                out[i],
+                if out[i].is_nan() {
+                    "undefined"
+                } else {
+                    "it overflows"
+                },
                 crate::plot::fmt_num(geo.theta_i[i].to_degrees()),
                 crate::plot::fmt_num(geo.theta_r[i].to_degrees()),
                 crate::plot::fmt_num(geo.phi_r[i].to_degrees()),
