@@ -32,12 +32,6 @@ fn eval_refuses_parameters_where_the_model_overflows() {
             &[][..],
             "B = 1e308, w = 1e-300",
         ),
-        (
-            "kbs",
-            "sigma=0.3,T=2,scale=1",
-            &["--wavelength", "1e-300"][..],
-            "wavelength 1e-300",
-        ),
     ] {
         eval(model, params, extra).code(2).stdout("").stderr(
             predicate::str::contains(format!("model {model} is not a finite number"))
@@ -45,6 +39,13 @@ fn eval_refuses_parameters_where_the_model_overflows() {
                 .and(predicate::str::contains("theta_i = ")),
         );
     }
+    // A wavelength beyond the lengths any option takes is refused before evaluating.
+    eval("kbs", "sigma=0.3,T=2,scale=1", &["--wavelength", "1e-300"])
+        .code(2)
+        .stdout("")
+        .stderr(predicate::str::contains(
+            "'1e-300': a length must lie within [1e-30, 1e30]",
+        ));
 }
 
 #[test]
