@@ -294,3 +294,28 @@ fn a_symlink_is_followed_only_where_the_kernel_would_follow_it() {
         .unwrap()
         .contains("L_model"));
 }
+
+#[test]
+fn a_replaced_file_keeps_its_owner_where_we_may_set_it() {
+    use std::os::unix::fs::MetadataExt;
+    let dir = workspace();
+    let d = dir.path();
+    let out = d.join("theirs.csv");
+    std::fs::write(&out, "old").unwrap();
+    let nobody = 65534;
+    if std::os::unix::fs::chown(&out, Some(nobody), Some(nobody)).is_err() {
+        eprintln!("skipped: cannot give a file to another user here");
+        return;
+    }
+    goniofit()
+        .current_dir(d)
+        .args([
+            "eval", "--model", "lambert", "--params", "scale=1", "h.csv", "-o",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let m = std::fs::metadata(&out).unwrap();
+    assert_eq!((m.uid(), m.gid()), (nobody, nobody));
+    assert!(std::fs::read_to_string(&out).unwrap().contains("L_model"));
+}

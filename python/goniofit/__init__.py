@@ -175,14 +175,17 @@ def fit(
         (as ``--channel all``).
     group : sequence of labels, optional
         A group label per sample: every group fitted on its own, in parallel (as
-        ``--by-group``); returns a dict label → FitResult in first-appearance order.
+        ``--by-group``); returns a dict label → FitResult in first-appearance order. A
+        missing label (None, NaN) is a ValueError, as in :func:`fit_frame`.
     **options
         ``radians`` (bool), ``signed_theta_r`` (bool: θr < 0 is the back side), ``mode``
         (``auto``/``series``/``smooth``/``rough``, the KBS evaluation), ``tol`` (its
         relative accuracy, default 1e-10), ``patch`` ((X, Y) half-sizes in the unit of λ:
         the coherent term), ``floor`` (for relative/log residuals; default 1e-6 × max |L|),
-        ``max_iter`` (default 500), ``timeout`` (seconds), ``reduce`` (default True: refit
-        the reduced problem when only combinations are determined), ``threads``,
+        ``max_iter`` (default 500), ``timeout`` (seconds, 0 < t ≤ 1e9), ``reduce``
+        (default True: refit the reduced problem when only combinations are determined),
+        ``threads`` (at most the machine's cores: more run on its cores, with a
+        ``RuntimeWarning``),
         ``wavelength_unit``, ``absolute_sigma`` (standard errors from ``sigma_L`` as stated,
         as scipy's ``curve_fit(absolute_sigma=True)``), ``intervals`` (profile-likelihood
         intervals: default True for one fit, as the CLI's single-file report, False with
