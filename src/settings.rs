@@ -13,6 +13,7 @@
 //! | `f_scale` | [1e-100, 1e100] (its square, the loss's scale, stays a normal number) |
 //! | `floor` | finite, > 0 (and below the largest measured value: [`check_floor`]) |
 //! | `wavelength`, `patch` half-sizes | [1e-30, 1e30] |
+//! | `scenes` (recover) | 1 ..= 1,000,000 (every scene is drawn, so the count is memory) |
 
 use crate::error::{Error, Result};
 use crate::model::domain::short_number;
@@ -138,6 +139,21 @@ pub fn length(front: Front, key: &str, v: f64) -> Result<f64> {
         ));
     }
     Ok(v)
+}
+
+/// The most scenes `recover` draws (each is drawn, fitted or not, so that a scene keeps its
+/// truth and noise whatever `--only` says).
+pub const MAX_SCENES: usize = 1_000_000;
+
+/// The number of scenes of a recovery run: 1 ..= [`MAX_SCENES`].
+pub fn scenes(front: Front, n: usize) -> Result<usize> {
+    if !(1..=MAX_SCENES).contains(&n) {
+        return Err(Error::Usage(format!(
+            "{} {n}: the number of scenes must lie in 1 ..= {MAX_SCENES}",
+            front.name("scenes")
+        )));
+    }
+    Ok(n)
 }
 
 /// The range of the relative accuracy target of the KBS evaluation.

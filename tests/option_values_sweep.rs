@@ -220,6 +220,18 @@ fn eval_synth_render_recover_bench_options() {
 }
 
 #[test]
+fn a_count_beyond_what_memory_holds_is_refused() {
+    let dir = workspace();
+    let args: Vec<String> = "recover --scenes 1000000000 --only 0"
+        .split(' ')
+        .map(String::from)
+        .collect();
+    let (code, _, err, _) = run(dir.path(), &args);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--scenes 1000000000"), "{err}");
+}
+
+#[test]
 fn a_thread_count_beyond_the_machine_is_capped_with_a_note() {
     let dir = workspace();
     for n in ["100000", "18446744073709551615"] {

@@ -43,9 +43,7 @@ pub struct RecoverArgs {
 
 /// Run `goniofit recover`.
 pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
-    if args.scenes == 0 {
-        return Err(goniofit::Error::Usage("--scenes must be at least 1".into()).into());
-    }
+    goniofit::settings::scenes(goniofit::settings::Front::Cli, args.scenes)?;
     if !(args.noise.is_finite() && args.noise > 0.0) {
         return Err(goniofit::Error::Usage(format!(
             "--noise {} must be positive (coverage needs noise)",
