@@ -673,7 +673,13 @@ fn timeout_in_a_big_fit_reports_the_point_without_uncertainties_it_did_not_compu
     }
     assert_eq!(v["termination"], "timeout");
     assert!(v["cost"].as_f64().is_some_and(f64::is_finite));
-    assert!(v["r2"].as_f64().is_some_and(f64::is_finite));
+    if v["fitted_computed"] == true {
+        assert!(v["r2"].as_f64().is_some_and(f64::is_finite));
+    } else {
+        // A loaded machine: evaluations slower than the stop's block size, so the stop
+        // also cut the fitted values; R² is then absent (null), never NaN.
+        assert!(v["r2"].is_null(), "{}", v["r2"]);
+    }
     let params: Vec<&serde_json::Value> =
         v["params"].as_object().expect("params").values().collect();
     let notes = v["notes"].to_string();
