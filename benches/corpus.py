@@ -16,7 +16,8 @@ Times: the fit's own run time (JSON `seconds`, per dataset) and each file's wall
 Usage: python3 benches/corpus.py EXE [--intervals] [--repeats N] [--json OUT]
 (standard library only; run from the repository root). Prints one line per MISS or
 degenerate fit, then the counts and the times (median and worst per dataset, of each file's fits, and
-each file's wall time; the slowest fits by name; how many Cornell channels take over 0.1 s).
+each file's wall time; the slowest fits by name; how many Cornell channels take over 0.1 s),
+and how many fits the adequacy tests flag per corpus, with the count of each reason.
 """
 import argparse
 import csv
@@ -87,6 +88,22 @@ def run(exe, corpus, path, extra, intervals):
     return json.loads(out.stdout)["fits"], wall
 
 
+def adequacy_lines(adequacy):
+    """Per corpus: how many fits the adequacy verdict flags, by verdict and by reason."""
+    for corpus in sorted({c for c, _, _ in adequacy.values()}):
+        fits = [(v, codes) for c, v, codes in adequacy.values() if c == corpus]
+        flagged = [(v, codes) for v, codes in fits if v in ("misfit", "noise")]
+        verdicts = {v: sum(1 for w, _ in fits if w == v) for v in sorted({v for v, _ in fits})}
+        reasons = {}
+        for _, codes in flagged:
+            for code in codes:
+                reasons[code] = reasons.get(code, 0) + 1
+        print(f"adequacy {corpus}: {len(flagged)} of {len(fits)} fits flagged ("
+              + ", ".join(f"{k} {v}" for k, v in verdicts.items()) + "); reasons: "
+              + (", ".join(f"{k} {v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
+                 or "none"))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("exe")
@@ -95,7 +112,7 @@ def main():
     ap.add_argument("--json", help="write the per-fit classes and times here")
     a = ap.parse_args()
     ref = reference()
-    classes, per_fit, per_file, rows = {}, {}, {}, []
+    classes, per_fit, per_file, rows, adequacy = {}, {}, {}, [], {}
     for _ in range(a.repeats):
         for corpus, path, extra in FILES:
             fits, wall = run(a.exe, corpus, path, extra, a.intervals)
@@ -106,6 +123,8 @@ def main():
                 if key not in classes:
                     c, why = class_of(f, ref[key])
                     classes[key] = c
+                    adequacy[key] = (corpus, f["adequacy"]["verdict"],
+                                     [r["code"] for r in f["adequacy"]["reasons"]])
                     rows.append({"file": key[0], "group": key[1], "class": c, "why": why,
                                  "cost": f["cost"], "cost_best": float(ref[key]["cost_best"]),
                                  "termination": f["termination"]})
@@ -113,6 +132,7 @@ def main():
                         print(f"{c:10s} {key[0]} {key[1]}: {why}")
     counts = {c: list(classes.values()).count(c) for c in ("at-best", "degenerate", "MISS")}
     print(f"{len(classes)} fits: " + ", ".join(f"{v} {k}" for k, v in counts.items()))
+    adequacy_lines(adequacy)
     fit_med = {k: statistics.median(v) for k, v in per_fit.items()}
     cornell = [v for k, v in fit_med.items() if k[0].endswith(".astm")]
     curet = [v for k, v in fit_med.items() if not k[0].endswith(".astm")]

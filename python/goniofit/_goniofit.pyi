@@ -47,6 +47,33 @@ Termination = Literal[
     "nonfinitestart", "nonfinitejacobian", "noprogress",
 ]
 Verdict = Literal["full", "rough", "smooth", "partial"]
+AdequacyVerdict = Literal["adequate", "misfit", "noise", "not_computed"]
+
+class AdequacyReason(TypedDict):
+    """One reason of a flagged adequacy verdict (docs/adequacy.md explains each code)."""
+
+    code: Literal[
+        "chi2_high", "chi2_low", "runs", "proportional_noise", "grazing_above",
+        "grazing_below", "peak_below", "peak_above", "floor", "far_above", "far_below",
+    ]
+    text: str
+    p: Optional[float]  # the test's p-value
+
+class Adequacy(TypedDict):
+    """Whether the model describes the data and the weights match the noise, from the
+    residuals: the CLI's JSON ``adequacy``. Each test is held to ``alpha / tests``."""
+
+    verdict: AdequacyVerdict
+    headline: str
+    reasons: List[AdequacyReason]
+    alpha: float
+    tests: int
+    r2: Optional[float]
+    reduced_chi2: Optional[float]  # with stated sigma_L only
+    chi2_p: Optional[float]
+    runs: Optional[Dict[str, Any]]  # runs, expected, sd, signs, scans, p
+    spread: Optional[Dict[str, Any]]  # triples, rho, slope, p (absolute residuals only)
+    regions: List[Dict[str, Any]]  # region (grazing, peak, far), n, data_above, p
 
 class FitResult:
     """A finished fit (converged or not). Every field comes from the CLI's JSON report."""
@@ -66,6 +93,9 @@ class FitResult:
     def termination(self) -> Termination: ...
     @property
     def verdict(self) -> Verdict: ...
+    @property
+    def adequacy(self) -> Adequacy:
+        """Whether the model describes the data (a verdict beside ``converged``)."""
     @property
     def notes(self) -> List[str]: ...
     @property

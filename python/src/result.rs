@@ -108,6 +108,15 @@ impl FitResult {
         self.field(py, "verdict")
     }
 
+    /// Whether the model describes the data and the weights match the noise: ``{"verdict":
+    /// "adequate" | "misfit" | "noise" | "not_computed", "headline", "reasons": [{"code",
+    /// "text", "p"}], "alpha", "tests", "r2", "reduced_chi2", "chi2_p", "runs", "spread",
+    /// "regions"}``, as the CLI's JSON ``adequacy`` (a verdict, not a failure).
+    #[getter]
+    fn adequacy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.field(py, "adequacy")
+    }
+
     /// The report's notes (plain-language statements about the fit).
     #[getter]
     fn notes(&self) -> Vec<String> {
@@ -176,7 +185,8 @@ impl FitResult {
 }
 
 /// One entry per outcome for `fit_frame`: `model`, `n`, `converged`, `termination`,
-/// `verdict`, `cost`, `reduced_chi2`, `r2`, `iterations`, then per parameter and derived
+/// `verdict`, `adequacy`, `adequacy_reasons`, `cost`, `reduced_chi2`, `r2`, `iterations`,
+/// then per parameter and derived
 /// quantity `NAME`, `NAME_stderr` (NaN when undetermined or fixed) and `NAME_determined`;
 /// a name absent from some fits (another model under `auto`) is NaN / False there.
 pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<Bound<'py, PyDict>> {
@@ -214,6 +224,11 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
     };
     out.set_item("termination", json_text("termination"))?;
     out.set_item("verdict", json_text("verdict"))?;
+    out.set_item(
+        "adequacy",
+        text(&|o| r(o).adequacy.verdict.name().to_string()),
+    )?;
+    out.set_item("adequacy_reasons", text(&|o| r(o).adequacy.codes()))?;
     let num = |f: &dyn Fn(&Outcome) -> f64| {
         outcomes
             .iter()

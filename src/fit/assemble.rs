@@ -2,6 +2,7 @@
 //! standard errors and whether each is determined, derived quantities, evaluation modes.
 //! The conventions (cost, χ², covariance, AIC/BIC) are in [`super::driver`]'s module doc.
 
+use super::adequacy::{self, Adequacy};
 use super::config::FitConfig;
 use super::identify::{log_covariance, DETERMINED_MAX_LOG_SE};
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind, Transform};
@@ -80,6 +81,7 @@ pub(super) fn assemble(
         notes,
         unusable,
         validity: None,
+        adequacy: Adequacy::not_computed(gof.r2),
         loss: problem.loss(),
         beyond_f_scale: gof.beyond_f_scale,
         cost: gof.cost,
@@ -111,6 +113,7 @@ pub(super) fn assemble(
         start: start.grid_start,
     };
     result.validity = validity_of(&result, input);
+    result.adequacy = adequacy_of(&result, &problem, input, config);
     if !result.is_finite() {
         result.notes.push(
             "not a usable optimum: the cost, a parameter, a standard error or a correlation is not a finite number (the values overflow double precision; rescale L or the weights)".into(),
@@ -276,24 +279,35 @@ fn r_squared(problem: &FitProblem, input: &FitInput, fitted: &[f64]) -> f64 {
         _ => v,
     };
     let t: Vec<f64> = input.y.iter().map(|&v| space(v)).collect();
-    let wsum: f64 = sw.iter().map(|s| s * s).sum();
-    let tbar = t.iter().zip(sw.iter()).map(|(v, s)| v * s * s).sum::<f64>() / wsum;
-    let ss_tot: f64 = t
-        .iter()
-        .zip(sw.iter())
-        .map(|(v, s)| (s * (v - tbar)).powi(2))
-        .sum();
-    let ss_res: f64 = fitted
-        .iter()
-        .zip(&t)
-        .zip(sw.iter())
-        .map(|((f, v), s)| (s * (space(*f) - v)).powi(2))
-        .sum();
-    if ss_tot > 0.0 {
-        1.0 - ss_res / ss_tot
-    } else {
-        f64::NAN
+    let f: Vec<f64> = fitted.iter().map(|&v| space(v)).collect();
+    adequacy::distributions::r_squared(&t, &f, |i| sw[i])
+}
+
+/// The adequacy tests on the residuals at the reported point (not computed when a stop
+/// cut them).
+fn adequacy_of(
+    r: &FitResult,
+    problem: &FitProblem,
+    input: &FitInput,
+    config: &FitConfig,
+) -> Adequacy {
+    if !r.fitted_computed {
+        return Adequacy::not_computed(r.r2);
     }
+    adequacy::assess(&adequacy::FitResiduals {
+        residuals: &r.residuals,
+        sqrt_weight: problem.sqrt_weight(),
+        fitted: &r.fitted,
+        geo: &input.geo,
+        channel: &input.channel,
+        kind: problem.kind(),
+        absolute_weights: config.weights_are_uncertainties,
+        linear_loss: problem.loss().is_linear(),
+        has_diffuse: r.model.contains("lambert"),
+        n_free: r.n_free,
+        chi2: r.chi2,
+        r2: r.r2,
+    })
 }
 
 /// Every layout parameter with its standard error (delta method through the transform)

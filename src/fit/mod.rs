@@ -5,6 +5,7 @@
 //! (`reduce`), validate (`validate`) and assemble (`assemble`); a dataset's fit with
 //! model selection, shared by the CLI and the Python package ([`dataset`]).
 
+pub mod adequacy;
 pub mod amplitudes;
 pub mod channels;
 pub mod dataset;

@@ -94,6 +94,9 @@ pub struct FitResult {
     /// Whether the fitted surface satisfies the paper's assumptions (KBS models; a warning,
     /// not a failure): [`super::validity`].
     pub validity: Option<super::validity::Validity>,
+    /// Whether the model describes the data and the weights match the noise, from the
+    /// residuals ([`super::adequacy`]; a verdict, not a failure).
+    pub adequacy: super::adequacy::Adequacy,
     /// The robust loss the fit minimised (linear: plain least squares).
     pub loss: Loss,
     /// Under a robust loss, how many samples have a weighted residual beyond `f_scale`

@@ -23,6 +23,7 @@
 //! `sigma_L` column would fit them.
 
 use crate::error::{Error, Result};
+use crate::fit::adequacy::AdequacyVerdict;
 use crate::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
 use crate::fit::lm::{LmConfig, Stop, Termination};
 use crate::fit::problem::Channels;
@@ -128,6 +129,11 @@ pub struct SceneResult {
     pub seconds: f64,
     pub checks: Vec<Check>,
     pub error: Option<String>,
+    /// The adequacy verdict of the fit (None when the fit returned an error) and the codes
+    /// of its reasons: a correct model with correct weights should be flagged in at most
+    /// [`crate::fit::adequacy::ALPHA`] of the scenes.
+    pub adequacy: Option<AdequacyVerdict>,
+    pub adequacy_reasons: Vec<&'static str>,
 }
 
 /// Error statistics of one quantity within a regime.
@@ -169,6 +175,10 @@ pub struct RecoverReport {
     pub n_with_stderr: usize,
     pub terminations: BTreeMap<String, usize>,
     pub converged: usize,
+    /// Scenes whose fit the adequacy tests flag (misfit or noise), and the count of each
+    /// reason among them.
+    pub adequacy_flagged: usize,
+    pub adequacy_reasons: BTreeMap<String, usize>,
     pub errors: usize,
     pub median_seconds: f64,
     pub total_seconds: f64,
@@ -401,6 +411,8 @@ fn fit_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> SceneResult 
         seconds: 0.0,
         checks: Vec::new(),
         error: Some(e.to_string()),
+        adequacy: None,
+        adequacy_reasons: Vec::new(),
     };
     let input = match scene_input(scene) {
         Ok(i) => i,
@@ -426,6 +438,8 @@ fn fit_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> SceneResult 
             seconds: fit.seconds,
             checks: score(scene, &fit),
             error: None,
+            adequacy: Some(fit.adequacy.verdict),
+            adequacy_reasons: fit.adequacy.reasons.iter().map(|r| r.code).collect(),
         },
         Err(e) => fail(n, e),
     }
@@ -527,6 +541,14 @@ pub fn summarize(
         .map(|r| r.seconds)
         .collect();
     let outliers = outliers::outliers(&results, config);
+    let flagged: Vec<&SceneResult> = results
+        .iter()
+        .filter(|r| r.adequacy.is_some_and(AdequacyVerdict::flagged))
+        .collect();
+    let mut adequacy_reasons = BTreeMap::new();
+    for code in flagged.iter().flat_map(|r| &r.adequacy_reasons) {
+        *adequacy_reasons.entry(code.to_string()).or_insert(0) += 1;
+    }
     RecoverReport {
         scenes: results.len(),
         seed,
@@ -535,6 +557,8 @@ pub fn summarize(
         n_with_stderr,
         terminations,
         converged: results.iter().filter(|r| r.converged).count(),
+        adequacy_flagged: flagged.len(),
+        adequacy_reasons,
         errors: results.iter().filter(|r| r.error.is_some()).count(),
         median_seconds: median(&secs),
         total_seconds,
@@ -691,6 +715,25 @@ impl RecoverReport {
             self.errors,
             fmt_num(Some(self.median_seconds)),
             fmt_num(Some(self.total_seconds))
+        );
+        let _ = writeln!(
+            s,
+            "adequacy: {} of {} scenes flagged (correct model and weights: expected at most {} %){}",
+            self.adequacy_flagged,
+            self.scenes,
+            100.0 * crate::fit::adequacy::ALPHA,
+            if self.adequacy_reasons.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; reasons: {}",
+                    self.adequacy_reasons
+                        .iter()
+                        .map(|(k, v)| format!("{k} {v}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            }
         );
         let _ = writeln!(
             s,

@@ -205,6 +205,25 @@ fn status(s: &mut String, r: &FitResult) {
         },
         escape(words)
     );
+    adequacy(s, r);
+}
+
+/// The adequacy verdict beside the convergence status, its reasons as a list.
+fn adequacy(s: &mut String, r: &FitResult) {
+    let a = &r.adequacy;
+    let class = if a.verdict.flagged() { "no" } else { "yes" };
+    let _ = writeln!(
+        s,
+        "<p id=\"adequacy\" class={class}>Adequacy: {}</p>",
+        escape(&a.headline())
+    );
+    if !a.reasons.is_empty() {
+        s.push_str("<ul id=\"adequacy-reasons\">\n");
+        for reason in &a.reasons {
+            let _ = writeln!(s, "<li>{}</li>", escape(&reason.text));
+        }
+        s.push_str("</ul>\n");
+    }
 }
 
 /// The setting: input file and checksum, wavelength, quantity, residual, floor, weights,

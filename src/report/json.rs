@@ -14,6 +14,15 @@ fn num(v: f64) -> Value {
     }
 }
 
+/// The adequacy verdict, its headline, reasons and statistics (non-finite numbers as null).
+fn adequacy_json(r: &FitResult) -> Value {
+    let mut v = serde_json::to_value(&r.adequacy).unwrap_or(Value::Null);
+    if let Value::Object(m) = &mut v {
+        m.insert("headline".into(), json!(r.adequacy.headline()));
+    }
+    v
+}
+
 /// The report as a JSON value.
 pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
     let units = &info.setting.units;
@@ -96,6 +105,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
                 })
                 .collect::<Map<String, Value>>()
         }),
+        "adequacy": adequacy_json(r),
         "cost": num(r.cost),
         "loss": {"kind": r.loss.kind, "f_scale": num(r.loss.f_scale), "beyond_f_scale": r.beyond_f_scale},
         "chi2": num(r.chi2),

@@ -3,6 +3,7 @@
 
 use super::setting::Units;
 use super::text::fixed;
+use crate::fit::adequacy::AdequacyVerdict;
 use crate::fit::driver::{FitResult, Verdict};
 use std::fmt::Write;
 
@@ -22,6 +23,9 @@ pub struct Row {
     pub t: Option<(f64, bool)>,
     pub ratio: Option<(f64, bool)>,
     pub verdict: Verdict,
+    /// Whether the model describes the data, and the codes of the reasons when not.
+    pub adequacy: AdequacyVerdict,
+    pub adequacy_reasons: String,
     /// Unit of σ and T.
     pub length_unit: String,
 }
@@ -49,6 +53,8 @@ pub fn row(group: &str, r: &FitResult, units: &Units) -> Row {
             .find(|d| d.name == "T/sigma")
             .map(|d| (d.value, d.determined)),
         verdict: r.verdict,
+        adequacy: r.adequacy.verdict,
+        adequacy_reasons: r.adequacy.codes(),
         length_unit: units.length_name(),
     }
 }
@@ -129,23 +135,37 @@ pub fn table(rows: &[Row]) -> String {
         .max()
         .unwrap_or(5)
         .max(5);
-    let mut line = |group: &str, cells: Vec<String>, verdict: &str| {
+    let mut line = |group: &str, cells: Vec<String>, verdict: &str, adequacy: &str| {
         let _ = write!(s, "    {group:<gw$}");
         for ((_, w, _), c) in TABLE_COLUMNS.iter().zip(cells) {
             let _ = write!(s, " {c:>w$}");
         }
-        let _ = writeln!(s, "  {verdict}");
+        let _ = writeln!(s, "  {verdict:<16} {adequacy}");
     };
     line(
         "group",
         TABLE_COLUMNS.iter().map(|c| c.0.to_string()).collect(),
         "verdict",
+        "adequacy",
     );
     for r in rows {
         let cells = TABLE_COLUMNS.iter().map(|c| (c.2)(r)).collect();
-        line(&r.group, cells, verdict_word(r.verdict));
+        line(&r.group, cells, verdict_word(r.verdict), &adequacy_cell(r));
     }
     s
+}
+
+/// The adequacy verdict with its reason codes, as in the table: `misfit (runs, floor)`.
+fn adequacy_cell(r: &Row) -> String {
+    if r.adequacy_reasons.is_empty() {
+        r.adequacy.name().to_string()
+    } else {
+        format!(
+            "{} ({})",
+            r.adequacy.name(),
+            r.adequacy_reasons.replace(',', ", ")
+        )
+    }
 }
 
 /// A value with its determination as two CSV fields (full precision; empty fields where
@@ -158,7 +178,7 @@ fn split(v: Option<(f64, bool)>) -> (String, String) {
 }
 
 /// The CSV columns ([`csv_rows`]): name and cell. A new column is one more entry here.
-const CSV_COLUMNS: [(&str, Cell); 15] = [
+const CSV_COLUMNS: [(&str, Cell); 17] = [
     ("group", |r| r.group.clone()),
     ("n", |r| r.n.to_string()),
     ("converged", |r| r.converged.to_string()),
@@ -180,6 +200,8 @@ const CSV_COLUMNS: [(&str, Cell); 15] = [
     ("verdict", |r| format!("{:?}", r.verdict).to_lowercase()),
     ("length_unit", |r| r.length_unit.clone()),
     ("verdict_text", |r| verdict_word(r.verdict).to_string()),
+    ("adequacy", |r| r.adequacy.name().to_string()),
+    ("adequacy_reasons", |r| r.adequacy_reasons.clone()),
 ];
 
 /// The CSV header of [`csv_rows`].

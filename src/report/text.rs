@@ -397,6 +397,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         r.termination.describe()
     );
     let _ = writeln!(s, "    converged       = {}", r.converged());
+    adequacy_lines(&mut s, r);
     let _ = writeln!(s, "    samples         = {}", r.n);
     let _ = writeln!(s, "    free parameters = {}", r.n_free);
     let _ = writeln!(s, "    iterations      = {}", r.iterations);
@@ -464,6 +465,45 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
 
 /// The `[[Validity]]` lines of a KBS fit: each of the paper's assumptions at the fitted
 /// surface, satisfied, violated or not determined (warnings, not failures).
+/// The adequacy verdict beside `converged`, its reasons below it, wrapped.
+fn adequacy_lines(s: &mut String, r: &FitResult) {
+    let a = &r.adequacy;
+    for (k, line) in wrap(&a.headline(), 78).iter().enumerate() {
+        let lead = if k == 0 {
+            "    adequacy        = "
+        } else {
+            "                      "
+        };
+        let _ = writeln!(s, "{lead}{line}");
+    }
+    for reason in &a.reasons {
+        for (k, line) in wrap(&reason.text, 76).iter().enumerate() {
+            let lead = if k == 0 { "- " } else { "  " };
+            let _ = writeln!(s, "                      {lead}{line}");
+        }
+    }
+}
+
+/// `text` broken at spaces into lines of at most `width` characters (a longer word stands
+/// on its own line).
+pub fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > width {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
 fn validity_lines(s: &mut String, r: &FitResult) {
     let Some(v) = &r.validity else {
         return;

@@ -1,0 +1,474 @@
+//! Adequacy: whether the fitted model describes the data and whether the weights match the
+//! noise, from the residuals at the reported point (no I/O). `converged` says the optimum
+//! was found; this says whether that optimum is a description of the surface.
+//!
+//! Every test is a significance test whose null hypothesis is "the model is right and each
+//! weighted residual √wᵢ rᵢ is independent noise of one spread" (rᵢ = model − data in the
+//! fitted space: the value, its relative deviation, or its logarithm):
+//!
+//! | test | statistic | null distribution | flags |
+//! |---|---|---|---|
+//! | `chi2` | χ² = Σ wᵢ rᵢ² (weights 1/σ_L², linear loss) | χ²(n − p), two-sided | misfit or σ_L too small; σ_L too large |
+//! | `runs` | sign runs along each scan | Wald–Wolfowitz, normal, one-sided (too few) | a systematic misfit |
+//! | `spread` | Spearman ρ of the local spread with L (absolute residuals) | √(m − 1)·ρ ~ N(0, 1), one-sided | proportional noise |
+//! | `grazing` | signs where θi or θr > 70° | binomial(n, ½), two-sided | Fresnel rise, shadowing |
+//! | `peak` | signs where the model is above half its peak at that θi | binomial, two-sided | clipped peak, sharper specular |
+//! | `far` | signs more than 45° from the mirror direction | binomial, two-sided | a missing diffuse floor |
+//!
+//! A scan is the samples of one channel sharing θi and a φ-plane (φ and φ + 180°), ordered
+//! by the signed angle θr (negative on the far side of the plane). The local spread is
+//! |second difference| of the weighted residuals over disjoint triples of neighbours along
+//! a scan, which a smooth misfit barely enters. Each test needs [`MIN_SAMPLES`] samples
+//! (runs: signs in scans of two or more; regions: samples inside and outside).
+//!
+//! The verdict rejects the model when a test's p-value is below [`ALPHA`] / k, k the number
+//! of tests run (Bonferroni: the chance that a correct model with correct weights is
+//! flagged at all is at most [`ALPHA`]).
+
+pub mod distributions;
+mod wording;
+
+use crate::fit::channels::Channels;
+use crate::fit::problem::ResidualKind;
+use crate::geometry::{Geometry, PerSample};
+use distributions::{chi2_sf, normal_sf, sign_test, slope, spearman, Runs};
+use std::collections::BTreeMap;
+
+/// Family-wise significance level of the adequacy tests (Bonferroni-corrected).
+pub const ALPHA: f64 = 1e-3;
+/// Incidence or reflection angle beyond which a sample is grazing, degrees.
+pub const GRAZING_DEG: f64 = 70.0;
+/// Angular distance from the mirror direction beyond which a sample is far from it, degrees.
+pub const FAR_DEG: f64 = 45.0;
+/// Fewest samples (signs, triples, region members) a test is run on.
+pub const MIN_SAMPLES: usize = 10;
+
+/// The verdict on a fit's adequacy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AdequacyVerdict {
+    /// No test rejects the model or its weights.
+    Adequate,
+    /// The model does not describe the data (a systematic misfit).
+    Misfit,
+    /// The model follows the data, but the weights do not match the noise.
+    Noise,
+    /// Not assessed: no residuals at the reported point, or too few samples for any test.
+    NotComputed,
+}
+
+impl AdequacyVerdict {
+    /// Lower-case name, as in JSON and CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            AdequacyVerdict::Adequate => "adequate",
+            AdequacyVerdict::Misfit => "misfit",
+            AdequacyVerdict::Noise => "noise",
+            AdequacyVerdict::NotComputed => "not_computed",
+        }
+    }
+
+    /// Whether the verdict flags the fit (misfit or noise).
+    pub fn flagged(self) -> bool {
+        matches!(self, AdequacyVerdict::Misfit | AdequacyVerdict::Noise)
+    }
+}
+
+/// One reason of a flagged verdict.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Reason {
+    /// Short name: chi2_high, chi2_low, runs, proportional_noise, grazing_above,
+    /// grazing_below, peak_below, peak_above, floor, far_above, far_below.
+    pub code: &'static str,
+    /// What it means, in words, with the numbers.
+    pub text: String,
+    /// The test's p-value.
+    pub p: f64,
+}
+
+/// The runs test of the residual signs along the scans.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunsTest {
+    pub runs: usize,
+    pub expected: f64,
+    pub sd: f64,
+    pub signs: usize,
+    pub scans: usize,
+    pub p: f64,
+}
+
+/// The spread of the weighted residuals against L.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SpreadTest {
+    /// Disjoint triples of scan neighbours.
+    pub triples: usize,
+    /// Spearman ρ of |second difference| with the mean fitted value of the triple.
+    pub rho: f64,
+    /// Slope of ln |second difference| on ln fitted value: ≈ 0 for constant noise, ≈ 1 for
+    /// noise proportional to L (NaN when not computable).
+    pub slope: f64,
+    pub p: f64,
+}
+
+/// The sign test of one region of the hemisphere.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RegionTest {
+    /// grazing, peak or far.
+    pub region: &'static str,
+    /// Samples in the region with a non-zero residual.
+    pub n: usize,
+    /// Of which the measured value lies above the model (negative residual).
+    pub data_above: usize,
+    pub p: f64,
+}
+
+/// The adequacy of a fit: verdict, reasons and the statistics behind them.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Adequacy {
+    pub verdict: AdequacyVerdict,
+    pub reasons: Vec<Reason>,
+    /// Family-wise significance level; each test is held to `alpha / tests`.
+    pub alpha: f64,
+    /// Number of tests run.
+    pub tests: usize,
+    /// R² in the fitted space (None when undefined).
+    pub r2: Option<f64>,
+    /// χ²/(n − p) when the weights are inverse variances of stated uncertainties.
+    pub reduced_chi2: Option<f64>,
+    /// Two-sided p-value of χ² against χ²(n − p).
+    pub chi2_p: Option<f64>,
+    pub runs: Option<RunsTest>,
+    pub spread: Option<SpreadTest>,
+    pub regions: Vec<RegionTest>,
+}
+
+impl Adequacy {
+    /// Not assessed (no residuals at the reported point).
+    pub fn not_computed(r2: f64) -> Adequacy {
+        Adequacy {
+            verdict: AdequacyVerdict::NotComputed,
+            reasons: Vec::new(),
+            alpha: ALPHA,
+            tests: 0,
+            r2: r2.is_finite().then_some(r2),
+            reduced_chi2: None,
+            chi2_p: None,
+            runs: None,
+            spread: None,
+            regions: Vec::new(),
+        }
+    }
+
+    /// The verdict in words (one line).
+    pub fn headline(&self) -> String {
+        wording::headline(self)
+    }
+
+    /// The reason codes, comma-separated ("" when none).
+    pub fn codes(&self) -> String {
+        let codes: Vec<&str> = self.reasons.iter().map(|r| r.code).collect();
+        codes.join(",")
+    }
+}
+
+/// What the tests need of a finished fit.
+pub struct FitResiduals<'a> {
+    /// rᵢ = model − data in the fitted space (value, relative deviation or logarithm).
+    pub residuals: &'a [f64],
+    /// √wᵢ.
+    pub sqrt_weight: &'a PerSample,
+    /// The model's values (the measured quantity).
+    pub fitted: &'a [f64],
+    pub geo: &'a Geometry,
+    pub channel: &'a Channels,
+    pub kind: ResidualKind,
+    /// Whether the weights are 1/σ_L² of stated uncertainties (then χ² is tested).
+    pub absolute_weights: bool,
+    /// Whether the loss is plain least squares (a robust loss expects outliers: no χ² test).
+    pub linear_loss: bool,
+    /// Whether the model has a diffuse (Lambertian) term.
+    pub has_diffuse: bool,
+    pub n_free: usize,
+    /// χ² = Σ wᵢ rᵢ².
+    pub chi2: f64,
+    /// R² in the fitted space.
+    pub r2: f64,
+}
+
+/// One test's outcome: its p-value and the reason it gives when it rejects.
+struct Outcome {
+    p: f64,
+    reason: Option<(&'static str, String)>,
+}
+
+/// The adequacy of a fit from its residuals (see the module doc).
+pub fn assess(fr: &FitResiduals) -> Adequacy {
+    let n = fr.residuals.len();
+    if n == 0 || fr.fitted.len() != n || fr.geo.len() != n {
+        return Adequacy::not_computed(fr.r2);
+    }
+    let mut out = Adequacy::not_computed(fr.r2);
+    let w = Weighted::of(fr);
+    let mut outcomes = Vec::new();
+    if let Some(o) = chi2_test(fr, &w, &mut out) {
+        outcomes.push(o);
+    }
+    let scans = scans(fr.geo, fr.channel, &w.used);
+    if let Some(o) = runs_test(&w, &scans, &mut out) {
+        outcomes.push(o);
+    }
+    if fr.kind == ResidualKind::Absolute {
+        if let Some(o) = spread_test(fr, &w, &scans, &mut out) {
+            outcomes.push(o);
+        }
+    }
+    outcomes.extend(region_tests(fr, &w, &mut out));
+    out.tests = outcomes.len();
+    if outcomes.is_empty() {
+        return out;
+    }
+    let level = ALPHA / outcomes.len() as f64;
+    for o in outcomes {
+        if let (true, Some((code, text))) = (o.p < level, o.reason) {
+            out.reasons.push(Reason { code, text, p: o.p });
+        }
+    }
+    // Weights that do not follow the noise come first: they also bend the fit, so the
+    // misfit reasons that remain may follow from them.
+    out.reasons
+        .sort_by_key(|r| (r.code != "proportional_noise", wording::is_misfit(r.code)));
+    out.verdict = if out.reasons.iter().any(|r| wording::is_misfit(r.code)) {
+        AdequacyVerdict::Misfit
+    } else if out.reasons.is_empty() {
+        AdequacyVerdict::Adequate
+    } else {
+        AdequacyVerdict::Noise
+    };
+    out
+}
+
+/// The weighted residuals zᵢ = √wᵢ rᵢ, and which samples the tests use: those with a
+/// finite zᵢ at least [`EXACT_FIT`] of the rms of z. A sample the model meets far more
+/// closely than the noise allows carries no noise to test (a value that underflowed to 0,
+/// or a stated σ_L that was capped); its sign would be the model's rounding.
+struct Weighted {
+    z: Vec<f64>,
+    used: Vec<bool>,
+    n_used: usize,
+}
+
+/// Weighted residuals below this fraction of their rms are exactly fitted: not tested.
+pub const EXACT_FIT: f64 = 1e-6;
+
+impl Weighted {
+    fn of(fr: &FitResiduals) -> Weighted {
+        let z: Vec<f64> = (0..fr.residuals.len())
+            .map(|i| fr.residuals[i] * fr.sqrt_weight[i])
+            .collect();
+        let finite: Vec<f64> = z.iter().copied().filter(|v| v.is_finite()).collect();
+        let rms = (finite.iter().map(|v| v * v).sum::<f64>() / finite.len().max(1) as f64).sqrt();
+        let used: Vec<bool> = z
+            .iter()
+            .map(|v| v.is_finite() && v.abs() > EXACT_FIT * rms)
+            .collect();
+        let n_used = used.iter().filter(|&&u| u).count();
+        Weighted { z, used, n_used }
+    }
+}
+
+/// The χ² test, when the weights are stated uncertainties under the linear loss (the
+/// degrees of freedom count the samples tested).
+fn chi2_test(fr: &FitResiduals, w: &Weighted, out: &mut Adequacy) -> Option<Outcome> {
+    let dof = w.n_used.checked_sub(fr.n_free).filter(|&d| d > 0)? as f64;
+    if !(fr.absolute_weights && fr.linear_loss && fr.chi2.is_finite()) {
+        return None;
+    }
+    let upper = chi2_sf(fr.chi2, dof);
+    let p = (2.0 * upper.min(1.0 - upper)).min(1.0);
+    let reduced = fr.chi2 / dof;
+    out.reduced_chi2 = Some(reduced);
+    out.chi2_p = Some(p);
+    Some(Outcome {
+        p,
+        reason: Some(wording::chi2(reduced, p, upper < 0.5)),
+    })
+}
+
+/// The samples grouped into scans (channel, θi, φ-plane), each ordered by signed θr.
+fn scans(geo: &Geometry, channel: &Channels, used: &[bool]) -> Vec<Vec<usize>> {
+    let mut groups: BTreeMap<(usize, i64, i64), Vec<(f64, usize)>> = BTreeMap::new();
+    for i in (0..geo.len()).filter(|&i| used[i]) {
+        let phi = geo.phi_r[i].to_degrees();
+        let plane = phi.rem_euclid(180.0);
+        let key = (
+            channel[i],
+            (geo.theta_i[i].to_degrees() * 100.0).round() as i64,
+            (plane * 100.0).round() as i64 % 18_000,
+        );
+        // The positive side of the plane is the azimuth `plane` itself.
+        let side = if (phi - plane).abs() < 90.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        groups
+            .entry(key)
+            .or_default()
+            .push((side * geo.theta_r[i], i));
+    }
+    groups
+        .into_values()
+        .filter(|g| g.len() > 1)
+        .map(|mut g| {
+            g.sort_by(|a, b| a.0.total_cmp(&b.0));
+            g.into_iter().map(|(_, i)| i).collect()
+        })
+        .collect()
+}
+
+/// The runs test of the residual signs along the scans.
+fn runs_test(w: &Weighted, scans: &[Vec<usize>], out: &mut Adequacy) -> Option<Outcome> {
+    let signs: Vec<Vec<bool>> = scans
+        .iter()
+        .map(|s| s.iter().map(|&i| w.z[i] > 0.0).collect())
+        .collect();
+    let runs = Runs::of(signs.iter().map(Vec::as_slice));
+    let z = runs.z();
+    if runs.signs < MIN_SAMPLES || !z.is_finite() {
+        return None;
+    }
+    let p = normal_sf(-z);
+    let test = RunsTest {
+        runs: runs.runs,
+        expected: runs.expected,
+        sd: runs.variance.sqrt(),
+        signs: runs.signs,
+        scans: signs.len(),
+        p,
+    };
+    let reason = wording::runs(&test);
+    out.runs = Some(test);
+    Some(Outcome {
+        p,
+        reason: Some(reason),
+    })
+}
+
+/// The spread of the weighted residuals against the fitted value: |second difference| of
+/// disjoint triples of scan neighbours against their mean fitted value.
+fn spread_test(
+    fr: &FitResiduals,
+    w: &Weighted,
+    scans: &[Vec<usize>],
+    out: &mut Adequacy,
+) -> Option<Outcome> {
+    let z = |i: usize| w.z[i];
+    let (mut spread, mut level) = (Vec::new(), Vec::new());
+    for s in scans {
+        for t in s.chunks_exact(3) {
+            let d = (z(t[1]) - 0.5 * (z(t[0]) + z(t[2]))).abs();
+            let f = (fr.fitted[t[0]] + fr.fitted[t[1]] + fr.fitted[t[2]]) / 3.0;
+            if d.is_finite() && f.is_finite() {
+                spread.push(d);
+                level.push(f);
+            }
+        }
+    }
+    let m = spread.len();
+    let rho = spearman(&level, &spread);
+    if m < MIN_SAMPLES || !rho.is_finite() {
+        return None;
+    }
+    let p = normal_sf(rho * ((m - 1) as f64).sqrt());
+    let (lx, ly): (Vec<f64>, Vec<f64>) = level
+        .iter()
+        .zip(&spread)
+        .filter(|(f, d)| **f > 0.0 && **d > 0.0)
+        .map(|(f, d)| (f.ln(), d.ln()))
+        .unzip();
+    let test = SpreadTest {
+        triples: m,
+        rho,
+        slope: slope(&lx, &ly),
+        p,
+    };
+    let reason = wording::spread(&test, fr.sqrt_weight);
+    out.spread = Some(test);
+    Some(Outcome {
+        p,
+        reason: Some(reason),
+    })
+}
+
+/// The sign tests of the grazing samples, the lobe's core and the samples far from the
+/// mirror direction (each where both it and the rest hold [`MIN_SAMPLES`] samples).
+fn region_tests(fr: &FitResiduals, w: &Weighted, out: &mut Adequacy) -> Vec<Outcome> {
+    let geo = fr.geo;
+    let n = geo.len();
+    let grazing: Vec<bool> = (0..n)
+        .map(|i| geo.theta_i[i].max(geo.theta_r[i]) > GRAZING_DEG.to_radians())
+        .collect();
+    let far: Vec<bool> = (0..n)
+        .map(|i| mirror_distance(geo, i) > FAR_DEG.to_radians())
+        .collect();
+    let peak = lobe_core(fr);
+    let mut outcomes = Vec::new();
+    for (region, members) in [("grazing", grazing), ("peak", peak), ("far", far)] {
+        let inside = members.iter().filter(|&&m| m).count();
+        if inside < MIN_SAMPLES || n - inside < MIN_SAMPLES {
+            continue;
+        }
+        let signs: Vec<bool> = (0..n)
+            .filter(|&i| members[i] && w.used[i])
+            .map(|i| w.z[i] < 0.0)
+            .collect();
+        if signs.len() < MIN_SAMPLES {
+            continue;
+        }
+        let above = signs.iter().filter(|&&a| a).count();
+        let test = RegionTest {
+            region,
+            n: signs.len(),
+            data_above: above,
+            p: sign_test(above, signs.len()),
+        };
+        outcomes.push(Outcome {
+            p: test.p,
+            reason: Some(wording::region(&test, fr.has_diffuse)),
+        });
+        out.regions.push(test);
+    }
+    outcomes
+}
+
+/// Angle between the view direction and the mirror direction of the incidence (radians):
+/// cos δ = cos θi cos θr + sin θi sin θr cos φr (φr = 0 forward).
+fn mirror_distance(geo: &Geometry, i: usize) -> f64 {
+    let (ti, tr, phi) = (geo.theta_i[i], geo.theta_r[i], geo.phi_r[i]);
+    (ti.cos() * tr.cos() + ti.sin() * tr.sin() * phi.cos())
+        .clamp(-1.0, 1.0)
+        .acos()
+}
+
+/// Whether each sample lies in the lobe's core: the model above half its largest value
+/// among the samples of the same channel and θi.
+fn lobe_core(fr: &FitResiduals) -> Vec<bool> {
+    let geo = fr.geo;
+    let key = |i: usize| {
+        (
+            fr.channel[i],
+            (geo.theta_i[i].to_degrees() * 100.0).round() as i64,
+        )
+    };
+    let mut peak: BTreeMap<(usize, i64), f64> = BTreeMap::new();
+    for i in 0..geo.len() {
+        let m = peak.entry(key(i)).or_insert(f64::NEG_INFINITY);
+        *m = m.max(fr.fitted[i]);
+    }
+    (0..geo.len())
+        .map(|i| {
+            let top = peak[&key(i)];
+            top > 0.0 && fr.fitted[i] >= 0.5 * top
+        })
+        .collect()
+}
