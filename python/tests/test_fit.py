@@ -67,6 +67,21 @@ def test_garnet_matches_cli_json(cli_json):
     assert r.L_fit.shape == (1439,) and r.residuals.shape == (1439,)
 
 
+def test_adequacy_flags_the_garnet_fresnel_rise_as_the_cli_does(cli_json):
+    cli = cli_json("--model", "kbs+lambert", "--quantity", "brdf", "--channel", "550nm",
+                   "--residual", "log", "--no-intervals", DATA / "cornell" / "garnet_red.astm")
+    d = goniofit.read(DATA / "cornell" / "garnet_red.astm", channel="550nm", radians=True)
+    r = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], model="kbs+lambert",
+                     quantity="brdf", residual="log", wavelength=d["wavelength"],
+                     wavelength_unit=d["wavelength_unit"], radians=True, intervals=False)
+    a = r.adequacy
+    assert a == cli["adequacy"]
+    assert a["verdict"] == "misfit" and a["alpha"] == 0.001
+    assert "grazing_above" in [x["code"] for x in a["reasons"]]
+    assert all(0.0 <= x["p"] < a["alpha"] / a["tests"] for x in a["reasons"])
+    assert r.converged  # a misfit is information, not a failure
+
+
 def test_csv_with_uncertainties_matches_cli_json(cli_json):
     path = DATA / "synthetic" / "kbs_hemisphere.csv"
     cli = cli_json("--wavelength", "1", path)

@@ -468,7 +468,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
 /// The adequacy verdict beside `converged`, its reasons below it, wrapped.
 fn adequacy_lines(s: &mut String, r: &FitResult) {
     let a = &r.adequacy;
-    for (k, line) in wrap(&a.headline(), 78).iter().enumerate() {
+    for (k, line) in wrap(&a.headline(), 80).iter().enumerate() {
         let lead = if k == 0 {
             "    adequacy        = "
         } else {

@@ -26,7 +26,7 @@ pub fn p_text(p: f64) -> String {
 /// The verdict in one line.
 pub(super) fn headline(a: &Adequacy) -> String {
     let tests = format!(
-        "{} test{} at family-wise α = {}",
+        "{} test{}, family-wise α = {}",
         a.tests,
         if a.tests == 1 { "" } else { "s" },
         ALPHA
