@@ -248,7 +248,7 @@ fn the_text_report_and_summary_csv_carry_the_verdict() {
         .unwrap();
     assert_eq!(out.status.code(), Some(0));
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert!(stdout.contains(" adequacy") && stdout.contains("misfit (runs"));
+    assert!(stdout.contains(" adequacy") && stdout.contains("misfit (runs,"));
     let summary = std::fs::read_to_string(&csv).unwrap();
     let header: Vec<&str> = summary.lines().next().unwrap().split(',').collect();
     assert!(

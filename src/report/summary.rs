@@ -155,18 +155,30 @@ pub fn table(rows: &[Row]) -> String {
     s
 }
 
-/// The adequacy verdict with its reason codes, as in the table: `misfit (runs, floor)`.
+/// The adequacy verdict with its reason codes, as in the table: `misfit (runs,floor)`; past
+/// [`ADEQUACY_WIDTH`] characters of codes the rest are counted (`+2`; the CSV has them all).
 fn adequacy_cell(r: &Row) -> String {
     if r.adequacy_reasons.is_empty() {
-        r.adequacy.name().to_string()
-    } else {
-        format!(
-            "{} ({})",
-            r.adequacy.name(),
-            r.adequacy_reasons.replace(',', ", ")
-        )
+        return r.adequacy.name().to_string();
     }
+    let mut shown = String::new();
+    let codes: Vec<&str> = r.adequacy_reasons.split(',').collect();
+    let mut k = 0;
+    while k < codes.len() && (k == 0 || shown.len() + 1 + codes[k].len() <= ADEQUACY_WIDTH) {
+        if k > 0 {
+            shown.push(',');
+        }
+        shown.push_str(codes[k]);
+        k += 1;
+    }
+    if k < codes.len() {
+        shown.push_str(&format!(" +{}", codes.len() - k));
+    }
+    format!("{} ({shown})", r.adequacy.name())
 }
+
+/// Characters of reason codes the table shows.
+const ADEQUACY_WIDTH: usize = 32;
 
 /// A value with its determination as two CSV fields (full precision; empty fields where
 /// the model has no such parameter).
