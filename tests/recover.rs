@@ -212,3 +212,29 @@ fn outliers_name_their_scenes_with_reproducing_commands() {
     }
     assert!(recover::outliers::table(&out).contains("CONFIDENTLY WRONG"));
 }
+
+#[test]
+fn an_interrupted_recovery_has_no_summary_and_counts_no_errors() {
+    // The run's flag set after the third finished scene: no scene starts after it, the
+    // run is a stop (no report whose interrupted scenes would count as errors).
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let stop = Stop::new(None, Some(flag.clone()));
+    let config = RecoverConfig {
+        scenes: 40,
+        seed: 11,
+        ..RecoverConfig::default()
+    };
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let report = recover::run(&config, &stop, &|r| {
+        assert!(r.error.is_none(), "{:?}", r.error);
+        if done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) == 2 {
+            flag.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    });
+    match report {
+        Err(goniofit::Error::Stopped(msg)) => assert!(msg.contains("of 40 scenes"), "{msg}"),
+        other => panic!("not a stop: {other:?}"),
+    }
+    let fitted = done.load(std::sync::atomic::Ordering::SeqCst);
+    assert!((3..40).contains(&fitted), "{fitted} scenes fitted");
+}

@@ -367,3 +367,35 @@ fn a_signal_at_any_moment_ends_every_command_cleanly() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+#[test]
+fn recover_ends_on_a_signal_with_130_and_no_summary() {
+    // 600 scenes take minutes: SIGINT, SIGTERM or SIGHUP after 0.8 s ends the run within
+    // the fits' next steps, with exit 130 (README), nothing on standard output (no summary
+    // counting the scenes being fitted as errors) and the count of scenes fitted.
+    for signal in ["INT", "TERM", "HUP"] {
+        let mut child = goniofit()
+            .args(["recover", "--scenes", "600", "--seed", "11", "--json"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(800));
+        let _ = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status();
+        let t0 = Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            assert!(t0.elapsed() < AFTER_SIGNAL, "SIG{signal}: still running");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "SIG{signal}: {err}");
+        assert!(out.stdout.is_empty(), "SIG{signal}: a summary was printed");
+        assert!(
+            err.contains("of 600 scenes were fitted: no summary"),
+            "SIG{signal}: {err}"
+        );
+    }
+}

@@ -130,8 +130,8 @@ fn evaluate<'py>(
         ..arrays::Columns::default()
     };
     let ds = arrays::dataset("arrays", &cols, radians, false).map_err(to_py_err)?;
-    let (values, jac) = run::guard(|| evaluated(m.as_ref(), &p, &ds, &lambda, quantity, jacobian))?
-        .map_err(to_py_err)?;
+    let geo = run::guard(|| Geometry::new(&ds.samples, &lambda, quantity))?.map_err(to_py_err)?;
+    let (values, jac) = run::evaluate_interruptible(py, m.as_ref(), &p, &geo, jacobian)?;
     let values = values.into_pyarray(py);
     match jac {
         None => Ok(values.into_any().unbind()),
@@ -143,35 +143,6 @@ fn evaluate<'py>(
             Ok((values, t).into_pyobject(py)?.into_any().unbind())
         }
     }
-}
-
-/// The model's values at `p` (and with `jacobian` its Jacobian, column-major n × p), every
-/// one finite: the CLI's `eval` check ([`model::domain::evaluate_checked`]), so that
-/// values the CLI refuses are refused here too.
-fn evaluated(
-    m: &dyn model::Model,
-    p: &[f64],
-    ds: &io::Dataset,
-    lambda: &[f64],
-    quantity: goniofit::geometry::Quantity,
-    jacobian: bool,
-) -> goniofit::Result<(Vec<f64>, Option<Vec<f64>>)> {
-    let geo = Geometry::new(&ds.samples, lambda, quantity)?;
-    let values = model::domain::evaluate_checked(m, p, &geo)?;
-    if !jacobian {
-        return Ok((values, None));
-    }
-    let mut again = vec![0.0; geo.len()];
-    let mut jac = vec![0.0; geo.len() * p.len()];
-    m.eval(&geo, p, &mut again, Some(&mut jac));
-    if jac.iter().any(|v| !v.is_finite()) {
-        return Err(goniofit::Error::Usage(format!(
-            "model {}: its Jacobian is not a finite number at {}: these parameters lie outside the range it can be evaluated in",
-            m.name(),
-            model::domain::describe_params(m, p)
-        )));
-    }
-    Ok((values, Some(jac)))
 }
 
 /// Read a measurement file (CSV, ASTM E1392, the NIST PTFE layout) into a dict of numpy

@@ -5,7 +5,9 @@
 use crate::convert::{to_py_err, to_py_err_in};
 use crate::options::FitOptions;
 use goniofit::fit::dataset::{fit_dataset, Outcome};
+use goniofit::geometry::Geometry;
 use goniofit::io::Dataset;
+use goniofit::model::{domain, Model};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -77,6 +79,77 @@ pub fn interruptible<T: Send>(
         (Err(payload), None) => Err(panic_error(payload)),
         (Ok(r), None) => r.map_err(to_py_err),
     }
+}
+
+/// Samples per block of [`evaluate_interruptible`]: a pending Ctrl-C is seen between
+/// blocks.
+const EVAL_BLOCK: usize = 4096;
+
+/// The model's values at `geo` and, with `jacobian`, its Jacobian (column-major, n × number
+/// of parameters), computed with the GIL released one block of [`EVAL_BLOCK`] samples at a
+/// time, so that Ctrl-C raises `KeyboardInterrupt` within one block's evaluation (every
+/// evaluation's work is bounded, see `goniofit::model::series`). A single block is
+/// evaluated directly (no thread to start), as its work is that bound. A value or
+/// derivative that is not finite (parameters beyond double precision) is the `ValueError`
+/// the command line's `eval` gives (exit 2 there).
+pub fn evaluate_interruptible(
+    py: Python<'_>,
+    model: &dyn Model,
+    p: &[f64],
+    geo: &Geometry,
+    jacobian: bool,
+) -> PyResult<(Vec<f64>, Option<Vec<f64>>)> {
+    let (values, jac) = evaluate_blocks(py, model, p, geo, jacobian)?;
+    let n = geo.len();
+    let check = |v: &[f64], what: &str| domain::check_finite(model, p, geo, v, what);
+    check(&values, "").map_err(to_py_err)?;
+    if let Some(j) = &jac {
+        for (column, spec) in j.chunks_exact(n.max(1)).zip(model.params()) {
+            check(column, &format!("'s derivative by {}", spec.name)).map_err(to_py_err)?;
+        }
+    }
+    Ok((values, jac))
+}
+
+/// The evaluation of [`evaluate_interruptible`], unchecked.
+fn evaluate_blocks(
+    py: Python<'_>,
+    model: &dyn Model,
+    p: &[f64],
+    geo: &Geometry,
+    jacobian: bool,
+) -> PyResult<(Vec<f64>, Option<Vec<f64>>)> {
+    let (n, k) = (geo.len(), p.len());
+    if n <= EVAL_BLOCK {
+        return guard(|| {
+            let mut values = vec![0.0; n];
+            let mut jac = jacobian.then(|| vec![0.0; n * k]);
+            model.eval(geo, p, &mut values, jac.as_deref_mut());
+            (values, jac)
+        });
+    }
+    let flag = Arc::new(AtomicBool::new(false));
+    let stop = flag.clone();
+    interruptible(py, Some(flag), Some(1), move || {
+        let mut values = vec![0.0; n];
+        let mut jac = jacobian.then(|| vec![0.0; n * k]);
+        for start in (0..n).step_by(EVAL_BLOCK) {
+            if stop.load(Ordering::SeqCst) {
+                return Err(goniofit::Error::Stopped("interrupted".into()));
+            }
+            let end = (start + EVAL_BLOCK).min(n);
+            let len = end - start;
+            let mut block_jac = jacobian.then(|| vec![0.0; len * k]);
+            let block = geo.slice(start..end);
+            model.eval(&block, p, &mut values[start..end], block_jac.as_deref_mut());
+            if let (Some(all), Some(part)) = (jac.as_mut(), block_jac) {
+                for (c, column) in part.chunks_exact(len).enumerate() {
+                    all[c * n + start..c * n + end].copy_from_slice(column);
+                }
+            }
+        }
+        Ok((values, jac))
+    })
 }
 
 /// The datasets of group codes `0..labels.len()` (`codes[i]`: the group of sample i),

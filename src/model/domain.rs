@@ -55,14 +55,28 @@ pub fn evaluate_checked(model: &dyn Model, params: &[f64], geo: &Geometry) -> Re
     }
     let mut out = vec![0.0; geo.len()];
     model.eval(geo, params, &mut out, None);
-    match out.iter().position(|v| !v.is_finite()) {
-        None => Ok(out),
+    check_finite(model, params, geo, &out, "")?;
+    Ok(out)
+}
+
+/// Ok when every entry of `values` (one per sample of `geo`: the model's values, or with
+/// `what` = "'s derivative by NAME" a column of its Jacobian) is finite; otherwise the
+/// [`Error::Usage`] of [`evaluate_checked`] for the first sample that is not.
+pub fn check_finite(
+    model: &dyn Model,
+    params: &[f64],
+    geo: &Geometry,
+    values: &[f64],
+    what: &str,
+) -> Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
         Some(i) => {
             Err(Error::Usage(format!(
-                "model {} is not a finite number ({}) at theta_i = {}°, theta_r = {}°, phi_r = {}°, wavelength {} for {}: \
+                "model {}{what} is not a finite number ({}) at theta_i = {}°, theta_r = {}°, phi_r = {}°, wavelength {} for {}: \
                  these parameters lie outside the range the model can be evaluated in (double precision overflows)",
                 model.name(),
-                if out[i].is_nan() {
+                if values[i].is_nan() {
                     "undefined"
                 } else {
                     "it overflows"

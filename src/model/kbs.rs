@@ -147,8 +147,8 @@ impl Kbs {
         let inc = s * unit;
         let mut value = inc;
         let mut d_scale = unit;
-        let mut d_sigma = inc * (2.0 + 2.0 * g * q.d_g) / sigma;
-        let d_corr = inc * (2.0 + 2.0 * a * q.d_a) / corr;
+        let mut d_sigma = scaled(inc, 2.0 + 2.0 * g * q.d_g, sigma);
+        let d_corr = scaled(inc, 2.0 + 2.0 * a * q.d_a, corr);
         if let Some((x, y)) = self.opts.patch {
             let k = 2.0 * PI / lambda;
             let (vx, vy) = geo.v_xy(i);
@@ -165,6 +165,18 @@ impl Kbs {
             d_corr,
             d_scale,
         }
+    }
+}
+
+/// inc · `factor` / x: a derivative of the radiance `inc` from its log-derivative factor;
+/// 0 where the radiance is 0 and the factor is not finite (at g = ∞ or a = ∞, the rough and
+/// flat limits of an extreme parameter, g ∂lnQ/∂g or a ∂lnQ/∂a is ∞ · 0).
+#[inline]
+fn scaled(inc: f64, factor: f64, x: f64) -> f64 {
+    if inc == 0.0 && !factor.is_finite() {
+        0.0
+    } else {
+        inc * factor / x
     }
 }
 

@@ -141,3 +141,28 @@ impl Stop {
         self.requested().is_some()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_part_stops_with_its_whole_and_at_its_own_deadline() {
+        let flag = Arc::new(AtomicBool::new(false));
+        let whole = Stop::without_handler(None, Some(flag.clone()));
+        let part = whole.part(Some(Duration::from_millis(30)));
+        let unlimited = whole.part(None);
+        // A limit past the clock's range is no limit (no overflow).
+        let huge = whole.part(Some(Duration::from_secs(u64::MAX)));
+        assert_eq!(part.requested(), None);
+        std::thread::sleep(Duration::from_millis(40));
+        assert_eq!(part.requested(), Some(Termination::Timeout));
+        for other in [&whole, &unlimited, &huge] {
+            assert_eq!(other.requested(), None);
+        }
+        flag.store(true, Ordering::SeqCst);
+        for s in [&whole, &part, &unlimited, &huge] {
+            assert_eq!(s.requested(), Some(Termination::Interrupted));
+        }
+    }
+}

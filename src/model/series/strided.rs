@@ -38,7 +38,8 @@ pub(super) const STRIDE_MIN: f64 = 12.0;
 /// exponent `a`, or `None` where it would be below [`STRIDE_MIN`].
 #[inline]
 pub(super) fn stride(m0: f64, a: f64) -> Option<f64> {
-    let curvature = 1.0 / (m0 + 0.5) - 1.0 / (m0 * m0) + 2.0 * a / (m0 * m0 * m0);
+    // 2 (a/m0³), not (2a)/m0³: the same bits, and no ∞/∞ at a near f64::MAX.
+    let curvature = 1.0 / (m0 + 0.5) - 1.0 / (m0 * m0) + 2.0 * (a / (m0 * m0 * m0));
     let h = (1.0 / (WIDTH_PER_STRIDE * curvature.sqrt())).floor();
     (h >= STRIDE_MIN).then_some(h)
 }
