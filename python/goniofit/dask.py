@@ -138,6 +138,8 @@ def _meta(ddf: Any, keys: List[str], fit_options: Dict[str, Any]) -> Any:
         "converged": [True],
         "termination": ["converged"],
         "verdict": ["full"],
+        "adequacy": ["adequate"],
+        "adequacy_reasons": [""],
         "cost": [0.0],
         "reduced_chi2": [0.0],
         "r2": [0.0],
