@@ -81,8 +81,72 @@ pub fn solve(
     if problem.kind() != ResidualKind::Log {
         return exact_cost(problem, basis, p, linear);
     }
-    // Log residuals: refine the linearised solve on the log residual itself.
+    // Log residuals: refine the best of the linearised solve and the log-space starts on
+    // the log residual itself.
+    log_start(problem, basis, &prep.log_y, p, linear);
     refine_log(problem, basis, &prep.log_y, p, linear)
+}
+
+/// Replace the amplitudes of `p` by the lowest-cost start of the log residual among them
+/// and, for each column c, the amplitude that alone fits the data best in log space,
+/// ln p_c = Σ wᵢ (ln max(yᵢ, floor) − ln column_ci) / Σ wᵢ over the samples where the column
+/// is positive, and the same over those whose value is above the floor (the others at 10⁻³
+/// of it; samples at the floor say nothing of a model value below it, and where weights
+/// grow as the values fall they would set the mean alone). The linearised solve weights each sample by
+/// 1/max(|y|, floor), so where the data's dark samples dominate it can put every model
+/// value below the floor, where the log residual is flat and no solve moves (a Lambertian
+/// term on a lobe-only scan; a wide lobe on a Cornell paint).
+fn log_start(
+    problem: &FitProblem,
+    basis: &PointBasis,
+    ly: &[f64],
+    p: &mut [f64],
+    linear: &[usize],
+) {
+    let n = basis.rest.len();
+    let sw = problem.sqrt_weight();
+    let floor = problem.floor;
+    let cost = |q: &[f64]| -> f64 {
+        let c: f64 = (0..n)
+            .map(|i| {
+                let r = sw[i] * (value_at(basis, q, linear, i).max(floor).ln() - ly[i]);
+                r * r
+            })
+            .sum();
+        if c.is_finite() {
+            c
+        } else {
+            f64::INFINITY
+        }
+    };
+    let mut best = cost(p);
+    let above = floor.ln();
+    for (c, &k) in linear.iter().flat_map(|k| [k, k]).enumerate() {
+        let (c, lit_only) = (c / 2, c % 2 == 1);
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..n {
+            let col = basis.columns[c * n + i];
+            if col > 0.0 && col.is_finite() && (!lit_only || ly[i] > above) {
+                let w = sw[i] * sw[i];
+                num += w * (ly[i] - col.ln());
+                den += w;
+            }
+        }
+        let amp = (num / den).exp();
+        if !(den > 0.0 && amp.is_normal()) {
+            continue;
+        }
+        let mut q = p.to_vec();
+        for &other in linear {
+            q[other] = 1e-3 * amp;
+        }
+        q[k] = amp;
+        let qc = cost(&q);
+        if qc < best {
+            best = qc;
+            p.copy_from_slice(&q);
+        }
+    }
 }
 
 /// Normal equations AᵀA x = Aᵀb of a few unknowns, accumulated one row of A at a time.
