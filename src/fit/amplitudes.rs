@@ -76,7 +76,7 @@ pub fn solve(
         return exact_cost(problem, basis, p, linear);
     }
     let coef = linearised(problem, basis, &prep.d)?;
-    set(p, linear, &coef, &problem.layout);
+    set(p, linear, &coef, &problem.layout, basis);
 
     if problem.kind() != ResidualKind::Log {
         return exact_cost(problem, basis, p, linear);
@@ -144,6 +144,55 @@ fn log_start(
         let qc = cost(&q);
         if qc < best {
             best = qc;
+            p.copy_from_slice(&q);
+        }
+    }
+    leave_plateau(basis, p, linear, floor, &cost, best);
+}
+
+/// Steps per decade of [`leave_plateau`]'s scan in its first decade above the floor (a
+/// factor 1.037: with weights that follow the values, 1/σ_L² with σ_L ∝ L, the valley just
+/// above the floor can be a few per cent wide).
+pub const PLATEAU_STEPS_NEAR: usize = 64;
+
+/// Steps per decade of [`leave_plateau`]'s scan beyond its first decade.
+pub const PLATEAU_STEPS_FAR: usize = 16;
+
+/// Decades above the floor [`leave_plateau`] scans.
+pub const PLATEAU_DECADES: usize = 12;
+
+/// When every model value at `p` lies at or below the floor (the log residual is flat
+/// there: no solve moves), scale the amplitudes together from where the largest value
+/// reaches the floor up [`PLATEAU_DECADES`] decades, and keep the lowest cost of the scan
+/// if it is below `best` (a Lambertian term on a lobe-only file: its optimum lies just
+/// above the floor, in a valley narrower than a Gauss–Newton step from the data's mean).
+fn leave_plateau(
+    basis: &PointBasis,
+    p: &mut [f64],
+    linear: &[usize],
+    floor: f64,
+    cost: &dyn Fn(&[f64]) -> f64,
+    mut best: f64,
+) {
+    let n = basis.rest.len();
+    let peak = (0..n)
+        .map(|i| value_at(basis, p, linear, i))
+        .filter(|v| v.is_finite())
+        .fold(f64::NEG_INFINITY, f64::max);
+    if !(peak > 0.0 && peak <= floor) || (0..n).any(|i| basis.rest[i] > floor) {
+        return;
+    }
+    let base = p.to_vec();
+    let near = (0..PLATEAU_STEPS_NEAR).map(|j| j as f64 / PLATEAU_STEPS_NEAR as f64);
+    let far = (0..=(PLATEAU_DECADES - 1) * PLATEAU_STEPS_FAR)
+        .map(|j| 1.0 + j as f64 / PLATEAU_STEPS_FAR as f64);
+    for decades in near.chain(far) {
+        let t = floor / peak * 10f64.powf(decades);
+        let mut q = base.clone();
+        linear.iter().for_each(|&k| q[k] *= t);
+        let c = cost(&q);
+        if c < best {
+            best = c;
             p.copy_from_slice(&q);
         }
     }
@@ -308,19 +357,56 @@ fn nnls_unit(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
     Some(coef)
 }
 
-/// Write amplitudes into `p`, each at least 10⁻³ of the largest (10⁻³ of its unit, the
-/// data's scale, when all are 0: see [`super::layout::ParamLayout::set_amplitude_units`]).
-fn set(p: &mut [f64], linear: &[usize], coef: &[f64], layout: &super::layout::ParamLayout) {
-    let largest = coef.iter().fold(0.0f64, |m, v| m.max(*v));
+/// Set the amplitudes `linear` of `p` to the solve's `coef`. One at its bound 0 (the solve
+/// found no use for its column) is given a value whose column adds at most [`AT_BOUND`] of
+/// the model's largest value, so the solver's transform has a gradient there while the cost
+/// stays that of the solve (a rule relative to the largest amplitude would not: a Lambertian
+/// scale and a narrow lobe's strength can differ by 10⁵ at the same brightness).
+fn set(
+    p: &mut [f64],
+    linear: &[usize],
+    coef: &[f64],
+    layout: &super::layout::ParamLayout,
+    basis: &PointBasis,
+) {
+    let n = basis.rest.len();
+    let col_max = |c: usize| {
+        basis.columns[c * n..(c + 1) * n]
+            .iter()
+            .fold(
+                0.0f64,
+                |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
+            )
+    };
+    let peak = (0..n)
+        .map(|i| {
+            coef.iter()
+                .enumerate()
+                .fold(basis.rest[i], |acc, (c, a)| {
+                    acc + a.max(0.0) * basis.columns[c * n + i]
+                })
+                .abs()
+        })
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max);
     for (c, &k) in linear.iter().enumerate() {
-        let tiny = if largest > 0.0 {
-            1e-3 * largest
+        let tiny = AT_BOUND * peak / col_max(c);
+        let tiny = if tiny.is_normal() {
+            tiny
         } else {
             1e-3 * layout.params[k].transform.unit()
         };
-        p[k] = if coef[c] > tiny { coef[c] } else { tiny };
+        p[k] = if coef[c] > 0.0 && coef[c].is_finite() {
+            coef[c]
+        } else {
+            tiny
+        };
     }
 }
+
+/// Largest share of the model's peak value the column of an amplitude at its bound 0 adds
+/// after [`set`] (a start for the solver, invisible in the cost).
+pub const AT_BOUND: f64 = 1e-9;
 
 /// The model value of sample `i` at `p` from the basis.
 #[inline]

@@ -163,7 +163,7 @@ pub(super) fn starting_point(
         .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Rough)))
         .transpose()?;
     let bar = search_bar(config.lm.progress);
-    let sub = init::search_input(input, init::REFINE_SAMPLES);
+    let sub = init::search_input(input, init::search_samples(model));
     let exact = FitProblem::new(
         refine_model.as_ref(),
         layout.clone(),
@@ -178,7 +178,7 @@ pub(super) fn starting_point(
         sub,
         ridge_given: ridge.is_some_and(|(ks, kt)| given[ks].is_some() || given[kt].is_some()),
     };
-    // The grid runs on (at most GRID_SAMPLES of) the refinement's subsample.
+    // The grid runs on (for KBS, at most GRID_SAMPLES of) the refinement's subsample.
     let stop = config.lm.stop.as_ref();
     let candidates = init::initial_values(
         &refiners.exact,
