@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Time and peak memory of one big fit (issue 15): a KBS hemisphere scan of ROWS rows
+# Time and peak memory of one big fit: a KBS hemisphere scan of ROWS rows
 # (σ = 0.25 λ, T = 2.5 λ, 1 % noise, `goniofit synth`, seed 1) fitted with
 # `goniofit fit --model kbs --wavelength 1 --json`, measured with `/usr/bin/time -v`
 # (wall time, peak resident set size, bytes per row = peak RSS / rows).

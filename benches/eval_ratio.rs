@@ -7,7 +7,7 @@
 //!
 //! `cargo bench --bench eval_ratio` prints, per geometry and regime, the median time per
 //! sample of each mode and the median and quartiles of the per-pair ratio, for values and
-//! with the Jacobian. The target of issue #2 is auto/rough ≤ 4 in every regime.
+//! with the Jacobian. The target is auto/rough ≤ 4 in every regime.
 
 mod common;
 

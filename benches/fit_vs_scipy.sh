@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Speed benchmark for `goniofit fit` (issue #4) against scipy.optimize.least_squares(method='lm')
+# Speed benchmark for `goniofit fit` against scipy.optimize.least_squares(method='lm')
 # on a vectorised numpy KBS model (benches/scipy_kbs_fit.py), measured side by side in one run.
 #
 # Data: a 10k-sample KBS hemisphere scan, sigma = 0.25 lambda, T = 2.5 lambda, 1 % relative

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Cost of the profile-likelihood intervals (issue 13) on every channel of the Cornell
+# Cost of the profile-likelihood intervals on every channel of the Cornell
 # paints: `fit --model kbs+lambert --quantity brdf --residual log --threads 1 --json
 # --channel C`, one process per channel, with intervals and with --no-intervals. With
 # BASE=path/to/old/goniofit the baseline binary runs too, alternated channel by channel

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Peer baseline for the `goniofit fit` speed benchmark (issue #4).
+"""Peer baseline for the `goniofit fit` speed benchmark (benches/fit_vs_scipy.sh).
 
 What a lab writes today: a vectorised numpy KBS model (the full series of eq. 37, summed in
 log space so it does not overflow) fitted with scipy.optimize.least_squares(method='lm')

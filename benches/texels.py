@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The texel batch of issue 15: many small in-plane scans in one CSV with a `group` column.
+"""The texel batch: many small in-plane scans in one CSV with a `group` column.
 
 A spatially varying surface measured one texel at a time: every texel is a 66-sample
 in-plane scan (θi = 30°, 60°; signed θr = −80°..80° in 5° steps, written as θr ≥ 0 with

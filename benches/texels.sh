@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Throughput of many small fits (issue 15): the texel batch of benches/texels.py (2,000
+# Throughput of many small fits: the texel batch of benches/texels.py (2,000
 # in-plane KBS scans of 66 samples in one CSV with a `group` column, 1 % noise, seeded),
 # fitted with `goniofit fit --by-group --model kbs --wavelength 1 --json`.
 #

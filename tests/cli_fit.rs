@@ -264,10 +264,10 @@ fn rough_data_reports_undetermined_sigma() {
 }
 
 /// Every channel of both rough Cornell paints either converges or says `degenerate` with
-/// its reason (`--by-group`; exit 3 when any is degenerate). The 580 nm
-/// channel of garnet red once started outside the model's domain: its refined rough-valley
-/// candidate drifted to σ ≈ 2.6e2 λ, where g exceeded the fit's limit on samples outside
-/// the refinement's subsample; the fit now takes the next start inside the domain.
+/// its reason (`--by-group`; exit 3 when any is degenerate). In the 580 nm channel of
+/// garnet red the refined rough-valley candidate drifts to σ ≈ 2.6e2 λ, where g exceeds the
+/// fit's limit on samples outside the refinement's subsample, so that start lies outside
+/// the model's domain; the fit takes the next start inside the domain.
 #[test]
 fn every_cornell_channel_converges() {
     let out = goniofit()

@@ -1,4 +1,4 @@
-//! What a fit report states (issue 13): units, the whole setting in JSON, `plot` from any
+//! What a fit report states: units, the whole setting in JSON, `plot` from any
 //! directory, `--channel` on CSV input, the ASTM file's own quantity, weights transformed
 //! with relative/log residuals, the floor's count, `--by-group` on ASTM files, and the
 //! smaller help/usage texts.

@@ -34,9 +34,9 @@ fn cornell_log_fit(model: &str, channel: &str, paint: &str) -> (Option<i32>, ser
 }
 
 // The Gaussian lobe narrower than the sampling: tests/specular_width.rs (garnet red 550 nm,
-// once w → 1e-102, now ends at its optimum since w is bounded below by the sampling).
+// ends at its optimum since w is bounded below by the sampling).
 
-/// krylon blue, 640 nm: the default start runs to T → 0 (issue 12): degenerate, with the
+/// krylon blue, 640 nm: the default start runs to T → 0: degenerate, with the
 /// reason naming the lobe's correlation length or T/σ.
 #[test]
 fn kbs_lobe_flattened_to_the_diffuse_term_is_degenerate() {

@@ -598,7 +598,7 @@ fn a_paint_fit_linear_is_not_crushed_by_its_grazing_points() {
             .any(|t| t.starts_with("4 measured above the top (up to 28.1")),
         "{lin:?}"
     );
-    // The y ticks stop below 2 sr⁻¹ (they used to run to 30).
+    // The y ticks stop below 2 sr⁻¹ (not up to the 28.1 of the highest measured sample).
     let ticks: Vec<f64> = lin.iter().filter_map(|t| t.parse().ok()).collect();
     assert!(ticks.contains(&1.5) && !ticks.contains(&25.0), "{ticks:?}");
     // Every picture states T/σ, what is not determined and that the fit converged.

@@ -52,8 +52,7 @@ fn seeded_recovery_is_calibrated_and_accurate() {
     );
     // 1 % noise on hundreds of samples: determined quantities within a few percent
     // (median well below 1 %). Quantities scored in fewer than 3 scenes have no meaningful
-    // median (seed 11 scene 13 is a fit that ran off to σ ~ 1e53 and was called rough: see
-    // the lead's note on issue #6).
+    // median (seed 11 scene 13 is a fit that runs off to σ ~ 1e53 and is called rough).
     for r in &report.regimes {
         for q in r.quantities.iter().filter(|q| q.n >= 3) {
             assert!(
@@ -100,12 +99,12 @@ fn scoring_follows_the_verdict() {
     }
 }
 
-/// The scenes issue #17 found converging at a wrong optimum (rough lobes with T/σ ≈ 2–3 on
-/// the sparse layout fitted as a smooth surface, σ ≈ 1e-5 and T ≈ 1 against σ ≈ 4–10 and
-/// T ≈ 12–24; 31337/109 an intermediate lobe ending at T = 0.875 against 2.39): each now
-/// converges at the truth's optimum, every determined quantity within 5 % of its truth.
+/// Scenes with a wrong optimum a fit can end at (rough lobes with T/σ ≈ 2–3 on the sparse
+/// layout also fit a smooth surface at σ ≈ 1e-5 and T ≈ 1 against σ ≈ 4–10 and T ≈ 12–24;
+/// 31337/109, an intermediate lobe, has one at T = 0.875 against 2.39): each converges at
+/// the truth's optimum, every determined quantity within 5 % of its truth.
 #[test]
-fn issue_17_wrong_optimum_scenes_converge_at_the_truth() {
+fn scenes_with_a_wrong_optimum_converge_at_the_truth() {
     let cases: [(u64, &[usize]); 3] = [
         (4242, &[74, 82, 138]),
         (777, &[18]),
@@ -134,12 +133,13 @@ fn issue_17_wrong_optimum_scenes_converge_at_the_truth() {
     }
 }
 
-/// Calibration where issue #17 found the error bars too narrow, by repeating one scene
-/// with fresh noise: (value − truth)/se should be N(0, 1), so its standard deviation over
-/// 40 draws lies within [0.7, 1.35] (a 40-draw sd of a unit normal is 1 ± 0.11). Before the
-/// fixes: the dense smooth scene 4242/28 gave 1.8 (its weight floor left 1387 of 2160
-/// samples without χ², s² ≈ 0.36), the smooth-verdict scene 4242/36 gave 2.0 for T and 2.4
-/// for the amplitude (the reduced problem's covariance was conditional on σ).
+/// Calibration of the error bars of smooth scenes, by repeating one scene with fresh noise:
+/// (value − truth)/se should be N(0, 1), so its standard deviation over 40 draws lies within
+/// [0.7, 1.35] (a 40-draw sd of a unit normal is 1 ± 0.11). The dense smooth scene 4242/28
+/// would give 1.8 with a weight floor of 1e-9 (1387 of 2160 samples without χ², s² ≈ 0.36;
+/// see [`recover::SIGMA_L_FLOOR`]), the smooth-verdict scene 4242/36 would give 2.0 for T
+/// and 2.4 for the amplitude with the reduced problem's own covariance, which is conditional
+/// on σ (see `fit/reduce.rs`).
 #[test]
 fn smooth_scenes_error_bars_match_the_scatter_over_noise_draws() {
     let scenes = recover::draw_scenes(150, 4242, 0.01);

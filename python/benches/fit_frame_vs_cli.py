@@ -4,7 +4,7 @@ run, the tools interleaved run by run.
 
     python python/benches/fit_frame_vs_cli.py [N=2000] [repeats=7]
 
-The scans are issue 15's texel batch (`benches/texels.py gen`: N in-plane KBS scans of 66
+The scans are the texel batch of `benches/texels.py gen` (N in-plane KBS scans of 66
 samples from `goniofit synth`, 1 % noise); the CSV is read into pandas exactly (Python's
 float() of each field), so both tools fit the same numbers (checked: every
 group's cost agrees). Needs the package installed (tests/all.sh's virtual environment has
@@ -36,7 +36,7 @@ REPO = HERE.parents[1]
 
 
 def texel_batch(exe, n, tmp):
-    """Issue 15's texel CSV of `n` scans (benches/texels.py gen) and it as a DataFrame."""
+    """The texel CSV of `n` scans (benches/texels.py gen) and it as a DataFrame."""
     import pandas as pd
 
     path = tmp / "texels.csv"

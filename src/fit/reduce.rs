@@ -5,8 +5,8 @@
 //! That covariance is the *marginal* one of the combinations, σ free
 //! ([`marginal_uncertainty`]): the reduced problem's own covariance is conditional on σ
 //! being exactly its estimate, and where the data still weakly tie σ to T (the smooth
-//! regime's O(g) corrections) it is too narrow (±2 s.e. covered 0.73 of smooth-verdict
-//! truths in `goniofit recover`, issue #17).
+//! regime's O(g) corrections) it is too narrow (its ±2 s.e. cover 0.73 of smooth-verdict
+//! truths in `goniofit recover`).
 
 use super::config::FitConfig;
 use super::identify::{log_covariance, uncertainty_of, Identified, RANK_THRESHOLD};

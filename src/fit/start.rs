@@ -398,7 +398,7 @@ pub const RIDGE_STEPS: usize = 12;
 /// are wider than the Gaussian limit), and weights that follow the values (relative noise,
 /// 1/σ_L² with σ_L ∝ L) count those samples as much as the peak. The grid's σ axis ends at
 /// 4λ, so a lobe of σ ≈ 8λ would otherwise be judged at a σ where the exact cost is 10⁵
-/// times the truth's, and lose to a smooth-looking optimum (recovery issue #17). The slide
+/// times the truth's, and lose to a smooth-looking optimum (as in `goniofit recover`). The slide
 /// steps by [`RIDGE_STEP`] while the exact cost falls, the point stays `inside` the domain
 /// and at most [`RIDGE_STEPS`] times, and no step is started after a stop request. A σ or
 /// T the user gave (`--init`) or held (`--fix`) is not slid.

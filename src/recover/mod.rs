@@ -285,10 +285,10 @@ pub fn draw_scenes(n: usize, seed: u64, noise: f64) -> Vec<Scene> {
 /// Smallest σ_L a scene's weights use, relative to its largest σ_L: it only keeps the
 /// weight of a sample whose value underflowed to 0 finite. Every other sample is weighted by
 /// its true 1/σ_L², so that its standardized residual is N(0, 1) and χ²/(n − p) estimates 1:
-/// a floor of 1e-9 (before issue #17) cut the weight of every sample of a narrow relative-noise
-/// lobe below 1e-9 of its peak (1387 of 2160 samples of a smooth scene), so those samples
-/// added nothing to χ² yet counted in n − p, the fit's s² came out near 0.36 and its
-/// standard errors 0.6 times too small (±2 s.e. covered 0.84 of smooth truths).
+/// a floor of 1e-9 would cut the weight of every sample of a narrow relative-noise lobe
+/// below 1e-9 of its peak (1387 of 2160 samples of a smooth scene), so those samples would
+/// add nothing to χ² yet count in n − p, the fit's s² would come out near 0.36 and its
+/// standard errors 0.6 times too small (±2 s.e. would cover 0.84 of smooth truths).
 pub const SIGMA_L_FLOOR: f64 = 1e-100;
 
 /// The fit's data for a scene, with weights 1/σ_L² (σ_L floored at [`SIGMA_L_FLOOR`] of its

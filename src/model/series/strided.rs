@@ -30,7 +30,7 @@ const WIDTH_PER_STRIDE: f64 = 1.5;
 
 /// Smallest stride `auto` uses: below it the plain sum is as fast (`cargo bench --bench
 /// off_specular`: at g = 200, a = 3.5 g^1.5, h = 8, the stride took 1.37 µs and the plain
-/// sum 1.15; at g = 400, h = 12, 1.28 against 1.53; against the plain sum as it is now,
+/// sum 1.15; at g = 400, h = 12, 1.28 against 1.53; against the plain sum,
 /// 7× faster at g = 1e4 and 60× at 7e5).
 pub(super) const STRIDE_MIN: f64 = 12.0;
 
