@@ -14,8 +14,9 @@ use std::collections::HashMap;
 const TOL: f64 = 1e-4;
 
 /// (dataset, model, residual): every model × residual kind once, on the smallest files
-/// (synthetic scans, CUReT surfaces of 205 samples, the PTFE 633 nm channel).
-const SLICE: [(&str, &str, &str); 17] = [
+/// (synthetic scans, CUReT surfaces of 205 samples, the PTFE 633 nm channel), and a case of
+/// each kind of valley the start search must not miss.
+const SLICE: [(&str, &str, &str); 21] = [
     ("synthetic/kbs_inplane", "kbs", "absolute"),
     ("curet/8", "kbs", "relative"),
     ("curet/8", "kbs", "log"),
@@ -34,6 +35,14 @@ const SLICE: [(&str, &str, &str); 17] = [
     ("nist-ptfe/633nm", "lambert", "log"),
     // Its best point is the Lambertian term alone: the lobe's amplitude B at 0.
     ("synthetic/kbs_hemisphere", "lambert-specular", "relative"),
+    // A Lambertian term whose log-residual optimum lies just above the floor.
+    ("synthetic/kbs_hemisphere", "lambert", "log"),
+    // A broad lobe that a subsample of the file ranks below a narrow one.
+    ("cornell/garnet_red/650nm", "lambert-specular", "log"),
+    // The smooth valley (σ → 0 at fixed sσ²), below a rougher one.
+    ("cornell/acryl_blue/550nm", "kbs", "relative"),
+    // A log-residual cost rugged on the scale of a per cent.
+    ("cornell/acryl_blue/650nm", "kbs-rough", "log"),
 ];
 
 /// The reference table's rows by (dataset, model, residual).

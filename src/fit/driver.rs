@@ -121,7 +121,8 @@ fn solve_checked(
     let layout = &problem.layout;
     if !validate::at_kbs_edge(layout, input, &first.values) {
         let inside = |p: &[f64]| !validate::at_kbs_edge(layout, input, p);
-        return best_of_rivals(first, &start.rivals, &solve, &inside, config);
+        let best = best_of_rivals(first, &start.rivals, &solve, &inside, config);
+        return leave_small_basins(problem, best, &solve, &inside, config);
     }
     let mut runs = vec![first];
     let mut cut = false;
@@ -186,6 +187,83 @@ fn best_of_rivals(
         mark_cut(&mut kept, config);
     }
     kept
+}
+
+/// Relative steps of each nonlinear parameter at which [`leave_small_basins`] probes a
+/// converged log-residual fit (each way).
+pub const PROBE_STEPS: [f64; 4] = [0.005, 0.02, 0.07, 0.25];
+
+/// Most solves [`leave_small_basins`] starts from probes.
+pub const PROBE_ROUNDS: usize = 4;
+
+/// Relative cost by which a probe must lie below the converged point to be solved from.
+pub const PROBE_GAIN: f64 = 1e-7;
+
+/// A converged fit with log residuals, probed: each free nonlinear parameter (σ, T, w) is
+/// moved by ±[`PROBE_STEPS`] with the others held, and where a probe inside the domain has
+/// a lower cost (by [`PROBE_GAIN`]), the fit is solved again from the lowest probe (at most
+/// [`PROBE_ROUNDS`] times; the lower converged run is kept). Samples at the floor make the
+/// log-residual cost of a real file rugged on the scale of a per cent: a Cornell paint's
+/// kbs-rough fit converged in a dip 0.2 % wide at T = 5225 nm with the cost falling by 0.4 %
+/// to T = 4480 nm. The other residual kinds are smooth and left as they are.
+fn leave_small_basins(
+    problem: &FitProblem,
+    run: solve::Run,
+    solve: &dyn Fn(&[f64]) -> solve::Run,
+    inside: &dyn Fn(&[f64]) -> bool,
+    config: &FitConfig,
+) -> solve::Run {
+    if problem.kind() != super::problem::ResidualKind::Log || !run.lm.termination.converged() {
+        return run;
+    }
+    let specs = problem.model.params();
+    let layout = &problem.layout;
+    let nonlinear: Vec<usize> = layout
+        .free()
+        .into_iter()
+        .filter(|&k| !super::layout::LINEAR.contains(&specs[layout.params[k].spec].name))
+        .collect();
+    let cost = |q: &[f64]| {
+        let (f, _) = problem.model_values(q, false);
+        problem.cost_of(&problem.raw_residuals(&f))
+    };
+    let mut run = run;
+    for _ in 0..PROBE_ROUNDS {
+        if stop_requested(config) {
+            break;
+        }
+        let probes = nonlinear.iter().flat_map(|&k| {
+            PROBE_STEPS
+                .iter()
+                .flat_map(move |d| [1.0 - d, 1.0 + d].map(|f| (k, f)))
+        });
+        let lowest = probes
+            .map(|(k, f)| {
+                let mut q = run.values.clone();
+                q[k] *= f;
+                q
+            })
+            .filter(|q| inside(q))
+            .map(|q| (cost(&q), q))
+            .filter(|(c, _)| c.is_finite())
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let Some((c, q)) = lowest else { break };
+        if c >= run.lm.cost * (1.0 - PROBE_GAIN) {
+            break;
+        }
+        let mut next = solve(&q);
+        let better = !next.joined
+            && next.lm.termination.converged()
+            && next.lm.cost < run.lm.cost
+            && inside(&next.values);
+        if !better {
+            run.add_counts(&next.lm);
+            break;
+        }
+        next.add_counts(&run.lm);
+        run = next;
+    }
+    run
 }
 
 /// Whether a run ended on a stop request (time limit or interrupt).

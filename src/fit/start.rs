@@ -91,6 +91,11 @@ pub(super) struct Start {
 struct Refiners<'m> {
     exact: FitProblem<'m>,
     rough: Option<&'m dyn Model>,
+    /// The smooth approximation (KBS models): a smooth-band candidate is refined with it
+    /// at its σ, so that it stays in the smooth valley (σ → 0 at fixed sσ²), which the
+    /// exact model's refinement on a subsample leaves for a rougher one the whole file
+    /// may not prefer.
+    smooth: Option<&'m dyn Model>,
     /// Layout index of σ (KBS models).
     sigma_k: Option<usize>,
     /// The subsample both problems are built on.
@@ -105,7 +110,18 @@ impl<'m> Refiners<'m> {
     /// approximation has no gradient along the rough ridge, so a free σ would wander along it,
     /// to σ → 0 as readily as anywhere); None without a rough approximation.
     fn rough_problem(&self, start: &[f64]) -> Option<FitProblem<'m>> {
-        let (model, k) = (self.rough?, self.sigma_k?);
+        self.held_sigma_problem(self.rough?, start)
+    }
+
+    /// The smooth approximation's problem on the subsample with σ held at `start`'s value
+    /// (in the smooth limit only sσ² is determined); None without one.
+    fn smooth_problem(&self, start: &[f64]) -> Option<FitProblem<'m>> {
+        self.held_sigma_problem(self.smooth?, start)
+    }
+
+    /// `model`'s problem on the subsample with σ held at `start`'s value.
+    fn held_sigma_problem(&self, model: &'m dyn Model, start: &[f64]) -> Option<FitProblem<'m>> {
+        let k = self.sigma_k?;
         let mut layout = self.exact.layout.clone();
         layout.params[k].fixed = Some(start[k]);
         let (kind, floor) = (self.exact.kind(), self.exact.floor);
@@ -162,6 +178,9 @@ pub(super) fn starting_point(
     let rough_model = sigma_k
         .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Rough)))
         .transpose()?;
+    let smooth_model = sigma_k
+        .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Smooth)))
+        .transpose()?;
     let bar = search_bar(config.lm.progress);
     let sub = init::search_input(input, init::search_samples(model));
     let exact = FitProblem::new(
@@ -174,19 +193,30 @@ pub(super) fn starting_point(
     let refiners = Refiners {
         exact,
         rough: rough_model.as_deref(),
+        smooth: smooth_model.as_deref(),
         sigma_k,
         sub,
         ridge_given: ridge.is_some_and(|(ks, kt)| given[ks].is_some() || given[kt].is_some()),
     };
     // The grid runs on (for KBS, at most GRID_SAMPLES of) the refinement's subsample.
     let stop = config.lm.stop.as_ref();
-    let candidates = init::initial_values(
+    let mut candidates = init::initial_values(
         &refiners.exact,
         grid_model.as_ref(),
         &refiners.sub,
         given,
         stop,
     );
+    // The best smooth-band candidate is refined twice: as every candidate, and once more
+    // with the smooth approximation at its σ (the last entry, `smooth_held`).
+    let smooth_held = refiners.sigma_k.and_then(|k| {
+        candidates
+            .iter()
+            .find(|(_, c)| super::identify::median_g(&refiners.sub, c[k]) < init::SMOOTH_BAND_G)
+            .cloned()
+    });
+    let held = smooth_held.is_some();
+    candidates.extend(smooth_held);
     let start_seconds = t0.elapsed().as_secs_f64();
     // A start must lie inside the models' domain on every sample, not only on the
     // subsample: a rough-valley candidate can drift to a σ where a sample outside the
@@ -203,9 +233,27 @@ pub(super) fn starting_point(
     // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
         show_refining(&bar, candidates.len(), refiners.sub.y.len());
-        let refined = refine_candidates(&refiners, &candidates, &coarse, &inside, &bar);
+        let refined = refine_candidates(&refiners, &candidates, held, &coarse, &inside, &bar);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
-        let chosen = choose_refined(&refined, &candidates, &at_edge, coarse.ftol, ridge);
+        let band = |p: &[f64]| {
+            sigma_k.map(|k| match super::identify::median_g(&refiners.sub, p[k]) {
+                g if g < init::SMOOTH_BAND_G => 0,
+                g if g > init::ROUGH_BAND_G => 2,
+                _ => 1,
+            })
+        };
+        let band_only = held.then(|| refined[refined.len() - 1].1.clone());
+        let chosen = choose_refined(
+            &refined,
+            &candidates,
+            &at_edge,
+            coarse.ftol,
+            Valleys {
+                ridge,
+                band: &band,
+                band_only: band_only.as_deref(),
+            },
+        );
         if let Some((values, start)) = chosen.start {
             p0 = values;
             grid_start = start;
@@ -228,20 +276,25 @@ pub(super) fn starting_point(
 /// point can be a factor of a few off, or sit in the valley of the rough asymptote
 /// (σ → ∞ at fixed T/σ) while the truth is elsewhere. A candidate in the rough band
 /// (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation and its
-/// refined cost then taken with the exact model. Returns (cost, values) per candidate;
+/// refined cost then taken with the exact model; with `smooth_held`, the last candidate is
+/// refined with the smooth approximation at its σ, and its cost taken the same way.
+/// Returns (cost, values) per candidate;
 /// the cost is infinite for a refined point that is not finite or not inside the domain,
 /// or for a candidate whose refinement was not started before a stop request (the fit's
 /// `coarse.stop`; a refinement under way ends at its last complete point).
 fn refine_candidates(
     refiners: &Refiners,
     candidates: &[(f64, Vec<f64>)],
+    smooth_held: bool,
     coarse: &LmConfig,
     inside: &(dyn Fn(&[f64]) -> bool + Sync),
     bar: &indicatif::ProgressBar,
 ) -> Vec<(f64, Vec<f64>)> {
+    let last = candidates.len().saturating_sub(1);
     candidates
         .par_iter()
-        .map(|(_, start)| {
+        .enumerate()
+        .map(|(i, (_, start))| {
             let _done = Done(bar);
             if stopped(coarse.stop.as_ref()) {
                 return (f64::INFINITY, start.clone());
@@ -249,10 +302,17 @@ fn refine_candidates(
             let rough_band = refiners.sigma_k.is_some_and(|k| {
                 super::identify::median_g(&refiners.sub, start[k]) > init::ROUGH_BAND_G
             });
+            let smooth_band = smooth_held && i == last;
+            let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
             let (cost, values) = match (refiners.rough_problem(start), rough_band) {
                 (Some(rough), true) => {
                     let run = run_lm(&rough, start, coarse);
                     slide_rough_ridge(refiners, run.values, inside, coarse.stop.as_ref())
+                }
+                _ if smooth_band && refiners.smooth_problem(start).is_some() => {
+                    let smooth = refiners.smooth_problem(start).expect("checked");
+                    let run = run_lm(&smooth, start, coarse);
+                    (exact_cost(&run.values), run.values)
                 }
                 _ => {
                     let run = run_lm(&refiners.exact, start, coarse);
@@ -313,6 +373,15 @@ struct Chosen {
     rivals: Vec<Vec<f64>>,
 }
 
+/// How [`choose_refined`] tells valleys apart: `ridge` (layout indices of σ and T, KBS),
+/// `band` (a point's KBS regime band) and `band_only` (a refined point that may be a rival
+/// only as its band's extra one).
+struct Valleys<'a> {
+    ridge: Option<(usize, usize)>,
+    band: &'a dyn Fn(&[f64]) -> Option<u8>,
+    band_only: Option<&'a [f64]>,
+}
+
 /// Choose among the refined candidates (`refined[i]` from `candidates[i]`). A refined start
 /// at an edge of the physical domain (T/σ → 0, T → 0: `at_edge`) is no optimum worth
 /// starting from while another candidate's valley is about as low; when the edge is lower
@@ -320,14 +389,21 @@ struct Chosen {
 /// there (to end `degenerate`, saying why), the others as alternatives. Otherwise the
 /// lowest usable one starts (ties within `ftol` to the better-ranked grid point), and the
 /// next usable ones in valleys of their own ([`same_optimum`], `ridge`: layout indices of σ
-/// and T) are rivals when their costs are within [`RIVAL_MARGIN`].
+/// and T) are rivals when their costs are within [`RIVAL_MARGIN`] (at most [`RIVALS`], and
+/// one more from a KBS regime band, `band`: smooth 0, between 1, rough 2, that none of them
+/// is in; the smooth approximation's refinement, `band_only`, is a rival only as that one).
 fn choose_refined(
     refined: &[(f64, Vec<f64>)],
     candidates: &[(f64, Vec<f64>)],
     at_edge: &dyn Fn(&[f64]) -> bool,
     ftol: f64,
-    ridge: Option<(usize, usize)>,
+    valleys: Valleys,
 ) -> Chosen {
+    let Valleys {
+        ridge,
+        band,
+        band_only,
+    } = valleys;
     let (edge, usable): (Vec<_>, Vec<_>) = refined
         .iter()
         .cloned()
@@ -363,10 +439,29 @@ fn choose_refined(
             let mut kept: Vec<(f64, &[f64])> = vec![(best_usable, &winner.0)];
             for (c, v) in others.iter() {
                 let new = kept.iter().all(|&k| !same_optimum((*c, v), k, ridge));
-                if *c <= best_usable * (1.0 + RIVAL_MARGIN) && new && kept.len() <= RIVALS {
+                let regular = band_only != Some(v.as_slice());
+                if *c <= best_usable * (1.0 + RIVAL_MARGIN)
+                    && new
+                    && regular
+                    && kept.len() <= RIVALS
+                {
                     kept.push((*c, v));
                     chosen.rivals.push(v.clone());
                 }
+            }
+            // A KBS regime band none of them is in (the smooth valley below rougher ones
+            // as low on the subsample) gets one more solve: its lowest valley within the
+            // margin.
+            let seen: Vec<Option<u8>> = kept.iter().map(|k| band(k.1)).collect();
+            let extra = others.iter().find(|(c, v)| {
+                let b = band(v);
+                b.is_some()
+                    && !seen.contains(&b)
+                    && *c <= best_usable * (1.0 + RIVAL_MARGIN)
+                    && kept.iter().all(|&k| !same_optimum((*c, v), k, ridge))
+            });
+            if let Some((_, v)) = extra {
+                chosen.rivals.push(v.clone());
             }
             chosen.start = Some(winner);
         }
