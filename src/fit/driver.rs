@@ -191,7 +191,7 @@ fn best_of_rivals(
 
 /// Relative steps of each nonlinear parameter at which [`leave_small_basins`] probes a
 /// converged log-residual fit (each way).
-pub const PROBE_STEPS: [f64; 4] = [0.005, 0.02, 0.07, 0.25];
+pub const PROBE_STEPS: [f64; 2] = [0.01, 0.04];
 
 /// Most solves [`leave_small_basins`] starts from probes.
 pub const PROBE_ROUNDS: usize = 4;
@@ -200,8 +200,9 @@ pub const PROBE_ROUNDS: usize = 4;
 pub const PROBE_GAIN: f64 = 1e-7;
 
 /// A converged fit with log residuals, probed: each free nonlinear parameter (σ, T, w) is
-/// moved by ±[`PROBE_STEPS`] with the others held, and where a probe inside the domain has
-/// a lower cost (by [`PROBE_GAIN`]), the fit is solved again from the lowest probe (at most
+/// moved by ±[`PROBE_STEPS`] (the smaller first) with the others held, and where a probe
+/// inside the domain has a lower cost (by [`PROBE_GAIN`]), the fit is solved again from the
+/// lowest probe of that step (at most
 /// [`PROBE_ROUNDS`] times; the lower converged run is kept). Samples at the floor make the
 /// log-residual cost of a real file rugged on the scale of a per cent: a Cornell paint's
 /// kbs-rough fit converged in a dip 0.2 % wide at T = 5225 nm with the cost falling by 0.4 %
@@ -232,25 +233,22 @@ fn leave_small_basins(
         if stop_requested(config) {
             break;
         }
-        let probes = nonlinear.iter().flat_map(|&k| {
-            PROBE_STEPS
+        // The smallest step with a probe lower than the point, and its lowest probe.
+        let lower = PROBE_STEPS.iter().find_map(|d| {
+            nonlinear
                 .iter()
-                .flat_map(move |d| [1.0 - d, 1.0 + d].map(|f| (k, f)))
+                .flat_map(|&k| [1.0 - d, 1.0 + d].map(|f| (k, f)))
+                .map(|(k, f)| {
+                    let mut q = run.values.clone();
+                    q[k] *= f;
+                    q
+                })
+                .filter(|q| inside(q))
+                .map(|q| (cost(&q), q))
+                .filter(|(c, _)| c.is_finite() && *c < run.lm.cost * (1.0 - PROBE_GAIN))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
         });
-        let lowest = probes
-            .map(|(k, f)| {
-                let mut q = run.values.clone();
-                q[k] *= f;
-                q
-            })
-            .filter(|q| inside(q))
-            .map(|q| (cost(&q), q))
-            .filter(|(c, _)| c.is_finite())
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        let Some((c, q)) = lowest else { break };
-        if c >= run.lm.cost * (1.0 - PROBE_GAIN) {
-            break;
-        }
+        let Some((_, q)) = lower else { break };
         let mut next = solve(&q);
         let better = !next.joined
             && next.lm.termination.converged()

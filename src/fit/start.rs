@@ -207,16 +207,21 @@ pub(super) fn starting_point(
         given,
         stop,
     );
-    // The best smooth-band candidate is refined twice: as every candidate, and once more
-    // with the smooth approximation at its σ (the last entry, `smooth_held`).
-    let smooth_held = refiners.sigma_k.and_then(|k| {
+    // The best smooth-band candidate, when the grid ranks it within RIVAL_MARGIN of its
+    // best, is refined twice: as every candidate, and once more with the smooth
+    // approximation at its σ (`held`, a copy at the end).
+    let grid_best = candidates.first().map_or(f64::INFINITY, |c| c.0);
+    let smooth = refiners.sigma_k.and_then(|k| {
         candidates
             .iter()
             .find(|(_, c)| super::identify::median_g(&refiners.sub, c[k]) < init::SMOOTH_BAND_G)
+            .filter(|(cost, _)| *cost <= grid_best * (1.0 + RIVAL_MARGIN))
             .cloned()
     });
-    let held = smooth_held.is_some();
-    candidates.extend(smooth_held);
+    let held = smooth.map(|c| {
+        candidates.push(c);
+        candidates.len() - 1
+    });
     let start_seconds = t0.elapsed().as_secs_f64();
     // A start must lie inside the models' domain on every sample, not only on the
     // subsample: a rough-valley candidate can drift to a σ where a sample outside the
@@ -242,7 +247,7 @@ pub(super) fn starting_point(
                 _ => 1,
             })
         };
-        let band_only = held.then(|| refined[refined.len() - 1].1.clone());
+        let band_only = held.map(|i| refined[i].1.clone());
         let chosen = choose_refined(
             &refined,
             &candidates,
@@ -276,8 +281,8 @@ pub(super) fn starting_point(
 /// point can be a factor of a few off, or sit in the valley of the rough asymptote
 /// (σ → ∞ at fixed T/σ) while the truth is elsewhere. A candidate in the rough band
 /// (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation and its
-/// refined cost then taken with the exact model; with `smooth_held`, the last candidate is
-/// refined with the smooth approximation at its σ, and its cost taken the same way.
+/// refined cost then taken with the exact model; candidate `smooth_held` is refined with the
+/// smooth approximation at its σ, and its cost taken the same way.
 /// Returns (cost, values) per candidate;
 /// the cost is infinite for a refined point that is not finite or not inside the domain,
 /// or for a candidate whose refinement was not started before a stop request (the fit's
@@ -285,12 +290,11 @@ pub(super) fn starting_point(
 fn refine_candidates(
     refiners: &Refiners,
     candidates: &[(f64, Vec<f64>)],
-    smooth_held: bool,
+    smooth_held: Option<usize>,
     coarse: &LmConfig,
     inside: &(dyn Fn(&[f64]) -> bool + Sync),
     bar: &indicatif::ProgressBar,
 ) -> Vec<(f64, Vec<f64>)> {
-    let last = candidates.len().saturating_sub(1);
     candidates
         .par_iter()
         .enumerate()
@@ -302,7 +306,7 @@ fn refine_candidates(
             let rough_band = refiners.sigma_k.is_some_and(|k| {
                 super::identify::median_g(&refiners.sub, start[k]) > init::ROUGH_BAND_G
             });
-            let smooth_band = smooth_held && i == last;
+            let smooth_band = smooth_held == Some(i);
             let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
             let (cost, values) = match (refiners.rough_problem(start), rough_band) {
                 (Some(rough), true) => {
