@@ -124,7 +124,7 @@ pub struct FitArgs {
     #[arg(long, default_value_t = 500)]
     pub max_iter: u64,
     /// Stop the whole command after this many seconds of wall time (counted from its start:
-    /// reading, fitting, writing); exit 3 with what exists (see the README).
+    /// reading, fitting, writing); exit 3 with what exists (see docs/guide.md, "Stopping a fit").
     #[arg(long)]
     pub timeout: Option<f64>,
     /// Show progress on standard error (reading, datasets done of total, solver

@@ -90,7 +90,7 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     Ok(0)
 }
 
-/// The exit code of a run ended by a signal (as an unhandled SIGINT's; README).
+/// The exit code of a run ended by a signal (as an unhandled SIGINT's; docs/guide.md).
 const SIGNALLED: u8 = 130;
 
 /// A progress bar on stderr, hidden when stderr is not a terminal.

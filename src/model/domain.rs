@@ -8,7 +8,7 @@
 //! printed with exit code 0.
 //!
 //! [`accuracy_warnings`] lists the parameters outside the range where the KBS sum's
-//! accuracy is stated (README, "Accuracy of the KBS sum"): T/λ ∈ [1e-3, 1e5],
+//! accuracy is stated (docs/guide.md, "Accuracy of the KBS sum"): T/λ ∈ [1e-3, 1e5],
 //! g ∈ [1e-12, 1e6], a ∈ [0, 1e8]. Values there are still finite, but their accuracy is not
 //! checked against the reference; the commands print these as warnings on standard error.
 
