@@ -1,22 +1,11 @@
 //! SHA-256 (FIPS 180-4) of a file's bytes, so a report names exactly the data it fitted.
-//! Exact (checked against the FIPS test vectors below).
+//! Computed by the `sha2` crate; the digest is written as 64 lower-case hex digits.
 
-const K: [u32; 64] = [
-    0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
-    0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
-    0xe49b69c1, 0xefbe4786, 0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
-    0x983e5152, 0xa831c66d, 0xb00327c8, 0xbf597fc7, 0xc6e00bf3, 0xd5a79147, 0x06ca6351, 0x14292967,
-    0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13, 0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85,
-    0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
-    0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
-    0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2,
-];
+use sha2::{Digest, Sha256};
 
 /// The SHA-256 digest of `data` as 64 lower-case hex digits.
 pub fn sha256_hex(data: &[u8]) -> String {
-    let mut h = Sha256::new();
-    h.update(data);
-    h.finish_hex()
+    hex(Sha256::digest(data).as_slice())
 }
 
 /// The SHA-256 digest of everything `reader` yields, read in 64 KiB pieces (a big file is
@@ -24,107 +13,24 @@ pub fn sha256_hex(data: &[u8]) -> String {
 pub fn sha256_hex_of(mut reader: impl std::io::Read) -> std::io::Result<(String, u64)> {
     let mut h = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
+    let mut len = 0u64;
     loop {
         match reader.read(&mut buf) {
             Ok(0) => break,
-            Ok(k) => h.update(&buf[..k]),
+            Ok(k) => {
+                h.update(&buf[..k]);
+                len += k as u64;
+            }
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
             Err(e) => return Err(e),
         }
     }
-    let len = h.len;
-    Ok((h.finish_hex(), len))
+    Ok((hex(h.finalize().as_slice()), len))
 }
 
-/// A SHA-256 computation fed piece by piece: the state, the bytes of an unfinished
-/// 64-byte block, and the message length so far.
-struct Sha256 {
-    h: [u32; 8],
-    block: [u8; 64],
-    filled: usize,
-    len: u64,
-}
-
-impl Sha256 {
-    fn new() -> Self {
-        Sha256 {
-            h: [
-                0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab,
-                0x5be0cd19,
-            ],
-            block: [0; 64],
-            filled: 0,
-            len: 0,
-        }
-    }
-
-    /// Append `data` to the message.
-    fn update(&mut self, mut data: &[u8]) {
-        self.len += data.len() as u64;
-        while !data.is_empty() {
-            let take = (64 - self.filled).min(data.len());
-            self.block[self.filled..self.filled + take].copy_from_slice(&data[..take]);
-            self.filled += take;
-            data = &data[take..];
-            if self.filled == 64 {
-                compress(&mut self.h, &self.block);
-                self.filled = 0;
-            }
-        }
-    }
-
-    /// Pad the message (FIPS 180-4 § 5.1.1) and return the digest in hex.
-    fn finish_hex(mut self) -> String {
-        let bits = self.len.wrapping_mul(8);
-        let mut pad = vec![0x80u8];
-        while (self.len + pad.len() as u64) % 64 != 56 {
-            pad.push(0);
-        }
-        pad.extend_from_slice(&bits.to_be_bytes());
-        self.update(&pad);
-        debug_assert_eq!(self.filled, 0);
-        self.h.iter().map(|v| format!("{v:08x}")).collect()
-    }
-}
-
-/// One SHA-256 compression of a 64-byte block into the state `h`.
-fn compress(h: &mut [u32; 8], block: &[u8; 64]) {
-    let mut w = [0u32; 64];
-    for (t, word) in block.chunks_exact(4).enumerate() {
-        w[t] = u32::from_be_bytes([word[0], word[1], word[2], word[3]]);
-    }
-    for t in 16..64 {
-        let s0 = w[t - 15].rotate_right(7) ^ w[t - 15].rotate_right(18) ^ (w[t - 15] >> 3);
-        let s1 = w[t - 2].rotate_right(17) ^ w[t - 2].rotate_right(19) ^ (w[t - 2] >> 10);
-        w[t] = w[t - 16]
-            .wrapping_add(s0)
-            .wrapping_add(w[t - 7])
-            .wrapping_add(s1);
-    }
-    let [mut a, mut b, mut c, mut d, mut e, mut f, mut g, mut hh] = *h;
-    for t in 0..64 {
-        let s1 = e.rotate_right(6) ^ e.rotate_right(11) ^ e.rotate_right(25);
-        let ch = (e & f) ^ (!e & g);
-        let t1 = hh
-            .wrapping_add(s1)
-            .wrapping_add(ch)
-            .wrapping_add(K[t])
-            .wrapping_add(w[t]);
-        let s0 = a.rotate_right(2) ^ a.rotate_right(13) ^ a.rotate_right(22);
-        let maj = (a & b) ^ (a & c) ^ (b & c);
-        let t2 = s0.wrapping_add(maj);
-        hh = g;
-        g = f;
-        f = e;
-        e = d.wrapping_add(t1);
-        d = c;
-        c = b;
-        b = a;
-        a = t1.wrapping_add(t2);
-    }
-    for (x, v) in h.iter_mut().zip([a, b, c, d, e, f, g, hh]) {
-        *x = x.wrapping_add(v);
-    }
+/// `bytes` as lower-case hex, two digits per byte.
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 #[cfg(test)]
@@ -167,6 +73,18 @@ mod tests {
         assert_eq!(
             hex,
             "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3"
+        );
+    }
+
+    #[test]
+    fn a_million_a_read_in_64_kib_pieces() {
+        // FIPS 180-2 appendix B.3: one million 'a', more than fifteen reads of the buffer.
+        let data = vec![b'a'; 1_000_000];
+        let (hex, len) = sha256_hex_of(&data[..]).unwrap();
+        assert_eq!(len, 1_000_000);
+        assert_eq!(
+            hex,
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0"
         );
     }
 }
