@@ -4,11 +4,13 @@
 //! The model layer knows nothing of files, fits or plots.
 
 pub mod domain;
+pub mod fresnel;
 pub mod kbs;
 pub mod lambert;
 mod lanes;
 pub mod mixed;
 pub mod series;
+pub mod shadowing;
 pub mod specular;
 
 use crate::error::{Error, Result};
