@@ -4,7 +4,7 @@ The Rust engine of the ``goniofit`` command line, called from Python: the same r
 checks, the same fit (starting values, Levenberg-Marquardt, uncertainties, the verdict on
 what the data determines) and the same reports, byte for byte.
 
-Conventions (MODEL.md of the project):
+Conventions (the project's docs/conventions.md):
 
 - angles in **degrees** unless ``radians=True``; θ from the surface normal,
   ``theta_i`` in [0, 90), ``theta_r`` in [0, 90]; ``phi_r`` is the view azimuth with
@@ -45,6 +45,13 @@ __all__ = [
     "AUTO_CANDIDATES",
     "__version__",
 ]
+
+
+
+def __dir__() -> List[str]:
+    """The public names only (not the modules and typing names this module imports)."""
+    return sorted(__all__ + ["dask"])
+
 
 __version__: str = _goniofit.__version__
 AUTO_CANDIDATES: List[str] = list(_goniofit.AUTO_CANDIDATES)

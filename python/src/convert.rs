@@ -12,9 +12,11 @@ use pyo3::types::{PyDict, PyList};
 /// column, or array and index), `FileNotFoundError`/`OSError` for files, `RuntimeError`
 /// for internal failures.
 pub fn to_py_err_in(context: Option<&str>, e: Error) -> PyErr {
-    let msg = match context {
-        Some(c) => format!("{c}: {e}"),
-        None => e.to_string(),
+    let text = python_terms(&e.to_string());
+    // Arrays passed in memory have no name worth printing.
+    let msg = match context.filter(|c| *c != "arrays") {
+        Some(c) => format!("{c}: {text}"),
+        None => text,
     };
     match &e {
         Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
@@ -25,6 +27,50 @@ pub fn to_py_err_in(context: Option<&str>, e: Error) -> PyErr {
         Error::Stopped(_) => PyTimeoutError::new_err(msg),
         _ if e.is_user_error() => PyValueError::new_err(msg),
         _ => PyRuntimeError::new_err(msg),
+    }
+}
+
+/// A library message in a Python user's terms: the name the library gives arrays passed
+/// in memory (`arrays: `) is dropped, and each command-line option (`--wavelength`,
+/// `--signed-theta-r`, `--no-intervals`, `--by-group`) becomes the keyword argument that sets
+/// it (`wavelength=`, `signed_theta_r=True`, `intervals=False`, `group=`).
+pub fn python_terms(msg: &str) -> String {
+    let mut rest = msg;
+    while let Some(r) = rest.strip_prefix("arrays: ") {
+        rest = r;
+    }
+    let mut out = String::with_capacity(rest.len());
+    let mut chars = rest.char_indices().peekable();
+    while let Some((i, c)) = chars.next() {
+        let flag = c == '-'
+            && rest[i..].starts_with("--")
+            && rest[i + 2..].starts_with(|n: char| n.is_ascii_lowercase())
+            && (i == 0 || !rest[..i].ends_with(|p: char| p.is_alphanumeric() || p == '-'));
+        if !flag {
+            out.push(c);
+            continue;
+        }
+        let name: String = rest[i + 2..]
+            .chars()
+            .take_while(|n| n.is_ascii_alphanumeric() || *n == '-')
+            .collect();
+        out.push_str(&keyword(&name));
+        // Skip the rest of the flag (its two dashes and its name).
+        for _ in 0..name.chars().count() + 1 {
+            chars.next();
+        }
+    }
+    out
+}
+
+/// The keyword argument that sets command-line option `--name`.
+fn keyword(name: &str) -> String {
+    match name {
+        "signed-theta-r" | "radians" => format!("{}=True", name.replace('-', "_")),
+        "no-intervals" => "intervals=False".to_string(),
+        "no-reduce" => "reduce=False".to_string(),
+        "by-group" => "group=".to_string(),
+        _ => format!("{}=", name.replace('-', "_")),
     }
 }
 
@@ -61,4 +107,29 @@ pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound
             d.into_any()
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::python_terms;
+
+    #[test]
+    fn messages_name_keyword_arguments_not_options() {
+        assert_eq!(
+            python_terms("arrays: arrays: KBS models need a wavelength: give --wavelength, a wavelength column"),
+            "KBS models need a wavelength: give wavelength=, a wavelength column"
+        );
+        assert_eq!(
+            python_terms("theta_r[0]: -5 is negative (in-plane scans: --signed-theta-r)"),
+            "theta_r[0]: -5 is negative (in-plane scans: signed_theta_r=True)"
+        );
+        assert_eq!(
+            python_terms("use --f-scale 0.03 or --no-intervals"),
+            "use f_scale= 0.03 or intervals=False"
+        );
+        assert_eq!(
+            python_terms("a range 1e-3--1e5 and x −−y"),
+            "a range 1e-3--1e5 and x −−y"
+        );
+    }
 }

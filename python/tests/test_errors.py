@@ -13,7 +13,7 @@ TI, TR, PR, L = [10.0, 20.0, 30.0, 40.0], [5.0] * 4, [0.0] * 4, [1.0, 2.0, 3.0, 
 def test_angle_out_of_domain_names_array_and_index():
     with pytest.raises(ValueError, match=r"^theta_i\[2\]: theta_i = 95° is outside \[0, 90°\)"):
         goniofit.fit(TI[:2] + [95.0] + TI[3:], TR, PR, L, model="lambert")
-    with pytest.raises(ValueError, match=r"^theta_r\[0\]: .*--signed-theta-r"):
+    with pytest.raises(ValueError, match=r"^theta_r\[0\]: .*signed_theta_r=True"):
         goniofit.fit(TI, [-5.0] + TR[1:], PR, L, model="lambert")
 
 
@@ -77,3 +77,12 @@ def test_read_layouts():
     assert d["theta_i"][0] == pytest.approx(9.0, rel=1e-15)
     # phi_r in goniofit's convention: -180 in the file is the back side, 180.
     assert abs(d["phi_r"][0]) == pytest.approx(180.0, rel=1e-15)
+
+
+def test_messages_speak_python_and_the_namespace_is_clean():
+    with pytest.raises(ValueError, match=r"^KBS models need a wavelength: give wavelength=") as e:
+        goniofit.fit(TI, TR, PR, L, model="kbs")
+    assert "--" not in str(e.value) and "arrays:" not in str(e.value)
+    public = [n for n in dir(goniofit) if not n.startswith("_")]
+    assert sorted(public) == sorted([n for n in goniofit.__all__ if not n.startswith("_")] + ["dask"])
+    assert "np" not in dir(goniofit) and "List" not in dir(goniofit)
