@@ -5,7 +5,8 @@
 //! θr ∈ [0, π/2], φr from the plane of incidence, φr = 0 the forward/specular side), the
 //! measured values, and the raw rows for pass-through output.
 //!
-//! Format detection: a file is ASTM E1392 when its extension is `.astm` (any case), or when
+//! Format detection: a file that starts with the bytes `tensor_file\0` or is named
+//! `*.bsdf` is an RGL measured BRDF ([`rgl`]). A file is ASTM E1392 when its extension is `.astm` (any case), or when
 //! its first non-blank line starts with an upper-case `KEY` token (e.g. `LAB_NAME ...`) and
 //! some line starts with `VARS`. Everything else is CSV.
 //!
@@ -35,6 +36,7 @@ pub mod csv;
 pub mod files;
 pub mod output;
 mod quantity;
+pub mod rgl;
 
 pub use files::FileSet;
 pub use output::{print_stdout, write_atomic, write_bytes};
@@ -229,7 +231,7 @@ fn read_file(
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
     let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
     let head = reader.fill_buf().map_err(io_err)?;
-    if !astm_by_extension(path) && surely_csv(head) {
+    if !is_binary(path, head) && !astm_by_extension(path) && surely_csv(head) {
         let rows_hint = estimate_rows(head, len);
         let stated = quantity::from_comments(path, head)?;
         let stopped = std::cell::Cell::new(None);
@@ -292,6 +294,16 @@ impl<R: std::io::Read> std::io::Read for Counting<'_, R> {
     }
 }
 
+/// Whether the file is an RGL `.bsdf` tensor file: its content starts with the tensor
+/// file's magic, or its extension is `.bsdf` (any case).
+fn is_binary(path: &Path, head: &[u8]) -> bool {
+    rgl::tensor::is_tensor_file(head)
+        || path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("bsdf"))
+}
+
 /// Whether the extension says ASTM E1392 (`.astm`, any case).
 fn astm_by_extension(path: &Path) -> bool {
     path.extension()
@@ -330,6 +342,9 @@ fn estimate_rows(head: &[u8], len: u64) -> usize {
 /// Read a dataset from bytes already in memory; `path` names it in messages and decides
 /// the format by extension as [`read_dataset`] does.
 pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
+    if is_binary(path, bytes) {
+        return rgl::read(path, bytes, opts);
+    }
     let text = decode_utf8(path, bytes)?;
     if is_astm(path, text) {
         astm::parse(path, text, opts)
