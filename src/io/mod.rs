@@ -243,7 +243,8 @@ fn read_file(
             stopped: &stopped,
         });
         // A file the streamed reader refuses is read whole again, so that every error
-        // message is the whole-file reader's (header-based field limits and hints).
+        // message is the whole-file reader's (which splits every record before reading
+        // any value, so a malformed record anywhere is the error reported).
         let parsed = csv::parse_reader(path, counted, opts, keep_rows, rows_hint);
         if let Some((why, done)) = stopped.get() {
             return Err(Error::Stopped(format!(

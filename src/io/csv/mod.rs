@@ -19,10 +19,12 @@
 //! normal: θr := |θr|, φr := φr + 180° (in-plane data: φr = 0 → 180°); in that mode the
 //! `phi_r` column may be left out (in-plane data, φr = 0).
 //!
-//! Lines starting with `#` are comments; blank lines, CRLF line ends, a UTF-8 byte-order mark
-//! and quoted fields are accepted. A `weight` and a `sigma_L` column together are an error
-//! (one of them decides the weights). With `require_value`, a file whose values are all
-//! zero is an error (nothing to fit).
+//! Records are split by the `csv` crate's parser with a measurement file's rules on top
+//! ([`split_records`]): lines whose first non-blank character is `#` are comments; blank
+//! lines, CRLF line ends, a UTF-8 byte-order mark and quoted fields (a field is quoted when
+//! its first character is `"`) are accepted; unquoted fields are trimmed. A `weight` and a
+//! `sigma_L` column together are an error (one of them decides the weights). With
+//! `require_value`, a file whose values are all zero is an error (nothing to fit).
 //!
 //! Values of L may be negative (background-subtracted data); they must be finite.
 //!
@@ -38,6 +40,11 @@
 //! θi = |thetai|, θr = thetar and φr = phir − φ_source − 180° (the mirror direction is then
 //! φr = 0), value = `f_r11`, wavelength = `lambda` (µm in those files). An explicit
 //! `--columns` mapping of any angle role turns this detection off.
+
+mod records;
+
+pub use records::{split_records, split_records_limited, Record, MAX_FIELDS};
+pub(crate) use records::{Fault, Limit, Records};
 
 use super::{check_angles, parse_finite, Dataset, ReadOptions};
 use crate::error::{Error, Result};
@@ -138,16 +145,18 @@ struct Nist {
     phi_r: usize,
 }
 
-/// Parse a CSV table (text already decoded, BOM removed).
+/// Parse a CSV table (text already decoded, BOM removed). Every record is split before
+/// any is interpreted, so a malformed record anywhere is the error reported.
 pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Dataset> {
-    let records = split_records_limited(text, MAX_FIELDS)
-        .map_err(|(line, m)| Error::input(path, line, "(row)", m))?;
+    let records = Records::new(text.as_bytes(), Limit::Table(MAX_FIELDS))
+        .collect::<std::result::Result<Vec<Record>, Fault>>()
+        .map_err(|f| fault_error(path, f))?;
     let n = records.len();
     parse_records(path, records.into_iter().map(Ok), opts, true, n)
 }
 
-/// Parse a CSV table streamed from `reader` record by record ([`RecordStream`]): the text
-/// is never held whole, and the raw rows are kept only with `keep_rows` (the fit needs them
+/// Parse a CSV table streamed from `reader` record by record ([`Records`]): the text is
+/// never held whole, and the raw rows are kept only with `keep_rows` (the fit needs them
 /// only for its residuals file). `rows_hint` sizes the columns (an estimate; 0 is fine).
 pub(crate) fn parse_reader(
     path: &Path,
@@ -156,13 +165,22 @@ pub(crate) fn parse_reader(
     keep_rows: bool,
     rows_hint: usize,
 ) -> Result<Dataset> {
-    parse_records(
-        path,
-        RecordStream::new(path, reader),
-        opts,
-        keep_rows,
-        rows_hint,
-    )
+    let records =
+        Records::new(reader, Limit::Table(MAX_FIELDS)).map(|r| r.map_err(|f| fault_error(path, f)));
+    parse_records(path, records, opts, keep_rows, rows_hint)
+}
+
+/// A record fault as the reader's error: malformed CSV on its line (column `(row)`),
+/// bytes that are not UTF-8 (column `(text)`), or the read's I/O error.
+fn fault_error(path: &Path, fault: Fault) -> Error {
+    match fault {
+        Fault::Row(line, m) => Error::input(path, line, "(row)", m),
+        Fault::Text(line, m) => Error::input(path, line, "(text)", m),
+        Fault::Io(source) => Error::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+    }
 }
 
 /// Parse CSV records (header first) into a dataset; see the module docs.
@@ -496,341 +514,6 @@ fn parse_records(
     Ok(ds)
 }
 
-/// One CSV record: the 1-based line it starts on, and its fields.
-pub type Record = (usize, Vec<String>);
-
-/// The most fields a header may have ([`split_records`]); a data row may have at most as
-/// many as its header. Rows are cut off at that many fields while they are read, so a
-/// hostile line of millions of fields is refused without holding them (reading stays
-/// O(file size) in memory).
-pub const MAX_FIELDS: usize = 10_000;
-
-/// Split CSV text into records, each with the 1-based line it starts on. Unquoted fields are
-/// trimmed of surrounding blanks; quoted fields are kept verbatim.
-/// Skips blank (or whitespace-only) lines and lines whose first non-blank character is `#`.
-/// Fields may be quoted (`"a, b"`, `""` for a quote, line breaks inside); line ends are
-/// `\n`, `\r\n` or `\r`. Errors: (line, message) for an unterminated quote or text after
-/// a closing quote.
-/// At most [`MAX_FIELDS`] fields per record.
-pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, String)> {
-    split(text, MAX_FIELDS, false)
-}
-
-/// [`split_records`] for a table: at most `max_fields` fields in the header (the first
-/// record) and at most the header's count in every later record; a longer record is an
-/// error as soon as its field `max + 1` starts, so it is never held field by field.
-pub fn split_records_limited(
-    text: &str,
-    max_fields: usize,
-) -> std::result::Result<Vec<Record>, (usize, String)> {
-    split(text, max_fields, true)
-}
-
-fn split(
-    text: &str,
-    max_fields: usize,
-    rows_by_header: bool,
-) -> std::result::Result<Vec<Record>, (usize, String)> {
-    let b = text.as_bytes();
-    let n = b.len();
-    let mut i = 0;
-    let mut line = 1;
-    let mut out: Vec<Record> = Vec::new();
-    // Consume one line end at i (if any); returns whether one was consumed.
-    let eol = |i: &mut usize, line: &mut usize| -> bool {
-        if *i < n && b[*i] == b'\r' {
-            *i += 1;
-            if *i < n && b[*i] == b'\n' {
-                *i += 1;
-            }
-            *line += 1;
-            true
-        } else if *i < n && b[*i] == b'\n' {
-            *i += 1;
-            *line += 1;
-            true
-        } else {
-            false
-        }
-    };
-    while i < n {
-        // Start of a line: blank or comment?
-        let mut j = i;
-        while j < n && (b[j] == b' ' || b[j] == b'\t') {
-            j += 1;
-        }
-        if j >= n {
-            break;
-        }
-        if b[j] == b'\n' || b[j] == b'\r' || b[j] == b'#' {
-            i = j;
-            while i < n && b[i] != b'\n' && b[i] != b'\r' {
-                i += 1;
-            }
-            eol(&mut i, &mut line);
-            continue;
-        }
-        let start_line = line;
-        let record_start = j;
-        let mut fields = Vec::new();
-        loop {
-            while i < n && (b[i] == b' ' || b[i] == b'\t') {
-                i += 1;
-            }
-            if i < n && b[i] == b'"' {
-                let quote_line = line;
-                i += 1;
-                let mut f = String::new();
-                let mut seg = i;
-                loop {
-                    if i >= n {
-                        return Err((quote_line, "a quoted field is never closed".into()));
-                    }
-                    if b[i] == b'"' {
-                        f.push_str(&text[seg..i]);
-                        if i + 1 < n && b[i + 1] == b'"' {
-                            f.push('"');
-                            i += 2;
-                            seg = i;
-                            continue;
-                        }
-                        i += 1;
-                        break;
-                    }
-                    if b[i] == b'\n' || (b[i] == b'\r' && !(i + 1 < n && b[i + 1] == b'\n')) {
-                        line += 1;
-                    }
-                    i += 1;
-                }
-                while i < n && (b[i] == b' ' || b[i] == b'\t') {
-                    i += 1;
-                }
-                if i < n && !matches!(b[i], b',' | b'\n' | b'\r') {
-                    let rest: String = text[i..].chars().take(20).collect();
-                    return Err((
-                        line,
-                        format!("unexpected text '{rest}' after a closing quote"),
-                    ));
-                }
-                fields.push(f);
-            } else {
-                let s0 = i;
-                while i < n && !matches!(b[i], b',' | b'\n' | b'\r') {
-                    i += 1;
-                }
-                fields.push(text[s0..i].trim().to_string());
-            }
-            if i < n && b[i] == b',' {
-                i += 1;
-                let limit = match out.first() {
-                    Some(h) if rows_by_header => h.1.len(),
-                    _ => max_fields,
-                };
-                if fields.len() >= limit {
-                    let m = too_many_fields(&out, limit, &text[record_start..], rows_by_header);
-                    return Err((start_line, m));
-                }
-                continue;
-            }
-            eol(&mut i, &mut line);
-            break;
-        }
-        if fields.iter().any(|f| !f.is_empty()) {
-            out.push((start_line, fields));
-        }
-    }
-    Ok(out)
-}
-
-/// Records read one at a time from a byte stream: the streaming form of [`split_records`]
-/// (same fields, same 1-based line numbers, same errors), holding one record's text at a
-/// time instead of the whole file. A record is one line, or several when a quoted field
-/// holds line breaks. Invalid UTF-8 is an error naming the line and the byte offset.
-pub(crate) struct RecordStream<'p, R> {
-    path: &'p Path,
-    reader: R,
-    /// Line number of the next line to read (1-based).
-    line: usize,
-    /// Bytes consumed so far after the byte-order mark (for the UTF-8 message).
-    offset: usize,
-    /// Whether the first chunk has been read (a byte-order mark is skipped there).
-    started: bool,
-    buf: Vec<u8>,
-    queue: std::collections::VecDeque<Record>,
-    failed: bool,
-}
-
-impl<'p, R: std::io::BufRead> RecordStream<'p, R> {
-    pub(crate) fn new(path: &'p Path, reader: R) -> Self {
-        RecordStream {
-            path,
-            reader,
-            line: 1,
-            offset: 0,
-            started: false,
-            buf: Vec::new(),
-            queue: std::collections::VecDeque::new(),
-            failed: false,
-        }
-    }
-
-    /// Read the next chunk of whole records (at least one line) and split it; false at the
-    /// end of the stream.
-    fn fill(&mut self) -> Result<bool> {
-        self.buf.clear();
-        loop {
-            let got = self
-                .reader
-                .read_until(b'\n', &mut self.buf)
-                .map_err(|source| Error::Io {
-                    path: self.path.to_path_buf(),
-                    source,
-                })?;
-            if got == 0 || !ends_inside_quotes(&self.buf) {
-                break;
-            }
-        }
-        if self.buf.is_empty() {
-            return Ok(false);
-        }
-        let mut start = 0;
-        if !self.started && self.buf.starts_with(b"\xEF\xBB\xBF") {
-            start = 3;
-        }
-        self.started = true;
-        let chunk = &self.buf[start..];
-        let text = std::str::from_utf8(chunk).map_err(|e| {
-            let good = &chunk[..e.valid_up_to()];
-            Error::input(
-                self.path,
-                self.line + good.iter().filter(|&&b| b == b'\n').count(),
-                "(text)",
-                format!(
-                    "invalid UTF-8 at byte {} (save the file as UTF-8 text)",
-                    self.offset + e.valid_up_to()
-                ),
-            )
-        })?;
-        let first = self.line;
-        let records = split_records(text)
-            .map_err(|(l, m)| Error::input(self.path, first + l - 1, "(row)", m))?;
-        self.queue
-            .extend(records.into_iter().map(|(l, f)| (first + l - 1, f)));
-        self.line += line_ends(chunk);
-        self.offset += chunk.len();
-        Ok(true)
-    }
-}
-
-impl<R: std::io::BufRead> Iterator for RecordStream<'_, R> {
-    type Item = Result<Record>;
-
-    fn next(&mut self) -> Option<Result<Record>> {
-        while self.queue.is_empty() && !self.failed {
-            match self.fill() {
-                Ok(true) => {}
-                Ok(false) => return None,
-                Err(e) => {
-                    self.failed = true;
-                    return Some(Err(e));
-                }
-            }
-        }
-        self.queue.pop_front().map(Ok)
-    }
-}
-
-/// Line ends as [`split_records`] counts them: `\n`, `\r\n`, and a lone `\r`.
-fn line_ends(b: &[u8]) -> usize {
-    (0..b.len())
-        .filter(|&i| b[i] == b'\n' || (b[i] == b'\r' && b.get(i + 1) != Some(&b'\n')))
-        .count()
-}
-
-/// Whether the text ends inside a quoted field, by the rules of [`split_records`]: a quote
-/// opens a field only at its start (after blanks), `""` inside is a quote, and a line whose
-/// first non-blank character is `#` is a comment.
-fn ends_inside_quotes(b: &[u8]) -> bool {
-    let mut i = 0;
-    let mut field_start = true;
-    let mut line_start = true;
-    while i < b.len() {
-        if line_start {
-            let mut j = i;
-            while j < b.len() && (b[j] == b' ' || b[j] == b'\t') {
-                j += 1;
-            }
-            if b.get(j) == Some(&b'#') {
-                while j < b.len() && b[j] != b'\n' && b[j] != b'\r' {
-                    j += 1;
-                }
-            }
-            i = j;
-            line_start = false;
-            continue;
-        }
-        match b[i] {
-            b' ' | b'\t' if field_start => i += 1,
-            b'"' if field_start => {
-                i += 1;
-                loop {
-                    if i >= b.len() {
-                        return true;
-                    }
-                    if b[i] == b'"' {
-                        if b.get(i + 1) == Some(&b'"') {
-                            i += 2;
-                            continue;
-                        }
-                        i += 1;
-                        break;
-                    }
-                    i += 1;
-                }
-                field_start = false;
-            }
-            b',' => {
-                field_start = true;
-                i += 1;
-            }
-            b'\n' | b'\r' => {
-                field_start = true;
-                line_start = true;
-                i += 1;
-            }
-            _ => {
-                field_start = false;
-                i += 1;
-            }
-        }
-    }
-    false
-}
-
-/// The message for a record cut off after `limit` fields; `line_text` is the record's
-/// first line (from its first field on), `rows_by_header` whether `limit` is the header's
-/// count.
-fn too_many_fields(out: &[Record], limit: usize, line_text: &str, rows_by_header: bool) -> String {
-    let line_text = line_text.split(['\n', '\r']).next().unwrap_or("");
-    match out.first() {
-        None => format!(
-            "the header has more than {limit} fields (a measurement table has a few columns)"
-        ),
-        Some((line, header)) if rows_by_header => {
-            if let Some(m) = delimiter_hint(header, line_text) {
-                return m;
-            }
-            // The count (exact for unquoted fields) without holding the fields.
-            let count = 1 + line_text.matches(',').count();
-            format!(
-                "row has {count} fields, the header on line {line} has {limit}{}",
-                decimal_comma_hint(line_text)
-            )
-        }
-        Some(_) => format!("a record has more than {limit} fields"),
-    }
-}
-
 /// A hint when `text` looks like numbers written with decimal commas (`0,5`): a comma
 /// between digits and no decimal point anywhere.
 pub(crate) fn decimal_comma_hint(text: &str) -> &'static str {
@@ -893,56 +576,4 @@ fn nist_sample(
         rel -= full;
     }
     check_angles(theta_i.abs(), theta_r, rel, radians, false)
-}
-
-#[cfg(test)]
-mod stream_tests {
-    use super::*;
-
-    /// The streamed records equal [`split_records`]'s, line numbers and errors included,
-    /// whatever the chunking (one line at a time here).
-    #[test]
-    fn record_stream_matches_split_records() {
-        let texts = [
-            "a,b\n1,2\n",
-            "a,b\r\n1,2\r\n\r\n# c, \"open\n3,4",
-            "\u{feff}a,b\n\"x\ny\",2\n  # \"q\n\"a\"\"b\", 3\n",
-            "a,\"b\n\nc\",d\n1,2,3\n",
-            "h\r1\r2\r",
-            "a,b\n\"never closed\n1,2\n",
-            "a,b\n\"x\" y,2\n",
-            "a,b\n1,\"2\" \n  \n3 , 4\n",
-            "",
-        ];
-        let path = Path::new("t.csv");
-        for text in texts {
-            let body = text.strip_prefix('\u{feff}').unwrap_or(text);
-            let want = split_records(body);
-            let got: std::result::Result<Vec<Record>, (usize, String)> =
-                RecordStream::new(path, std::io::BufReader::with_capacity(4, text.as_bytes()))
-                    .map(|r| {
-                        r.map_err(|e| match e {
-                            Error::Input { line, message, .. } => (line, message),
-                            e => (0, e.to_string()),
-                        })
-                    })
-                    .collect();
-            assert_eq!(got, want, "{text:?}");
-        }
-    }
-
-    #[test]
-    fn record_stream_names_the_line_of_invalid_utf8() {
-        let bytes = b"a,b\n1,2\n3,\xff\n";
-        let err = RecordStream::new(Path::new("t.csv"), &bytes[..])
-            .find_map(|r| r.err())
-            .expect("an error");
-        match err {
-            Error::Input { line, message, .. } => {
-                assert_eq!(line, 3);
-                assert!(message.contains("at byte 10"), "{message}");
-            }
-            e => panic!("unexpected error {e}"),
-        }
-    }
 }
