@@ -57,8 +57,29 @@ fn eval_to(out: &Path) {
         .success();
 }
 
+/// The `.goniofit-*.tmp` names in `dir`.
+fn temporaries(dir: &Path) -> Vec<std::ffi::OsString> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .filter(|n| {
+            let n = n.to_string_lossy();
+            n.starts_with(".goniofit-") && n.ends_with(".tmp")
+        })
+        .collect()
+}
+
+/// `-o /dev/stdout` writes through the device: the table reaches stdout, and `/dev/stdout`
+/// stays the link or device it was (a write through a temporary and a rename, as a regular file
+/// gets, would replace it by a file when run as root, or fail otherwise), with no
+/// temporary left in /dev.
 #[test]
 fn dev_stdout_prints_the_table() {
+    let what = || {
+        let meta = std::fs::symlink_metadata("/dev/stdout").unwrap();
+        (meta.file_type(), std::fs::read_link("/dev/stdout").ok())
+    };
+    let before = what();
     let out = goniofit()
         .args(EVAL)
         .arg(data("angles_inplane.csv"))
@@ -69,7 +90,12 @@ fn dev_stdout_prints_the_table() {
         .stdout
         .clone();
     assert_eq!(out, eval_table());
-    assert!(std::fs::metadata("/dev/stdout").is_ok());
+    assert!(!before.0.is_file(), "{before:?}");
+    assert_eq!(what(), before);
+    assert_eq!(
+        temporaries(Path::new("/dev")),
+        Vec::<std::ffi::OsString>::new()
+    );
 }
 
 #[test]

@@ -436,19 +436,6 @@ fn check_fit_plots(input: &FitPlotInput) {
     assert!(write_fit_plots(dir.path(), &short).is_err());
 }
 
-/// Writes the fit pictures of the synthetic dataset to $GONIOFIT_PLOT_DEMO (for looking at
-/// them); does nothing when the variable is unset.
-#[test]
-fn fit_plots_demo_output() {
-    let Ok(dir) = std::env::var("GONIOFIT_PLOT_DEMO") else {
-        return;
-    };
-    with_synthetic_input(0.05, |input| {
-        write_fit_plots(std::path::Path::new(&dir), input)
-    })
-    .unwrap();
-}
-
 #[test]
 fn fit_plots_cope_with_awkward_data() {
     // Out-of-plane samples only, a BRDF, a flat model, a NaN residual and zero values.
