@@ -34,7 +34,7 @@ class ParamReport(_Intervals):
     unit: str  # "λ unit" for sigma and T (the unit of the wavelength), "rad" for w
 
 class DerivedReport(_Intervals):
-    """One derived quantity (T/sigma, rms_slope, amplitude, ...), as in the CLI's JSON."""
+    """One derived quantity (T/sigma, beckmann_alpha, amplitude, ...), as in the CLI's JSON."""
 
     value: Optional[float]
     stderr: Optional[float]

@@ -10,7 +10,7 @@ still fitted once, on all its rows.
 Every partition's table has the same columns, in the same order and with the same types:
 the group label(s), the fit statistics, and for every parameter of every model the fit can
 choose (the ``model`` option, or the four of ``model="auto"``) and every derived quantity
-(``T/sigma``, ``rms_slope``, ``amplitude`` for KBS models) its ``NAME``, ``NAME_stderr``,
+(``T/sigma``, ``beckmann_alpha``, ``amplitude`` for KBS models) its ``NAME``, ``NAME_stderr``,
 ``NAME_determined``; a quantity a group's fit does not report is NaN / False there. (A
 joint fit over several channels reports per-channel names, ``scale[550nm]``: pass the
 result's columns as ``meta`` for those.)
@@ -39,7 +39,7 @@ import goniofit
 AUTO_MODELS = ("lambert", "lambert-specular", "kbs", "kbs+lambert")
 
 #: The derived quantities of a model with parameters ``sigma`` and ``T`` (KBS models).
-KBS_DERIVED = ("T/sigma", "rms_slope", "amplitude")
+KBS_DERIVED = ("T/sigma", "beckmann_alpha", "amplitude")
 
 
 def _keys(by: Any) -> List[str]:

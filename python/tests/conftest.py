@@ -37,3 +37,15 @@ def cli_json(cli):
         return json.loads(out)
 
     return run
+
+
+@pytest.fixture
+def python_sigint():
+    """Python's own SIGINT handler for the test (a shell starts background jobs with SIGINT
+    ignored, and Python then installs no handler: Ctrl-C would never reach it), the earlier
+    one restored after."""
+    import signal
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)

@@ -68,7 +68,7 @@ def test_every_parameter_of_every_model_at_hostile_values():
 
 @pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),
                     reason="signals reach the main thread only")
-def test_ctrl_c_interrupts_a_long_evaluation():
+def test_ctrl_c_interrupts_a_long_evaluation(python_sigint):
     # 864,000 samples of a rough surface summed term by term (mode="series", g ~ 1e5):
     # ~10 s of work; Ctrl-C after 0.5 s ends it within one block of 4096 samples.
     ti, tr, pr, _ = hemisphere(600)

@@ -20,7 +20,7 @@ def long_fit_arrays(repeat):
 
 @pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),
                     reason="signals reach the main thread only")
-def test_ctrl_c_interrupts_a_long_fit():
+def test_ctrl_c_interrupts_a_long_fit(python_sigint):
     # 864,000 samples in series mode: several seconds of fitting (timeout is the safety net).
     arrays = long_fit_arrays(600)
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))

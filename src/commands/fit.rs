@@ -653,13 +653,14 @@ fn draw_pictures(
     info: &RunInfo,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
-    let status = plot_status(&report::json::to_json(&o.result, info));
+    let json = report::json::to_json(&o.result, info);
+    let status = plot_status(&json);
     plot_fit(
         dir,
         &config,
         &o.input,
         (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
-        &status,
+        (&status, &super::plot::undetermined_params(&json)),
         wavelength_unit(args, &o.dataset).as_deref(),
     )
 }

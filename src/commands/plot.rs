@@ -104,7 +104,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         &config,
         &input,
         (&layout, &values, None),
-        &status,
+        (&status, &undetermined_params(&json)),
         unit.as_deref(),
     )?;
     eprintln!(
@@ -113,6 +113,19 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         goniofit::io::shown(&args.out)
     );
     Ok(0)
+}
+
+/// The free parameters the fit's JSON report marks as not determined by the data.
+pub fn undetermined_params(json: &serde_json::Value) -> Vec<String> {
+    json["params"]
+        .as_object()
+        .map(|m| {
+            m.iter()
+                .filter(|(_, p)| p["determined"] == false && p["fixed"] != true)
+                .map(|(k, _)| k.clone())
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// The pictures' second title line, from the fit's JSON report (so that `goniofit plot`
@@ -129,15 +142,10 @@ pub fn plot_status(json: &serde_json::Value) -> String {
             });
         }
     }
-    let mut undetermined: Vec<String> = json["params"]
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .filter(|(_, p)| p["determined"] == false && p["fixed"] != true)
-                .map(|(k, _)| k.replace("sigma", "σ"))
-                .collect()
-        })
-        .unwrap_or_default();
+    let mut undetermined: Vec<String> = undetermined_params(json)
+        .iter()
+        .map(|k| k.replace("sigma", "σ"))
+        .collect();
     // σ and T first, as in the report.
     undetermined.sort_by_key(|k| (k != "σ", k != "T", k.clone()));
     // The text report's words for a verdict that leaves something undetermined (σ drawn
@@ -161,8 +169,9 @@ pub fn plot_status(json: &serde_json::Value) -> String {
 }
 
 /// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`; `fit.2` its
-/// fitted values when the fit has them, else they are evaluated here), with `status`
-/// (see [`plot_status`]) under their titles and λ in `unit`. A joint fit draws every
+/// fitted values when the fit has them, else they are evaluated here), with `status.0`
+/// (see [`plot_status`]) under their titles, the parameters of `status.1` (not determined
+/// by the data) named in the title without a value, and λ in `unit`. A joint fit draws every
 /// channel with its own parameters (the polar and contour maps: the busiest θi's channel,
 /// named in their titles).
 pub fn plot_fit(
@@ -170,7 +179,7 @@ pub fn plot_fit(
     config: &FitConfig,
     input: &FitInput,
     (layout, values, fitted): (&goniofit::fit::problem::ParamLayout, &[f64], Option<&[f64]>),
-    status: &str,
+    status: (&str, &[String]),
     unit: Option<&str>,
 ) -> anyhow::Result<Vec<PathBuf>> {
     use goniofit::fit::problem::FitProblem;
@@ -200,8 +209,8 @@ pub fn plot_fit(
         .collect();
     let joint = n_channels > 1;
     let plot_input = goniofit::plot::fit::FitPlotInput {
-        title: plot_title(model.as_ref(), layout, &params[0]),
-        subtitle: status.to_string(),
+        title: plot_title(model.as_ref(), layout, &params[0], status.1),
+        subtitle: status.0.to_string(),
         model: model.as_ref(),
         params: &params[0],
         geo: &input.geo,
@@ -222,11 +231,12 @@ pub fn plot_fit(
 }
 
 /// "kbs: sigma=… T=… scale=…"; for a joint fit only the shared parameters, and which are
-/// per channel.
+/// per channel. A parameter in `undetermined` gets no value: "(σ, T not determined)".
 fn plot_title(
     model: &dyn goniofit::model::Model,
     layout: &goniofit::fit::problem::ParamLayout,
     params: &[f64],
+    undetermined: &[String],
 ) -> String {
     let n_channels = layout.index.len();
     let per_channel = |j: usize| {
@@ -238,12 +248,18 @@ fn plot_title(
     };
     let mut title = format!("{}:", model.name());
     let mut own = Vec::new();
+    let mut loose = Vec::new();
     for (j, (spec, v)) in model.params().iter().zip(params).enumerate() {
         if per_channel(j) {
             own.push(spec.name.to_string());
+        } else if undetermined.iter().any(|u| u == spec.name) {
+            loose.push(spec.name.replace("sigma", "σ"));
         } else {
             title += &format!(" {}={}", spec.name, goniofit::plot::fmt_num(*v));
         }
+    }
+    if !loose.is_empty() {
+        title += &format!(" ({} not determined)", loose.join(", "));
     }
     if !own.is_empty() {
         title += &format!(

@@ -392,7 +392,7 @@ fn log_combination(
     (value, se)
 }
 
-/// The derived quantities of KBS fits: T/σ and the rms slope 2σ/T (determined unless the
+/// The derived quantities of KBS fits: T/σ and Beckmann's α = 2σ/T (determined unless the
 /// verdict is smooth or partial), and per channel the amplitude the regime determines.
 fn derived_quantities(
     layout: &ParamLayout,
@@ -420,11 +420,11 @@ fn derived_quantities(
     });
     let (slope, slope_se) = combo(&[(ks, 1.0), (kt, -1.0)]);
     derived.push(Derived {
-        name: "rms_slope".into(),
+        name: "beckmann_alpha".into(),
         value: 2.0 * slope,
         stderr: ratio_ok.then_some(slope_se.map(|s| 2.0 * s)).flatten(),
         determined: ratio_ok,
-        doc: "rms slope 2σ/T".into(),
+        doc: "Beckmann's α = 2σ/T, the surface's rms slope".into(),
     });
     let scale_spec = specs.iter().position(|s| s.name == "scale").unwrap_or(0);
     for (c, ch) in layout.index.iter().enumerate() {

@@ -106,7 +106,7 @@ impl Interval {
     }
 
     /// The same interval for `factor · ψ` (`factor` > 0), or for `factor / ψ` with
-    /// `invert` (the sides swap); used for the rms slope 2σ/T from T/σ and π·s from s.
+    /// `invert` (the sides swap); used for Beckmann's α = 2σ/T from T/σ and π·s from s.
     pub fn mapped(&self, name: &str, factor: f64, invert: bool) -> Interval {
         let f = |b: Bound| {
             let g = |v: f64| if invert { factor / v } else { factor * v };

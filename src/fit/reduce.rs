@@ -109,7 +109,7 @@ const MARGINAL_NOT_COMPUTED: &str = "the fit was stopped before the marginal unc
 
 /// The note of a `kbs-rough` fit (σ held by construction, see
 /// [`super::validate::rough_by_construction`]).
-const ROUGH_MODEL_NOTE: &str = "kbs-rough (the paper's rough approximation, eq. 43) depends on σ and T only through T/σ: the data determines the slope T/σ (rms slope 2σ/T) and the lobe amplitude s·(T/σ)², but not σ and T separately; σ was held and σ, T are reported as undetermined (fit kbs for σ and T, which the full model can separate only where the lobe is not fully rough)";
+const ROUGH_MODEL_NOTE: &str = "kbs-rough (the paper's rough approximation, eq. 43) depends on σ and T only through T/σ: the data determines the slope T/σ (Beckmann's α = 2σ/T) and the lobe amplitude s·(T/σ)², but not σ and T separately; σ was held and σ, T are reported as undetermined (fit kbs for σ and T, which the full model can separate only where the lobe is not fully rough)";
 
 /// The report's note on a verdict other than [`Verdict::Full`].
 fn regime_note(verdict: Verdict, g_median: f64) -> String {

@@ -21,7 +21,7 @@ pub struct ParamResult {
     pub unit: String,
 }
 
-/// A quantity derived from the parameters (T/σ, rms slope, determined combinations).
+/// A quantity derived from the parameters (T/σ, Beckmann's α, determined combinations).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Derived {
     pub name: String,

@@ -134,7 +134,7 @@ fn assign(layout: &ParamLayout, pairs: &[(String, f64)], out: &mut [Option<f64>]
     Ok(())
 }
 
-/// T/σ below which a KBS lobe is not a surface's specular lobe: the rms slope 2σ/T > 20
+/// T/σ below which a KBS lobe is not a surface's specular lobe: Beckmann's α = 2σ/T > 20
 /// is far outside the paper's domain, and the lobe then only mimics a diffuse term.
 pub const MIN_T_OVER_SIGMA: f64 = 0.1;
 
@@ -220,7 +220,7 @@ pub(super) fn degeneracy(
         let lambda = input.geo.wavelength.median();
         if below(t / sigma, MIN_T_OVER_SIGMA) {
             return Some(format!(
-                "the data shows no specular lobe beyond the diffuse term: T/σ ran below {MIN_T_OVER_SIGMA} (T/σ = {:.3e}, rms slope 2σ/T = {:.3e}), far outside the surfaces KBS describes",
+                "the data shows no specular lobe beyond the diffuse term: T/σ ran below {MIN_T_OVER_SIGMA} (T/σ = {:.3e}, Beckmann's α = 2σ/T = {:.3e}), far outside the surfaces KBS describes",
                 t / sigma,
                 2.0 * sigma / t
             ));

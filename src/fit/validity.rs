@@ -153,7 +153,7 @@ fn shadowing(s: &Surface, theta_i: &[f64], theta_r: &[f64]) -> Check {
         .count();
     let satisfied = s.ratio_determined.then_some(shadowed <= MAX_SHADOWED);
     let detail = format!(
-        "rms slope √2σ/T = {m:.3e}; at the largest angle measured, θ = {:.1}° (m·tan θ = {:.3e}), Smith's shadowing function leaves {:.1} % of the surface in shadow; shadowing stays below {:.0} % up to θ = {:.1}°, and {beyond} of {} samples lie beyond",
+        "rms slope per direction √2σ/T = {m:.3e}; at the largest angle measured, θ = {:.1}° (m·tan θ = {:.3e}), Smith's shadowing function leaves {:.1} % of the surface in shadow; shadowing stays below {:.0} % up to θ = {:.1}°, and {beyond} of {} samples lie beyond",
         theta_max.to_degrees(),
         m * theta_max.tan(),
         100.0 * shadowed,

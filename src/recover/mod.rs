@@ -333,7 +333,7 @@ pub fn truths(scene: &Scene) -> BTreeMap<&'static str, f64> {
         ("T", scene.corr_len),
         ("scale", scene.scale),
         ("T/sigma", ratio),
-        ("rms_slope", 2.0 / ratio),
+        ("beckmann_alpha", 2.0 / ratio),
     ])
 }
 

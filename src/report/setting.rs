@@ -44,7 +44,7 @@ impl Units {
         }
     }
 
-    /// The unit of a derived quantity by name: T/σ, the rms slope and reflectance factors
+    /// The unit of a derived quantity by name: T/σ, Beckmann's α and reflectance factors
     /// are pure numbers; the rough amplitude s(T/σ)² has the scale's unit, the smooth one
     /// s·σ² the scale's unit times length².
     pub fn of_derived(&self, name: &str, smooth: bool) -> String {

@@ -272,6 +272,12 @@ fn interval_lines(s: &mut String, r: &FitResult, info: &RunInfo) {
         s,
         "[[Intervals]] (profile likelihood, as lmfit's conf_interval; one-sided where χ² stays flat to a factor 1000 or up to the model's domain edge)"
     );
+    if r.params.iter().any(|p| !p.determined && !p.fixed) {
+        let _ = writeln!(
+            s,
+            "    note: for a parameter not determined by the data the interval is not an error bar: it is how far the data still bounds that parameter alone, the others refitted at each value"
+        );
+    }
     let width = info
         .intervals
         .iter()

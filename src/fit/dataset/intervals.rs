@@ -1,5 +1,5 @@
 //! Profile-likelihood intervals of a dataset's chosen fit ([`crate::fit::profile`]): every
-//! free parameter, the parameters the reduced fit held, and T/σ, the rms slope, the
+//! free parameter, the parameters the reduced fit held, and T/σ, Beckmann's α, the
 //! amplitudes and the reflectance factors.
 
 use super::DatasetFit;
@@ -14,7 +14,7 @@ use crate::fit::profile::{Interval, Profiler, Target};
 pub const MAX_PROFILED: usize = 8;
 
 /// Profile-likelihood intervals of every free parameter, of the parameters the reduced
-/// fit held, and of T/σ, the rms slope, the amplitudes and the reflectance factors, on the
+/// fit held, and of T/σ, Beckmann's α, the amplitudes and the reflectance factors, on the
 /// full problem at the reported optimum `r` (`uncertainties`: the weights come from a
 /// stated `sigma_L`). A quantity whose profile cannot be walked is left out. Every refit
 /// shares the fit's `stop` (its time limit and signals): once it fires the walks end, and
@@ -60,7 +60,7 @@ pub fn profile_intervals(
             eliminate: ks,
         };
         if let Some(iv) = prof.interval("T/sigma", &ratio) {
-            out.push(iv.mapped("rms_slope", 2.0, true));
+            out.push(iv.mapped("beckmann_alpha", 2.0, true));
             out.push(iv);
         }
         for d in &r.derived {
