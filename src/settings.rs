@@ -186,6 +186,7 @@ pub fn model_options(
         mode,
         tol: tol(front, tol_value)?,
         patch,
+        ..ModelOptions::default()
     })
 }
 

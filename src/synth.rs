@@ -791,6 +791,12 @@ pub struct Truth {
     pub tol: f64,
     /// Patch half-sizes (X, Y), when the coherent term was included.
     pub patch: Option<(f64, f64)>,
+    /// Fresnel factor on the KBS lobe (`none` when the file does not say).
+    #[serde(default)]
+    pub fresnel: crate::model::fresnel::Fresnel,
+    /// Shadowing factor on the KBS lobe (`none` when the file does not say).
+    #[serde(default)]
+    pub shadowing: crate::model::shadowing::Shadowing,
     /// [`Layout::describe`] of the layout, or the layout file's path as given: either way
     /// [`Layout::parse`] reads it back.
     pub layout: String,
@@ -843,6 +849,8 @@ impl Truth {
             mode: parse_eval_mode(&self.mode)?,
             tol: self.tol,
             patch: self.patch,
+            fresnel: self.fresnel,
+            shadowing: self.shadowing,
         })
     }
 

@@ -116,6 +116,7 @@ impl ModeSpec {
             mode: self.mode,
             tol: self.tol,
             patch: None,
+            ..ModelOptions::default()
         }
     }
 }
@@ -209,6 +210,7 @@ fn reference_model() -> Result<Box<dyn Model>> {
             mode: EvalMode::Series,
             tol: REFERENCE_TOL,
             patch: None,
+            ..ModelOptions::default()
         },
     )
 }

@@ -151,6 +151,7 @@ fn eval_options_brdf_patch_mode_tol() {
             mode: EvalMode::Series,
             tol: 1e-12,
             patch: Some((3.0, 4.0)),
+            ..ModelOptions::default()
         },
     );
     for (row, w) in rows.iter().zip(&want) {

@@ -1,9 +1,12 @@
 //! Model properties: analytic Jacobians against central differences for every model, no
 //! NaN/inf/panic anywhere in the domain, continuity of `auto` across its switch points,
-//! the paper's Figures 6–7 facts, and the coherent (patch) term.
+//! the paper's Figures 6–7 facts, the coherent (patch) term, and the lobe times its
+//! Fresnel and shadowing factors (the product of the parts, and its Jacobian).
 
 use goniofit::geometry::{Geometry, Quantity, Sample};
+use goniofit::model::fresnel::Fresnel;
 use goniofit::model::series::{self, LnQ};
+use goniofit::model::shadowing::Shadowing;
 use goniofit::model::{self, kbs::Kbs, EvalMode, Mode, Model, ModelOptions};
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -24,8 +27,42 @@ fn kbs(mode: EvalMode, patch: Option<(f64, f64)>) -> Kbs {
         mode,
         tol: TOL,
         patch,
+        ..ModelOptions::default()
     })
     .unwrap()
+}
+
+/// The KBS models and modes the Fresnel and shadowing factors are checked on.
+const FACTOR_MODELS: [(&str, EvalMode); 5] = [
+    ("kbs", EvalMode::Auto),
+    ("kbs", EvalMode::Series),
+    ("kbs-smooth", EvalMode::Smooth),
+    ("kbs-rough", EvalMode::Rough),
+    ("kbs+lambert", EvalMode::Auto),
+];
+
+/// Every Fresnel form, each with a shadowing form.
+const FACTORS: [(Fresnel, Shadowing); 4] = [
+    (Fresnel::Dielectric, Shadowing::Smith),
+    (Fresnel::Conductor, Shadowing::SmithCorrelated),
+    (Fresnel::Schlick, Shadowing::None),
+    (Fresnel::None, Shadowing::Smith),
+];
+
+fn with_factors(
+    name: &str,
+    mode: EvalMode,
+    fresnel: Fresnel,
+    shadowing: Shadowing,
+) -> Box<dyn Model> {
+    let opts = ModelOptions {
+        mode,
+        tol: TOL,
+        fresnel,
+        shadowing,
+        ..ModelOptions::default()
+    };
+    model::by_name(name, &opts).unwrap()
 }
 
 /// Analytic Jacobian column j against a central difference in ln p_j (relative step h).
@@ -98,10 +135,23 @@ proptest! {
         ti in 0.0..85.0f64, tr in 0.0..88.0f64, pr in -180.0..180.0f64,
         sigma in log_uniform(1e-4, 15.0), tq in log_uniform(0.3, 30.0),
         s in log_uniform(0.1, 10.0), sd in log_uniform(0.01, 1.0),
-        w in log_uniform(0.02, 1.0),
+        w in log_uniform(0.02, 1.0), n in 1.01..4.0f64, kappa in log_uniform(1e-3, 10.0),
     ) {
         let geo = geo1(ti, tr, pr, 1.0);
         let corr = sigma * tq;
+        // The KBS lobe times the Fresnel and shadowing factors, in every mode and model.
+        for (name, mode) in FACTOR_MODELS {
+            for (fresnel, shadowing) in FACTORS {
+                let m = with_factors(name, mode, fresnel, shadowing);
+                let mut p = vec![sigma, corr, s];
+                if name == "kbs+lambert" {
+                    p.push(sd);
+                }
+                p.extend([n, kappa].into_iter().take(fresnel.param_count()));
+                let jump = if mode == EvalMode::Auto { TOL } else { 1e-15 };
+                check_jacobian(m.as_ref(), &geo, &p, jump).map_err(TestCaseError::fail)?;
+            }
+        }
         for mode in [EvalMode::Auto, EvalMode::Series, EvalMode::Smooth, EvalMode::Rough] {
             let jump = if mode == EvalMode::Auto { TOL } else { 1e-15 };
             let k = kbs(mode, None);
@@ -141,6 +191,15 @@ proptest! {
             let mut out2 = [0.0];
             k.eval(&geo, &p, &mut out2, None);
             prop_assert_eq!(out2[0], out[0]);
+            for (fresnel, shadowing) in FACTORS {
+                let m = with_factors("kbs", mode, fresnel, shadowing);
+                let p = [sigma * lambda, t * lambda, 1.0, 1.01 + 3.0 * t.fract(), 10.0 * t.fract()];
+                let p = &p[..3 + fresnel.param_count()];
+                let mut jac = [0.0; 5];
+                m.radiance(&geo, p, &mut out, Some(&mut jac[..p.len()]));
+                prop_assert!(out[0].is_finite() && out[0] >= 0.0, "{fresnel:?}: L = {}", out[0]);
+                prop_assert!(jac.iter().all(|v| v.is_finite()), "{fresnel:?}: J = {jac:?}");
+            }
         }
     }
 
@@ -380,5 +439,46 @@ fn incoherent_model_matches_paper_form_without_patch() {
             "{} vs {expect}",
             out[0]
         );
+    }
+}
+
+/// The extended lobe is the plain lobe times F(θ_loc) G(θi, θr), each factor as its module
+/// computes it from the sample's angles: cos θ_loc = √((1 + ŝ·k̂₂)/2) from the vectors.
+#[test]
+fn extended_lobe_is_the_plain_lobe_times_its_factors() {
+    use goniofit::model::shadowing::cot;
+    let (sigma, corr, n, kappa) = (0.4, 3.0, 1.7, 0.8);
+    for (ti, tr, pr) in [
+        (10.0, 20.0, 0.0),
+        (60.0, 70.0, 30.0),
+        (85.0, 89.9, 0.0),
+        (45.0, 30.0, 180.0),
+    ] {
+        let geo = geo1(ti, tr, pr, 1.0);
+        let (ti_r, tr_r, pr_r) = (
+            f64::to_radians(ti),
+            f64::to_radians(tr),
+            f64::to_radians(pr),
+        );
+        let s_hat = [-ti_r.sin(), 0.0, ti_r.cos()];
+        let k2 = [tr_r.sin() * pr_r.cos(), tr_r.sin() * pr_r.sin(), tr_r.cos()];
+        let dot: f64 = s_hat.iter().zip(&k2).map(|(a, b)| a * b).sum();
+        let cos_loc = ((1.0 + dot) / 2.0).sqrt();
+        let mut plain = [0.0];
+        kbs(EvalMode::Series, None).radiance(&geo, &[sigma, corr, 1.0], &mut plain, None);
+        for (fresnel, shadowing) in FACTORS {
+            let m = with_factors("kbs", EvalMode::Series, fresnel, shadowing);
+            let p = [sigma, corr, 1.0, n, kappa];
+            let mut out = [0.0];
+            m.radiance(&geo, &p[..3 + fresnel.param_count()], &mut out, None);
+            let f = fresnel.eval(cos_loc, &[n, kappa]).f;
+            let g = shadowing.eval(cot(ti_r), cot(tr_r), corr / sigma).g;
+            let want = plain[0] * f * g;
+            assert!(
+                (out[0] - want).abs() <= 1e-12 * want,
+                "{ti},{tr},{pr} {fresnel:?}: {} vs {want}",
+                out[0]
+            );
+        }
     }
 }

@@ -3,7 +3,9 @@
 use clap::ValueEnum;
 use goniofit::fit::loss::LossKind;
 use goniofit::geometry::Quantity;
-use goniofit::model::EvalMode;
+use goniofit::model::fresnel::Fresnel;
+use goniofit::model::shadowing::Shadowing;
+use goniofit::model::{EvalMode, ModelOptions};
 
 /// A wavelength on the command line: the number and its unit (`nm`, `µm`), or no unit for
 /// a bare number (then it is in the unit of σ and T, whatever that is).
@@ -102,4 +104,68 @@ pub fn parse_patch(text: &str) -> goniofit::Result<(f64, f64)> {
         return Err(bad());
     }
     Ok((x, y))
+}
+
+/// `--fresnel` and `--shadowing`: the factors on the KBS lobe (fit, eval, synth, render).
+#[derive(Debug, Clone, Copy, Default, clap::Args)]
+pub struct FactorArgs {
+    /// Fresnel factor on the KBS lobe, normalised at normal incidence: dielectric (parameter
+    /// n), conductor (n, kappa), schlick (n), or none (the paper's model).
+    #[arg(long, value_enum, default_value = "none")]
+    pub fresnel: FresnelArg,
+    /// Shadowing–masking on the KBS lobe: Smith's G for the Gaussian slopes of T/σ
+    /// (smith: G1(θi) G1(θr); smith-correlated: 1/(1 + Λi + Λr)), or none.
+    #[arg(long, value_enum, default_value = "none")]
+    pub shadowing: ShadowingArg,
+}
+
+impl FactorArgs {
+    /// `opts` with these factors.
+    pub fn apply(self, opts: ModelOptions) -> ModelOptions {
+        ModelOptions {
+            fresnel: self.fresnel.into(),
+            shadowing: self.shadowing.into(),
+            ..opts
+        }
+    }
+}
+
+/// `--fresnel`, as chosen on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum FresnelArg {
+    #[default]
+    None,
+    Dielectric,
+    Conductor,
+    Schlick,
+}
+
+impl From<FresnelArg> for Fresnel {
+    fn from(f: FresnelArg) -> Self {
+        match f {
+            FresnelArg::None => Fresnel::None,
+            FresnelArg::Dielectric => Fresnel::Dielectric,
+            FresnelArg::Conductor => Fresnel::Conductor,
+            FresnelArg::Schlick => Fresnel::Schlick,
+        }
+    }
+}
+
+/// `--shadowing`, as chosen on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum ShadowingArg {
+    #[default]
+    None,
+    Smith,
+    SmithCorrelated,
+}
+
+impl From<ShadowingArg> for Shadowing {
+    fn from(s: ShadowingArg) -> Self {
+        match s {
+            ShadowingArg::None => Shadowing::None,
+            ShadowingArg::Smith => Shadowing::Smith,
+            ShadowingArg::SmithCorrelated => Shadowing::SmithCorrelated,
+        }
+    }
 }

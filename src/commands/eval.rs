@@ -37,6 +37,9 @@ pub struct EvalArgs {
     /// Patch half-sizes X,Y (unit of λ): adds the coherent term ρ0² with A = 4XY.
     #[arg(long, value_name = "X,Y")]
     pub patch: Option<String>,
+    /// Fresnel and shadowing factors on the KBS lobe.
+    #[command(flatten)]
+    pub factors: super::args::FactorArgs,
     /// KBS evaluation mode.
     #[arg(long, value_enum, default_value_t = ModeArg::Auto)]
     pub mode: ModeArg,
@@ -88,7 +91,12 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
         channel: args.channel.clone(),
     };
     let patch = args.patch.as_deref().map(parse_patch).transpose()?;
-    let mopts = settings::model_options(Front::Cli, args.mode.into(), args.tol, patch)?;
+    let mopts = args.factors.apply(settings::model_options(
+        Front::Cli,
+        args.mode.into(),
+        args.tol,
+        patch,
+    )?);
     let model = model::by_name(&args.model, &mopts)?;
     let params = model::parse_params(model.as_ref(), &args.params)?;
 

@@ -117,6 +117,9 @@ pub struct FitArgs {
     /// Patch half-sizes X,Y (unit of λ): include the coherent term.
     #[arg(long)]
     pub patch: Option<String>,
+    /// Fresnel and shadowing factors on the KBS lobe.
+    #[command(flatten)]
+    pub factors: super::args::FactorArgs,
     /// Do not reduce the fit when the data determines only parameter combinations.
     #[arg(long)]
     pub no_reduce: bool,
@@ -293,7 +296,12 @@ pub fn fit_config(
     let patch = args.patch.as_deref().map(parse_patch).transpose()?;
     Ok(FitConfig {
         model: model.to_string(),
-        model_opts: settings::model_options(CLI, args.mode.into(), args.tol, patch)?,
+        model_opts: args.factors.apply(settings::model_options(
+            CLI,
+            args.mode.into(),
+            args.tol,
+            patch,
+        )?),
         residual: args.residual.into(),
         loss: Loss::new(args.loss.into(), settings::f_scale(CLI, args.f_scale)?)?,
         floor: settings::floor(CLI, args.floor)?,

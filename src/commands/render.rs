@@ -48,6 +48,9 @@ pub struct SphereArgs {
     /// Output file, .png or .svg.
     #[arg(long)]
     pub out: PathBuf,
+    /// Fresnel and shadowing factors on the KBS lobe.
+    #[command(flatten)]
+    pub factors: super::args::FactorArgs,
 }
 
 impl RenderArgs {
@@ -66,7 +69,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<u8> {
 }
 
 fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
-    let model = by_name(&a.model, &ModelOptions::default())?;
+    let model = by_name(&a.model, &a.factors.apply(ModelOptions::default()))?;
     let params = parse_params(model.as_ref(), &a.params)?;
     let image = sphere_radiance(model.as_ref(), &params, a.light_deg, a.wavelength.0, a.size)?;
     let pic = SpherePicture {

@@ -79,6 +79,9 @@ pub struct SynthArgs {
     /// Patch half-sizes X,Y (unit of λ): include the coherent term with A = 4XY.
     #[arg(long, value_name = "X,Y")]
     pub patch: Option<String>,
+    /// Fresnel and shadowing factors on the KBS lobe.
+    #[command(flatten)]
+    pub factors: super::args::FactorArgs,
     /// Measured quantity: radiance, or BRDF = radiance / cos θi.
     #[arg(long, value_enum, default_value_t = QuantityArg::Radiance)]
     pub quantity: QuantityArg,
@@ -178,7 +181,12 @@ fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
 
 pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     let patch = a.patch.as_deref().map(parse_patch).transpose()?;
-    let opts = settings::model_options(Front::Cli, a.mode.into(), a.tol, patch)?;
+    let opts = a.factors.apply(settings::model_options(
+        Front::Cli,
+        a.mode.into(),
+        a.tol,
+        patch,
+    )?);
     let model = by_name(&a.model, &opts)?;
     let params = parse_params(model.as_ref(), &a.params)?;
     let layout = build_layout(&a)?;
@@ -236,6 +244,8 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         mode: synth::eval_mode_name(opts.mode).to_string(),
         tol: a.tol,
         patch,
+        fresnel: opts.fresnel,
+        shadowing: opts.shadowing,
         layout: match &layout {
             Layout::Angles(_) => a.layout.clone(),
             l => l.describe(),

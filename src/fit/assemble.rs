@@ -59,7 +59,8 @@ pub(super) fn assemble(
     let dof = (n - n_free).max(1) as f64;
     let (gof, sample_modes, fitted_computed) =
         fitted_at_point(&problem, input, &run.lm, p, config, &mut notes);
-    let params = param_results(layout, specs, p, &unc, verdict, &mut notes);
+    let mut params = param_results(layout, specs, p, &unc, verdict, &mut notes);
+    fresnel_reach(&mut params, &input.geo, &mut notes);
     let derived = derived_quantities(layout, specs, p, &unc, verdict);
     let mut modes = BTreeMap::new();
     for m in &sample_modes {
@@ -68,6 +69,10 @@ pub(super) fn assemble(
     notes.extend(validate::termination_note(run.lm.termination));
     let mut result = FitResult {
         model: model.name().to_string(),
+        factors: model
+            .options()
+            .map(|o| o.factors_label())
+            .unwrap_or_default(),
         params,
         derived,
         corr_names: free
@@ -310,6 +315,40 @@ fn adequacy_of(
     })
 }
 
+/// Local incidence angle (degrees) below which every sample of a fit lies for its Fresnel
+/// parameters to count as not determined: there a dielectric's R(θ_loc)/R(0) stays within
+/// a factor ~2 of 1, so the index is read from the curvature of a nearly flat factor and
+/// trades against the lobe's shape.
+const FRESNEL_MIN_LOCAL_DEG: f64 = 60.0;
+
+/// Marks the Fresnel parameters (`n`, `kappa`) not determined, with a note, when no sample
+/// reaches θ_loc = [`FRESNEL_MIN_LOCAL_DEG`] (cos θ_loc = √((1 + ŝ·k̂₂)/2)).
+fn fresnel_reach(
+    params: &mut [ParamResult],
+    geo: &crate::geometry::Geometry,
+    notes: &mut Vec<String>,
+) {
+    let largest = geo
+        .h
+        .iter()
+        .map(|&h| crate::model::fresnel::cos_local(h).acos().to_degrees())
+        .fold(0.0f64, f64::max);
+    if largest >= FRESNEL_MIN_LOCAL_DEG {
+        return;
+    }
+    for p in params
+        .iter_mut()
+        .filter(|p| (p.name == "n" || p.name == "kappa") && p.determined)
+    {
+        p.determined = false;
+        p.stderr = None;
+        notes.push(format!(
+            "{} is not determined: no sample beyond θ_loc = {FRESNEL_MIN_LOCAL_DEG:.0}° (the largest local incidence angle is {largest:.1}°), where the Fresnel factor depends on the index",
+            p.name
+        ));
+    }
+}
+
 /// Every layout parameter with its standard error (delta method through the transform)
 /// and whether the data determines it: free, not reduced away by the verdict, outside the
 /// Jacobian's null space, a log standard error at most [`DETERMINED_MAX_LOG_SE`], not at a
@@ -468,6 +507,7 @@ fn validity_of(r: &FitResult, input: &FitInput) -> Option<validity::Validity> {
         ratio_determined: ratio.determined,
         both_determined: (sigma.determined || sigma.fixed) && (corr.determined || corr.fixed),
         wavelength: input.geo.wavelength.median(),
+        shadowing_modelled: r.factors.contains("--shadowing"),
     };
     Some(validity::check(
         &surface,

@@ -74,6 +74,9 @@ fn grid_for(name: &str, lambda: f64) -> Vec<f64> {
             .map(|v| v * lambda)
             .collect(),
         "w" => logspace(0.003, 1.2, 30),
+        // The Fresnel factor's index: a paint's or glass's, and a metal's extinction order.
+        "n" => vec![1.5],
+        "kappa" => vec![1.0],
         _ => vec![1.0],
     }
 }
@@ -195,8 +198,11 @@ fn model_side(
     use crate::model::{by_name, EvalMode, ModelOptions};
     let stopped = || stop.is_some_and(Stop::is_requested);
     let limit = |mode: EvalMode| {
+        let base = grid_model.options().unwrap_or_default();
         let opts = ModelOptions {
             mode,
+            fresnel: base.fresnel,
+            shadowing: base.shadowing,
             ..ModelOptions::default()
         };
         is_kbs

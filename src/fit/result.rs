@@ -79,6 +79,9 @@ impl Verdict {
 #[derive(Debug, Clone)]
 pub struct FitResult {
     pub model: String,
+    /// The model's factor options as command-line text (` --fresnel dielectric`), empty
+    /// without factors ([`crate::model::ModelOptions::factors_label`]).
+    pub factors: String,
     pub params: Vec<ParamResult>,
     pub derived: Vec<Derived>,
     /// Names and correlation matrix of the free parameters of the reported fit.

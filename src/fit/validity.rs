@@ -98,6 +98,8 @@ pub struct Surface {
     pub both_determined: bool,
     /// Median wavelength of the samples (unit of σ, T).
     pub wavelength: f64,
+    /// Whether the model multiplies the lobe by a shadowing–masking factor.
+    pub shadowing_modelled: bool,
 }
 
 /// The checks at a fitted surface, over samples with polar angles `theta_i`, `theta_r`
@@ -151,7 +153,10 @@ fn shadowing(s: &Surface, theta_i: &[f64], theta_r: &[f64]) -> Check {
         .zip(theta_r)
         .filter(|(i, r)| i.abs() > limit_angle || r.abs() > limit_angle)
         .count();
-    let satisfied = s.ratio_determined.then_some(shadowed <= MAX_SHADOWED);
+    // With a shadowing factor in the model the assumption is not the paper's any more.
+    let satisfied = s
+        .ratio_determined
+        .then_some(shadowed <= MAX_SHADOWED || s.shadowing_modelled);
     let detail = format!(
         "rms slope per direction √2σ/T = {m:.3e}; at the largest angle measured, θ = {:.1}° (m·tan θ = {:.3e}), Smith's shadowing function leaves {:.1} % of the surface in shadow; shadowing stays below {:.0} % up to θ = {:.1}°, and {beyond} of {} samples lie beyond",
         theta_max.to_degrees(),
@@ -165,6 +170,9 @@ fn shadowing(s: &Surface, theta_i: &[f64], theta_r: &[f64]) -> Check {
         None => format!(
             "not determined: T/σ is not determined by the data; at the fitted values, {detail}"
         ),
+        Some(true) if s.shadowing_modelled => {
+            format!("modelled: Smith's shadowing–masking factor multiplies the lobe; {detail}")
+        }
         Some(true) => format!("satisfied: {detail}"),
         Some(false) => format!("violated: {detail}; the model ignores shadowing there"),
     };
@@ -211,7 +219,26 @@ mod tests {
             ratio_determined: true,
             both_determined: true,
             wavelength: 1.0,
+            shadowing_modelled: false,
         }
+    }
+
+    #[test]
+    fn a_modelled_shadowing_factor_satisfies_the_check_on_a_steep_surface() {
+        let theta = [80f64.to_radians()];
+        let plain = check(&surface(1.0, 2.0), &theta, &theta);
+        assert!(plain.any_violated());
+        let modelled = Surface {
+            shadowing_modelled: true,
+            ..surface(1.0, 2.0)
+        };
+        let v = check(&modelled, &theta, &theta);
+        assert_eq!(v.checks[1].satisfied, Some(true));
+        assert!(
+            v.checks[1].text.starts_with("modelled:"),
+            "{}",
+            v.checks[1].text
+        );
     }
 
     #[test]

@@ -36,7 +36,7 @@
 use std::ops::{Add, Mul, Sub};
 
 /// Which Fresnel factor multiplies the KBS lobe.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Fresnel {
     /// No factor: the paper's model (a perfect conductor).

@@ -7,10 +7,14 @@
 //! | `T` | unit of λ | > 0 |
 //! | `scale` (s) | 1 | > 0 |
 //! | `scale_d` (s_d) | 1 | > 0 |
+//! | `n`, `kappa` (with `--fresnel`) | 1 | > 0 |
+//!
+//! The Fresnel and shadowing factors (options `fresnel`, `shadowing`) multiply the KBS part
+//! only; their parameters follow `scale_d`.
 //!
 //! Accuracy: that of [`super::kbs::Kbs`]; the Lambertian part is exact to rounding.
 
-use super::kbs::{Kbs, CORR_LEN, SIGMA};
+use super::kbs::{Kbs, CORR_LEN, INDEX_N, KAPPA, SIGMA};
 use super::{Mode, Model, ModelOptions, ParamSpec};
 use crate::error::Result;
 use crate::geometry::Geometry;
@@ -21,16 +25,21 @@ pub struct KbsLambert {
     pub kbs: Kbs,
 }
 
-const PARAMS: [ParamSpec; 4] = [
+const SCALE_D: ParamSpec = ParamSpec {
+    name: "scale_d",
+    unit: "1",
+    positive: true,
+    doc: "Lambertian (body) scale s_d",
+};
+const PARAMS: [ParamSpec; 4] = [SIGMA, CORR_LEN, super::lambert::SCALE, SCALE_D];
+const PARAMS_N: [ParamSpec; 5] = [SIGMA, CORR_LEN, super::lambert::SCALE, SCALE_D, INDEX_N];
+const PARAMS_NK: [ParamSpec; 6] = [
     SIGMA,
     CORR_LEN,
     super::lambert::SCALE,
-    ParamSpec {
-        name: "scale_d",
-        unit: "1",
-        positive: true,
-        doc: "Lambertian (body) scale s_d",
-    },
+    SCALE_D,
+    INDEX_N,
+    KAPPA,
 ];
 
 impl KbsLambert {
@@ -48,16 +57,27 @@ impl Model for KbsLambert {
     }
 
     fn params(&self) -> &'static [ParamSpec] {
-        &PARAMS
+        match self.kbs.opts.fresnel.param_count() {
+            0 => &PARAMS,
+            1 => &PARAMS_N,
+            _ => &PARAMS_NK,
+        }
     }
 
     fn radiance(&self, geo: &Geometry, p: &[f64], out: &mut [f64], jac: Option<&mut [f64]>) {
         let n = geo.len();
+        // The KBS part's parameters: σ, T, s, then the Fresnel ones (after s_d here).
+        let mut kp = [0.0; 5];
+        kp[..3].copy_from_slice(&p[..3]);
+        let nf = p.len() - 4;
+        kp[3..3 + nf].copy_from_slice(&p[4..]);
+        let kp = &kp[..3 + nf];
         match jac {
-            None => self.kbs.radiance(geo, &p[..3], out, None),
+            None => self.kbs.lobe(geo, kp, out, None),
             Some(j) => {
-                let (j_kbs, j_d) = j.split_at_mut(3 * n);
-                self.kbs.radiance(geo, &p[..3], out, Some(j_kbs));
+                let (j_kbs, rest) = j.split_at_mut(3 * n);
+                let (j_d, j_f) = rest.split_at_mut(n);
+                self.kbs.lobe(geo, kp, out, Some((j_kbs, j_f)));
                 j_d.copy_from_slice(&geo.cos_i);
             }
         }

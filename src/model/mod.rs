@@ -82,6 +82,10 @@ pub struct ModelOptions {
     /// Patch half-sizes (X, Y) in the unit of λ: when given, KBS includes the coherent ρ0²
     /// term and uses A = 4XY; otherwise A = λ² and no coherent term.
     pub patch: Option<(f64, f64)>,
+    /// Fresnel factor on the KBS lobe ([`fresnel`]; ignored by the other models).
+    pub fresnel: fresnel::Fresnel,
+    /// Shadowing–masking factor on the KBS lobe ([`shadowing`]; ignored by the others).
+    pub shadowing: shadowing::Shadowing,
 }
 
 impl Default for ModelOptions {
@@ -90,7 +94,24 @@ impl Default for ModelOptions {
             mode: EvalMode::Auto,
             tol: 1e-10,
             patch: None,
+            fresnel: fresnel::Fresnel::None,
+            shadowing: shadowing::Shadowing::None,
         }
+    }
+}
+
+impl ModelOptions {
+    /// The factor options as command-line text (` --fresnel dielectric --shadowing smith`),
+    /// empty for the paper's model: what a report appends to the model's name.
+    pub fn factors_label(&self) -> String {
+        let mut s = String::new();
+        if self.fresnel != fresnel::Fresnel::None {
+            s += &format!(" --fresnel {}", self.fresnel.name());
+        }
+        if self.shadowing != shadowing::Shadowing::None {
+            s += &format!(" --shadowing {}", self.shadowing.name());
+        }
+        s
     }
 }
 

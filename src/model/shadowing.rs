@@ -19,7 +19,7 @@
 //! ν > 6, Λ < 1e-18 and |ν ∂Λ/∂ν| < 2e-17: both are taken as 0.
 
 /// Which shadowing–masking factor multiplies the KBS lobe.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Shadowing {
     /// No factor: the paper's model.

@@ -79,6 +79,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
     }
     json!({
         "model": r.model,
+        "factors": r.factors.trim(),
         "start": start,
         "params": params,
         "derived": derived,

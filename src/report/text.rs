@@ -393,7 +393,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     let _ = writeln!(s, "[[goniofit {}: fit report]]", info.version);
     let _ = writeln!(s, "    input           = {}", info.input);
     let _ = writeln!(s, "    command         = {}", info.command);
-    let _ = writeln!(s, "    model           = {}", r.model);
+    let _ = writeln!(s, "    model           = {}{}", r.model, r.factors);
     setting_lines(&mut s, &info.setting);
     let _ = writeln!(s, "[[Fit statistics]]");
     let _ = writeln!(
