@@ -12,7 +12,8 @@
 //! modes series, rough, smooth, auto, and rough+jac, auto+jac with the Jacobian),
 //! `lnq_hemi/<regime>/<mode>` (the sum ln Q alone, as a batch: `series::ln_q_batch`), and
 //! `models/<name>/{values,jacobian}`
-//! for the other models. Throughput is reported in samples/s; the target is auto/rough ≤ 4
+//! for the other models, and `kbs_factors/<regime>/<factors>` (the lobe with its Fresnel and
+//! shadowing factors beside the plain one). Throughput is reported in samples/s; the target is auto/rough ≤ 4
 //! in every regime.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -125,5 +126,50 @@ fn bench_models(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_kbs, bench_lnq, bench_models);
+/// The KBS lobe with and without its Fresnel and shadowing factors, side by side
+/// (`kbs_factors/<regime>/<factors>[+jac]`, `auto` mode, hemisphere set): the target is
+/// the extended lobe within 1.5× of the plain one.
+fn bench_factors(c: &mut Criterion) {
+    use model::fresnel::Fresnel;
+    use model::shadowing::Shadowing;
+    let geo = geometry(false, 7);
+    let mut group = c.benchmark_group("kbs_factors");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(N as u64));
+    for (rname, g) in REGIMES {
+        let sigma = sigma_for(g);
+        for (fname, fresnel, shadowing) in [
+            ("plain", Fresnel::None, Shadowing::None),
+            ("dielectric+smith", Fresnel::Dielectric, Shadowing::Smith),
+            (
+                "conductor+smith-correlated",
+                Fresnel::Conductor,
+                Shadowing::SmithCorrelated,
+            ),
+        ] {
+            let m = model::kbs::Kbs::new(ModelOptions {
+                fresnel,
+                shadowing,
+                ..Default::default()
+            })
+            .unwrap();
+            let p = [sigma, 5.0 * sigma, 1.0, 1.5, 2.0];
+            let p = &p[..3 + fresnel.param_count()];
+            let mut out = vec![0.0; N];
+            let mut jac = vec![0.0; p.len() * N];
+            group.bench_function(BenchmarkId::new(rname, fname), |b| {
+                b.iter(|| m.radiance(&geo, p, &mut out, None))
+            });
+            group.bench_function(BenchmarkId::new(rname, format!("{fname}+jac")), |b| {
+                b.iter(|| m.radiance(&geo, p, &mut out, Some(&mut jac)))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_kbs, bench_lnq, bench_models, bench_factors);
 criterion_main!(benches);
