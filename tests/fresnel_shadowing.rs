@@ -52,7 +52,11 @@ fn fresnel_matches_the_reference_at_extreme_angles_and_indices() {
                 "Schlick c={c} n={n}"
             );
             let via = Fresnel::Dielectric.eval(c, &[n]);
-            assert_eq!(via, complex_ratio(c, n, 0.0));
+            let ed = rel(via.d_n, dn, dn.abs() + f);
+            assert!(
+                rel(via.f, f, f) < 1e-13 && ed < 1e-12,
+                "dielectric c={c} n={n}: {via:?}"
+            );
         }
     }
     println!("Fresnel: worst relative error of F {worst_f:.1e}, of ∂F {worst_d:.1e}");
@@ -100,7 +104,12 @@ fn closed_forms_hold() {
         // The conductor form with κ = 0 is the dielectric one, and it is continuous there.
         for c in [0.01, 0.3, 0.9] {
             let d = Fresnel::Dielectric.eval(c, &[n]);
-            assert_eq!(Fresnel::Conductor.eval(c, &[n, 0.0]), d);
+            let k0 = Fresnel::Conductor.eval(c, &[n, 0.0]);
+            assert!(
+                (k0.f - d.f).abs() < 1e-14 * d.f
+                    && (k0.d_n - d.d_n).abs() < 1e-13 * (d.f + d.d_n.abs())
+            );
+            assert_eq!(k0.d_kappa, 0.0);
             let k = Fresnel::Conductor.eval(c, &[n, 1e-9]);
             assert!(
                 (k.f - d.f).abs() < 1e-11 * d.f,

@@ -95,6 +95,7 @@ impl Fresnel {
                 d_n: 0.0,
                 d_kappa: 0.0,
             },
+            Fresnel::Dielectric if p[0] > 1.0 => real_ratio(cos_loc, p[0]),
             Fresnel::Dielectric => complex_ratio(cos_loc, p[0], 0.0),
             Fresnel::Conductor => complex_ratio(cos_loc, p[0], p[1]),
             Fresnel::Schlick => schlick_ratio(cos_loc, p[0]),
@@ -147,6 +148,30 @@ pub fn complex_ratio(c: f64, n: f64, kappa: f64) -> FresnelValue {
         f: p * m,
         d_n: 4.0 * q * (1.0 + n) * m + p * g.re,
         d_kappa: 4.0 * q * kappa * m - p * g.im,
+    }
+}
+
+/// [`complex_ratio`] at κ = 0 for n > 1, in real arithmetic (w² = n² − 1 + c² > 0): the
+/// same formulas, the same accuracy.
+#[inline]
+pub fn real_ratio(c: f64, n: f64) -> FresnelValue {
+    let (n2, c2) = (n * n, c * c);
+    let w = (n2 - 1.0 + c2).sqrt();
+    let dw = n / w;
+    let u_inv = 1.0 / (c + w);
+    let a_s = u_inv * u_inv;
+    let da_s = -2.0 * a_s * dw * u_inv;
+    let num = n2 * c2 + (c2 - 1.0);
+    let d_inv = 1.0 / (n2 * c + w);
+    let a_p = num * d_inv * d_inv;
+    let da_p = 2.0 * c2 * n * d_inv * d_inv - 2.0 * a_p * (2.0 * n * c + dw) * d_inv;
+    let m = 0.5 * (a_s * a_s + a_p * a_p);
+    let q = (1.0 + n) * (1.0 + n);
+    let p = q * q;
+    FresnelValue {
+        f: p * m,
+        d_n: 4.0 * q * (1.0 + n) * m + p * (a_s * da_s + a_p * da_p),
+        d_kappa: 0.0,
     }
 }
 

@@ -174,7 +174,9 @@ impl Kbs {
                 d_ln_t: 0.0,
             }
         } else {
-            let cot_i = super::shadowing::cot(geo.theta_i[i]);
+            // cot θi from the stored cos θi (θi < 90°): one square root, no sin_cos.
+            let ci = geo.cos_i[i];
+            let cot_i = ci / ((1.0 - ci) * (1.0 + ci)).sqrt();
             let cot_r = super::shadowing::cot(geo.theta_r[i]);
             shadowing.eval(cot_i, cot_r, corr / sigma)
         };
