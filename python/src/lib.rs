@@ -149,7 +149,8 @@ fn evaluate<'py>(
 /// arrays: ``theta_i``, ``theta_r``, ``phi_r`` (degrees, or radians with ``radians=True``,
 /// in goniofit's convention: φr = 0 the forward side), and where the file has them ``L``,
 /// ``weights``, ``sigma_L``, ``wavelength``, ``channel`` (labels). ``channel``: an ASTM
-/// channel such as ``"550nm"``, or ``"all"``; ``csv_radians``, ``columns``,
+/// channel such as ``"550nm"``, an RGL ``.bsdf`` channel (``"r"``, ``"g"``, ``"b"``), or
+/// ``"all"``; ``csv_radians``, ``columns``,
 /// ``signed_theta_r``: the CLI's ``--radians``, ``--columns``, ``--signed-theta-r``.
 /// Errors carry the CLI's located messages (file, line, column, value) as ``ValueError``;
 /// a missing file is ``FileNotFoundError``. Degrees are converted from the radians the

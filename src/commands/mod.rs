@@ -4,6 +4,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod convert;
 pub mod eval;
 pub mod figures;
 pub mod fit;
@@ -25,6 +26,7 @@ impl Command {
             Command::Synth(a) => a.files(),
             Command::Recover(_) => FileSet::new().stdout(),
             Command::Bench(a) => a.files(),
+            Command::Convert(a) => a.files(),
             Command::Render(a) => a.files(),
             Command::Figures(a) => a.files(),
         })
@@ -43,6 +45,7 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Synth(a) => synth::run(*a),
         Command::Recover(a) => recover::run(*a),
         Command::Bench(a) => bench::run(*a),
+        Command::Convert(a) => convert::run(a),
         Command::Render(a) => render::run(a),
         Command::Figures(a) => figures::run(a),
     }
