@@ -6,7 +6,8 @@
 //! measured values, and the raw rows for pass-through output.
 //!
 //! Format detection: a file that starts with the bytes `tensor_file\0` or is named
-//! `*.bsdf` is an RGL measured BRDF ([`rgl`]). A file is ASTM E1392 when its extension is `.astm` (any case), or when
+//! `*.bsdf` is an RGL measured BRDF ([`rgl`]); a file of MERL's size whose first 12 bytes
+//! are the dimensions 90, 90, 180, or one named `*.binary`, is a MERL BRDF ([`merl`]). A file is ASTM E1392 when its extension is `.astm` (any case), or when
 //! its first non-blank line starts with an upper-case `KEY` token (e.g. `LAB_NAME ...`) and
 //! some line starts with `VARS`. Everything else is CSV.
 //!
@@ -34,6 +35,7 @@ pub mod arrays;
 pub mod astm;
 pub mod csv;
 pub mod files;
+pub mod merl;
 pub mod output;
 mod quantity;
 pub mod rgl;
@@ -231,6 +233,9 @@ fn read_file(
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
     let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
     let head = reader.fill_buf().map_err(io_err)?;
+    if merl::is_merl(head, len) || merl_by_extension(path) {
+        return merl::read(path, reader, len, opts, 1);
+    }
     if !is_binary(path, head) && !astm_by_extension(path) && surely_csv(head) {
         let rows_hint = estimate_rows(head, len);
         let stated = quantity::from_comments(path, head)?;
@@ -305,6 +310,13 @@ fn is_binary(path: &Path, head: &[u8]) -> bool {
             .is_some_and(|e| e.eq_ignore_ascii_case("bsdf"))
 }
 
+/// Whether the extension says MERL (`.binary`, any case).
+fn merl_by_extension(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("binary"))
+}
+
 /// Whether the extension says ASTM E1392 (`.astm`, any case).
 fn astm_by_extension(path: &Path) -> bool {
     path.extension()
@@ -343,6 +355,9 @@ fn estimate_rows(head: &[u8], len: u64) -> usize {
 /// Read a dataset from bytes already in memory; `path` names it in messages and decides
 /// the format by extension as [`read_dataset`] does.
 pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
+    if merl::is_merl(bytes, bytes.len() as u64) || merl_by_extension(path) {
+        return merl::read(path, bytes, bytes.len() as u64, opts, 1);
+    }
     if is_binary(path, bytes) {
         return rgl::read(path, bytes, opts);
     }

@@ -402,7 +402,7 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
 }
 
 /// The channel indices `--channel` selects; none given is an error listing them.
-fn select_channels(path: &Path, channel: Option<&str>) -> Result<Vec<usize>> {
+pub(crate) fn select_channels(path: &Path, channel: Option<&str>) -> Result<Vec<usize>> {
     let list = "r, g, b";
     match channel.map(str::trim) {
         Some(c) if c.eq_ignore_ascii_case("all") => Ok(vec![0, 1, 2]),
