@@ -252,7 +252,17 @@ impl<R: BufRead> Records<R> {
             }
         };
         // The blank and comment lines the parser skipped before a record.
-        let skipped = if first { skipped_lines(&self.raw) } else { 0 };
+        let skipped = match first.then(|| skipped_lines(&self.raw)) {
+            None => 0,
+            Some(Ok(skipped)) => skipped,
+            Some(Err(at)) => {
+                let mut cr = self.after_cr;
+                return Err(Fault::Row(
+                    start_line + line_ends(&self.raw[..at], &mut cr),
+                    "a comment line ends with a lone carriage return (\\r) and would hide the lines after it: save the file with \\n or \\r\\n line ends".into(),
+                ));
+            }
+        };
         let out = match (
             std::str::from_utf8(&self.raw[..skipped]),
             std::str::from_utf8(&self.out),
@@ -372,18 +382,26 @@ fn quoted_len(body: &[u8], line: usize, after_cr: bool, out: usize) -> Result<us
 }
 
 /// The bytes the parser skips before a record: line ends, and lines opening with `#`.
-fn skipped_lines(raw: &[u8]) -> usize {
+/// Err: the offset of a comment line that holds a lone `\r` with text after it (the
+/// parser ends a comment at `\n` only, so in a file with `\r` line ends the comment
+/// would hide the lines after it).
+fn skipped_lines(raw: &[u8]) -> Result<usize, usize> {
     let mut i = 0;
     loop {
         match raw.get(i) {
             Some(b'\r' | b'\n') => i += 1,
             Some(b'#') => {
-                i = raw[i..]
+                let end = raw[i..]
                     .iter()
                     .position(|&b| b == b'\n')
                     .map_or(raw.len(), |k| i + k + 1);
+                let comment = &raw[i..end];
+                if comment.windows(2).any(|w| w[0] == b'\r' && w[1] != b'\n') {
+                    return Err(i);
+                }
+                i = end;
             }
-            _ => return i,
+            _ => return Ok(i),
         }
     }
 }
@@ -459,6 +477,15 @@ mod tests {
                 vec!["a".into(), "\" b \"".into(), " c ".into(), "#d".into()]
             )]
         );
+    }
+
+    #[test]
+    fn a_comment_hiding_lines_behind_a_lone_carriage_return_is_refused() {
+        let e = split_records("h\r1\r# c\r2\r").unwrap_err();
+        assert_eq!(e.0, 3);
+        assert!(e.1.contains("lone carriage return"), "{}", e.1);
+        // A comment ending in \r\n, or a lone \r at the end of the text, hides nothing.
+        assert_eq!(split_records("# c\r\nh\r1\r# end\r").unwrap().len(), 2);
     }
 
     #[test]
