@@ -132,6 +132,9 @@ pub fn read(
         path: path.to_path_buf(),
         source,
     };
+    if len < 12 {
+        return Err(size_error(path, len));
+    }
     let mut head = [0u8; 12];
     reader.read_exact(&mut head).map_err(io_err)?;
     for (k, (b, d)) in head.chunks_exact(4).zip(DIMS).enumerate() {
@@ -147,10 +150,7 @@ pub fn read(
         }
     }
     if len != FILE_BYTES {
-        return Err(Error::file(
-            path,
-            format!("expected {FILE_BYTES} bytes (12 + 3 tables of {CELLS} f64), found {len}"),
-        ));
+        return Err(size_error(path, len));
     }
     let selected = super::rgl::select_channels(path, opts.channel.as_deref())?;
     let stride = stride.max(1);
@@ -199,6 +199,16 @@ fn push_channel(ds: &mut Dataset, table: &[f64], c: usize, stride: usize) {
             }
         }
     }
+}
+
+/// The error for a file of the wrong size.
+fn size_error(path: &Path, len: u64) -> Error {
+    Error::file(
+        path,
+        format!(
+            "expected {FILE_BYTES} bytes (12 + 3 tables of {CELLS} f64: a MERL file), found {len}"
+        ),
+    )
 }
 
 /// One channel table of f64, read through `buf`.

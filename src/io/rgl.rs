@@ -301,6 +301,9 @@ impl RglBrdf {
                         continue;
                     }
                     let f = self.eval_cos32(wi, wo);
+                    if !f.iter().chain(&wo).all(|v| v.is_finite()) {
+                        continue; // a damaged table's warp, not a measured point
+                    }
                     let wo = wo.map(f64::from);
                     let sample = Sample {
                         theta_i: theta_i as f64,
