@@ -548,7 +548,7 @@ pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
     );
     plot.subtitle = input.subtitle.clone();
     plot.x_range = if over_phi {
-        (-180.0, 180.0)
+        phi_range(gs.iter().flat_map(|g| g.idx.iter().map(|&k| geo.phi_r[k])))
     } else {
         (0.0, 90.0)
     };
@@ -585,6 +585,19 @@ pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
         label: "±2 and 0 (grey lines)".into(),
     });
     Ok(plot)
+}
+
+/// The φr axis (degrees) for azimuths `phi` (radians): 0…180 when none is negative (a file
+/// measured on one side of the plane of incidence, as the Cornell and CUReT files), −180…0
+/// when none is positive, else −180…180.
+fn phi_range(phi: impl Iterator<Item = f64>) -> (f64, f64) {
+    let tol = 1e-9;
+    let (lo, hi) = phi.fold((0.0f64, 0.0f64), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    match (lo < -tol, hi > tol) {
+        (false, _) => (0.0, 180.0),
+        (true, false) => (-180.0, 0.0),
+        (true, true) => (-180.0, 180.0),
+    }
 }
 
 /// The group with the most samples (the first such by θi).
@@ -931,6 +944,17 @@ mod tests {
         assert!(plane_distance(PI - 0.001) < PLANE_TOL);
         assert!(plane_distance(-PI + 0.001) < PLANE_TOL);
         assert!(plane_distance(0.5 * PI) > 1.0);
+    }
+
+    #[test]
+    fn the_phi_axis_covers_the_side_the_data_is_on() {
+        let deg = |v: &[f64]| v.iter().map(|d: &f64| d.to_radians()).collect::<Vec<_>>();
+        assert_eq!(
+            phi_range(deg(&[0.0, 90.0, 180.0]).into_iter()),
+            (0.0, 180.0)
+        );
+        assert_eq!(phi_range(deg(&[-10.0, 0.0]).into_iter()), (-180.0, 0.0));
+        assert_eq!(phi_range(deg(&[-10.0, 170.0]).into_iter()), (-180.0, 180.0));
     }
 
     #[test]
