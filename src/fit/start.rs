@@ -113,6 +113,32 @@ impl<'m> Refiners<'m> {
         self.held_sigma_problem(self.rough?, start)
     }
 
+    /// The KBS regime band of point `p` by its median g on the subsample: smooth 0 (below
+    /// [`init::SMOOTH_BAND_G`]), between 1, rough 2 (above [`init::ROUGH_BAND_G`]); None
+    /// without σ.
+    fn band(&self, p: &[f64]) -> Option<u8> {
+        self.sigma_k
+            .map(|k| match super::identify::median_g(&self.sub, p[k]) {
+                g if g < init::SMOOTH_BAND_G => 0,
+                g if g > init::ROUGH_BAND_G => 2,
+                _ => 1,
+            })
+    }
+
+    /// Append a copy of the best smooth-band candidate when the grid ranks it within
+    /// [`RIVAL_MARGIN`] of its best, to be refined once more with the smooth approximation
+    /// at its σ; its index, or None.
+    fn add_smooth_held(&self, candidates: &mut Vec<(f64, Vec<f64>)>) -> Option<usize> {
+        let grid_best = candidates.first().map_or(f64::INFINITY, |c| c.0);
+        let smooth = candidates
+            .iter()
+            .find(|(_, c)| self.band(c) == Some(0))
+            .filter(|(cost, _)| *cost <= grid_best * (1.0 + RIVAL_MARGIN))
+            .cloned()?;
+        candidates.push(smooth);
+        Some(candidates.len() - 1)
+    }
+
     /// The smooth approximation's problem on the subsample with σ held at `start`'s value
     /// (in the smooth limit only sσ² is determined); None without one.
     fn smooth_problem(&self, start: &[f64]) -> Option<FitProblem<'m>> {
@@ -175,12 +201,13 @@ pub(super) fn starting_point(
     let sigma_k = layout.find("sigma").first().copied();
     // Layout indices of σ and T (KBS models).
     let ridge = sigma_k.zip(layout.find("T").first().copied());
-    let rough_model = sigma_k
-        .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Rough)))
-        .transpose()?;
-    let smooth_model = sigma_k
-        .map(|_| loose_model(model, config, REFINE_TOL, Some(EvalMode::Smooth)))
-        .transpose()?;
+    // The rough and smooth approximations refine KBS candidates in their bands.
+    let limit = |mode| {
+        sigma_k
+            .map(|_| loose_model(model, config, REFINE_TOL, Some(mode)))
+            .transpose()
+    };
+    let (rough_model, smooth_model) = (limit(EvalMode::Rough)?, limit(EvalMode::Smooth)?);
     let bar = search_bar(config.lm.progress);
     let sub = init::search_input(input, init::search_samples(model));
     let exact = FitProblem::new(
@@ -207,21 +234,7 @@ pub(super) fn starting_point(
         given,
         stop,
     );
-    // The best smooth-band candidate, when the grid ranks it within RIVAL_MARGIN of its
-    // best, is refined twice: as every candidate, and once more with the smooth
-    // approximation at its σ (`held`, a copy at the end).
-    let grid_best = candidates.first().map_or(f64::INFINITY, |c| c.0);
-    let smooth = refiners.sigma_k.and_then(|k| {
-        candidates
-            .iter()
-            .find(|(_, c)| super::identify::median_g(&refiners.sub, c[k]) < init::SMOOTH_BAND_G)
-            .filter(|(cost, _)| *cost <= grid_best * (1.0 + RIVAL_MARGIN))
-            .cloned()
-    });
-    let held = smooth.map(|c| {
-        candidates.push(c);
-        candidates.len() - 1
-    });
+    let held = refiners.add_smooth_held(&mut candidates);
     let start_seconds = t0.elapsed().as_secs_f64();
     // A start must lie inside the models' domain on every sample, not only on the
     // subsample: a rough-valley candidate can drift to a σ where a sample outside the
@@ -237,27 +250,14 @@ pub(super) fn starting_point(
     // After a stop request nothing is refined (the fit's first evaluation on the whole data
     // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
-        show_refining(&bar, candidates.len(), refiners.sub.y.len());
-        let refined = refine_candidates(&refiners, &candidates, held, &coarse, &inside, &bar);
         let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
-        let band = |p: &[f64]| {
-            sigma_k.map(|k| match super::identify::median_g(&refiners.sub, p[k]) {
-                g if g < init::SMOOTH_BAND_G => 0,
-                g if g > init::ROUGH_BAND_G => 2,
-                _ => 1,
-            })
-        };
-        let band_only = held.map(|i| refined[i].1.clone());
-        let chosen = choose_refined(
-            &refined,
+        let chosen = refine_and_choose(
+            &refiners,
             &candidates,
-            &at_edge,
-            coarse.ftol,
-            Valleys {
-                ridge,
-                band: &band,
-                band_only: band_only.as_deref(),
-            },
+            held,
+            (&inside, &at_edge),
+            &coarse,
+            &bar,
         );
         if let Some((values, start)) = chosen.start {
             p0 = values;
@@ -275,6 +275,41 @@ pub(super) fn starting_point(
         alternatives,
         rivals,
     })
+}
+
+/// A test of a point in parameter space (layout order), shareable across threads.
+type PointTest<'a> = &'a (dyn Fn(&[f64]) -> bool + Sync);
+
+/// Refine every candidate (`held`: the one refined with the smooth approximation) and
+/// choose among them ([`choose_refined`]); `domain`: whether a point is inside the
+/// models' domain on the whole data, and whether it lies at an edge of it.
+fn refine_and_choose(
+    refiners: &Refiners,
+    candidates: &[(f64, Vec<f64>)],
+    held: Option<usize>,
+    domain: (PointTest, PointTest),
+    coarse: &LmConfig,
+    bar: &indicatif::ProgressBar,
+) -> Chosen {
+    let (inside, at_edge) = domain;
+    show_refining(bar, candidates.len(), refiners.sub.y.len());
+    let refined = refine_candidates(refiners, candidates, held, coarse, inside, bar);
+    let band = |p: &[f64]| refiners.band(p);
+    let band_only = held.map(|i| refined[i].1.clone());
+    let ridge = refiners
+        .sigma_k
+        .zip(refiners.exact.layout.find("T").first().copied());
+    choose_refined(
+        &refined,
+        candidates,
+        at_edge,
+        coarse.ftol,
+        Valleys {
+            ridge,
+            band: &band,
+            band_only: band_only.as_deref(),
+        },
+    )
 }
 
 /// Refine each candidate with a quick LM on the subsample (in parallel): the grid's best
@@ -303,9 +338,7 @@ fn refine_candidates(
             if stopped(coarse.stop.as_ref()) {
                 return (f64::INFINITY, start.clone());
             }
-            let rough_band = refiners.sigma_k.is_some_and(|k| {
-                super::identify::median_g(&refiners.sub, start[k]) > init::ROUGH_BAND_G
-            });
+            let rough_band = refiners.band(start) == Some(2);
             let smooth_band = smooth_held == Some(i);
             let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
             let (cost, values) = match (refiners.rough_problem(start), rough_band) {
