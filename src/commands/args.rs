@@ -169,3 +169,35 @@ impl From<ShadowingArg> for Shadowing {
         }
     }
 }
+
+/// The read options of a command that reads one table (`eval`, `convert`): its `--columns`
+/// mappings parsed, its angle flags and channel; `require_value`: whether the value column
+/// `L` must be there.
+pub fn table_read_options(
+    columns: &[String],
+    (radians, signed_theta_r): (bool, bool),
+    channel: Option<String>,
+    require_value: bool,
+) -> anyhow::Result<goniofit::io::ReadOptions> {
+    let mut parsed = Vec::new();
+    for c in columns {
+        parsed.extend(goniofit::io::csv::parse_columns(c)?);
+    }
+    Ok(goniofit::io::ReadOptions {
+        radians,
+        signed_theta_r,
+        columns: parsed,
+        require_value,
+        channel,
+    })
+}
+
+/// The files of a command that reads `file` and writes one table to `out` (standard output
+/// when none).
+pub fn table_files(file: &std::path::Path, out: Option<&std::path::Path>) -> goniofit::io::FileSet {
+    let set = goniofit::io::FileSet::new().input("input", file);
+    match out {
+        Some(out) => set.output("--out", out),
+        None => set.stdout(),
+    }
+}

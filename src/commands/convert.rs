@@ -10,7 +10,7 @@
 
 use clap::Args;
 use goniofit::geometry::Quantity;
-use goniofit::io::{self, FileSet, ReadOptions};
+use goniofit::io::{self, FileSet};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -39,26 +39,17 @@ pub struct ConvertArgs {
 impl ConvertArgs {
     /// The input file; the table to `--out` or standard output.
     pub fn files(&self) -> FileSet {
-        let set = FileSet::new().input("input", &self.file);
-        match &self.out {
-            Some(out) => set.output("--out", out),
-            None => set.stdout(),
-        }
+        super::args::table_files(&self.file, self.out.as_deref())
     }
 }
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<u8> {
-    let mut columns = Vec::new();
-    for c in &args.columns {
-        columns.extend(io::csv::parse_columns(c)?);
-    }
-    let opts = ReadOptions {
-        radians: args.radians,
-        signed_theta_r: args.signed_theta_r,
-        columns,
-        require_value: true,
-        channel: args.channel.clone(),
-    };
+    let opts = super::args::table_read_options(
+        &args.columns,
+        (args.radians, args.signed_theta_r),
+        args.channel.clone(),
+        true,
+    )?;
     let ds = io::read_dataset_columns(&args.file, &opts)?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
     io::write_atomic(&out, |w: &mut dyn Write| write_table(w, &ds))?;

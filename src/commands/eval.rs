@@ -14,7 +14,7 @@ use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::Args;
 use goniofit::geometry::Geometry;
-use goniofit::io::{self, FileSet, ReadOptions};
+use goniofit::io::{self, FileSet};
 use goniofit::model;
 use goniofit::settings::{self, Front};
 use std::path::PathBuf;
@@ -70,26 +70,17 @@ pub struct EvalArgs {
 impl EvalArgs {
     /// The input file; the table to `--out` or standard output.
     pub fn files(&self) -> FileSet {
-        let set = FileSet::new().input("input", &self.file);
-        match &self.out {
-            Some(out) => set.output("--out", out),
-            None => set.stdout(),
-        }
+        super::args::table_files(&self.file, self.out.as_deref())
     }
 }
 
 pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
-    let mut columns = Vec::new();
-    for c in &args.columns {
-        columns.extend(io::csv::parse_columns(c)?);
-    }
-    let opts = ReadOptions {
-        radians: args.radians,
-        signed_theta_r: args.signed_theta_r,
-        columns,
-        require_value: false,
-        channel: args.channel.clone(),
-    };
+    let opts = super::args::table_read_options(
+        &args.columns,
+        (args.radians, args.signed_theta_r),
+        args.channel.clone(),
+        false,
+    )?;
     let patch = args.patch.as_deref().map(parse_patch).transpose()?;
     let mopts = args.factors.apply(settings::model_options(
         Front::Cli,
