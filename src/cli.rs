@@ -17,11 +17,11 @@ pub struct Cli {
 pub enum Command {
     /// Evaluate a model at the angles of a CSV file; prints the rows with `L_model` appended.
     Eval(commands::eval::EvalArgs),
-    /// Fit a model to a measurement file (CSV, ASTM E1392 or RGL `.bsdf`) and report parameters with
-    /// uncertainties, what the data determines, and residual statistics.
+    /// Fit a model to a measurement file (CSV, ASTM E1392, RGL `.bsdf`, MERL `.binary`, ALTA
+    /// data) and report parameters with uncertainties, what the data determines, and residual statistics.
     Fit(Box<commands::fit::FitArgs>),
     /// Write the samples `fit` would fit, from any format goniofit reads (CSV, ASTM E1392,
-    /// RGL `.bsdf`), as a CSV table: theta_i, theta_r, phi_r (degrees), L, the channel.
+    /// RGL `.bsdf`, MERL `.binary`, ALTA data), as a CSV table: theta_i, theta_r, phi_r (degrees), L, the channel.
     Convert(commands::convert::ConvertArgs),
     /// Redraw a fit's pictures from its saved JSON report (`goniofit fit --json > fit.json`).
     Plot(commands::plot::PlotArgs),

@@ -2,6 +2,8 @@
 //! the layout and lookup of MERL's reference reader (BRDFRead.cpp): the values come back
 //! at 1e-6 and a fit recovers the function's parameters.
 
+mod common;
+
 use goniofit::fit::driver::{fit, FitConfig, FitInput};
 use goniofit::geometry::{Geometry, Quantity, Sample};
 use goniofit::io::{merl, read_dataset, ReadOptions};
@@ -147,6 +149,29 @@ fn a_written_merl_file_reads_back_and_fits() {
             p.value
         );
     }
+    // The same subsampling on the command line: convert writes those samples, one row each;
+    // a file that is not MERL refuses it.
+    let out = dir.path().join("g.csv");
+    common::success_stdout(&[
+        "convert",
+        "--channel",
+        "g",
+        "--subsample",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+        path.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let rows = text.lines().filter(|l| !l.starts_with('#')).count();
+    assert_eq!(rows, ds.len() + 1, "a header and one row per sample");
+    let csv = common::data("angles_inplane.csv");
+    let refused = common::goniofit()
+        .args(["convert", "--subsample", "3", csv.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("MERL tables only"));
 }
 
 /// A file of the wrong size or dimensions is refused with what was expected.

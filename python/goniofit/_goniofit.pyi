@@ -153,9 +153,11 @@ def read(
     columns: Optional[str] = None,
     signed_theta_r: bool = False,
     require_value: bool = False,
+    subsample: int = 1,
 ) -> Dict[str, Any]:
     """The file's columns: theta_i, theta_r, phi_r (degrees unless radians), and where
-    present L, weights or sigma_L, wavelength (float arrays) and channel (list of str)."""
+    present L, weights or sigma_L, wavelength (float arrays) and channel (list of str).
+    ``subsample=k`` keeps every k-th θd and φd cell of a MERL table."""
 def models() -> Dict[str, List[Tuple[str, str, str]]]:
     """Model name → [(parameter, unit, meaning), ...]."""
 def _json_roundtrip(text: str) -> Any: ...

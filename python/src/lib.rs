@@ -157,7 +157,7 @@ fn evaluate<'py>(
 /// reader stores (one rounding): ``radians=True`` here and in ``fit`` reproduces the CLI's
 /// numbers bit for bit.
 #[pyfunction]
-#[pyo3(signature = (path, channel=None, *, radians=false, csv_radians=false, columns=None, signed_theta_r=false, require_value=false))]
+#[pyo3(signature = (path, channel=None, *, radians=false, csv_radians=false, columns=None, signed_theta_r=false, require_value=false, subsample=1))]
 #[allow(clippy::too_many_arguments)]
 fn read<'py>(
     py: Python<'py>,
@@ -168,6 +168,7 @@ fn read<'py>(
     columns: Option<&str>,
     signed_theta_r: bool,
     require_value: bool,
+    subsample: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let ds = run::guard(|| {
         let opts = ReadOptions {
@@ -176,6 +177,7 @@ fn read<'py>(
             columns: io::csv::parse_columns(columns.unwrap_or(""))?,
             require_value,
             channel,
+            subsample,
         };
         // The file's angles (CSV: degrees, or radians with `csv_radians`; ASTM: radians)
         // are handed back in the unit asked for (`radians`).

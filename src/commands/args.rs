@@ -171,12 +171,12 @@ impl From<ShadowingArg> for Shadowing {
 }
 
 /// The read options of a command that reads one table (`eval`, `convert`): its `--columns`
-/// mappings parsed, its angle flags and channel; `require_value`: whether the value column
+/// mappings parsed, its angle flags, channel and MERL subsampling; `require_value`: whether the value column
 /// `L` must be there.
 pub fn table_read_options(
     columns: &[String],
     (radians, signed_theta_r): (bool, bool),
-    channel: Option<String>,
+    (channel, subsample): (Option<String>, usize),
     require_value: bool,
 ) -> anyhow::Result<goniofit::io::ReadOptions> {
     let mut parsed = Vec::new();
@@ -189,6 +189,7 @@ pub fn table_read_options(
         columns: parsed,
         require_value,
         channel,
+        subsample,
     })
 }
 

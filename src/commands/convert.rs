@@ -20,6 +20,9 @@ pub struct ConvertArgs {
     /// group or wavelength; `all` for every channel.
     #[arg(long)]
     pub channel: Option<String>,
+    /// MERL tables: every K-th θd and φd cell (K² fewer samples; default all).
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=90))]
+    pub subsample: usize,
     /// Angles are in radians (CSV input; other formats state their unit).
     #[arg(long)]
     pub radians: bool,
@@ -32,7 +35,7 @@ pub struct ConvertArgs {
     /// Write the table here (atomically); `-` or none: standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Option<PathBuf>,
-    /// A measurement file: CSV, ASTM E1392, or RGL `.bsdf`.
+    /// A measurement file: CSV, ASTM E1392, RGL `.bsdf`, MERL `.binary` or ALTA data.
     pub file: PathBuf,
 }
 
@@ -47,7 +50,7 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<u8> {
     let opts = super::args::table_read_options(
         &args.columns,
         (args.radians, args.signed_theta_r),
-        args.channel.clone(),
+        (args.channel.clone(), args.subsample),
         true,
     )?;
     let ds = io::read_dataset_columns(&args.file, &opts)?;

@@ -78,7 +78,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let opts = super::args::table_read_options(
         &args.columns,
         (args.radians, args.signed_theta_r),
-        args.channel.clone(),
+        (args.channel.clone(), 1),
         false,
     )?;
     let patch = args.patch.as_deref().map(parse_patch).transpose()?;

@@ -77,6 +77,9 @@ pub struct FitArgs {
     /// shared σ, T and per-channel scales.
     #[arg(long)]
     pub channel: Option<String>,
+    /// MERL tables: fit every K-th θd and φd cell (K² fewer samples; default all).
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=90))]
+    pub subsample: usize,
     /// CSV angles are in radians (default degrees).
     #[arg(long)]
     pub radians: bool,
@@ -214,6 +217,7 @@ impl FitArgs {
             columns: io::csv::parse_columns(self.columns.as_deref().unwrap_or(""))?,
             require_value: true,
             channel,
+            subsample: self.subsample,
         })
     }
 
@@ -244,8 +248,7 @@ pub fn setting_of(
     let unit = wavelength_unit(args, ds);
     let source = match (args.wavelength, &ds.wavelength) {
         (Some(_), _) => "--wavelength",
-        (None, Some(_)) if io::is_astm(&ds.path, "") => "channel name",
-        (None, Some(_)) => "wavelength column",
+        (None, Some(_)) => ds.wavelength_origin.unwrap_or("wavelength column"),
         (None, None) => "none",
     };
     let source = SettingSource {

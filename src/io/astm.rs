@@ -324,6 +324,7 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         sigma_l: None,
         wavelength: have_wl.then(|| Vec::with_capacity(n)),
         wavelength_unit: have_wl.then(|| "nm".to_string()),
+        wavelength_origin: have_wl.then_some("channel name"),
         channel: Some(Vec::with_capacity(n)),
         quantity: stated_quantity(header.get("MEAS_NAME")),
     };

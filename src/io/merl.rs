@@ -238,6 +238,7 @@ fn empty_dataset(path: &Path, labelled: bool) -> Dataset {
         sigma_l: None,
         wavelength: Some(Vec::new()),
         wavelength_unit: Some("nm".into()),
+        wavelength_origin: Some(super::rgl::NOMINAL_ORIGIN),
         channel: labelled.then(Vec::new),
         quantity: Some(Quantity::Brdf),
     }

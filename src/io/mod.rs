@@ -7,7 +7,9 @@
 //!
 //! Format detection: a file that starts with the bytes `tensor_file\0` or is named
 //! `*.bsdf` is an RGL measured BRDF ([`rgl`]); a file of MERL's size whose first 12 bytes
-//! are the dimensions 90, 90, 180, or one named `*.binary`, is a MERL BRDF ([`merl`]). A file is ASTM E1392 when its extension is `.astm` (any case), or when
+//! are the dimensions 90, 90, 180, or one named `*.binary`, is a MERL BRDF ([`merl`]); a
+//! text file whose first non-blank line is `#DIM` is ALTA data ([`alta`]). A file is ASTM
+//! E1392 when its extension is `.astm` (any case), or when
 //! its first non-blank line starts with an upper-case `KEY` token (e.g. `LAB_NAME ...`) and
 //! some line starts with `VARS`. Everything else is CSV.
 //!
@@ -31,6 +33,7 @@
 //! an [`Error::File`] (the whole file: empty, no data rows, missing column) or an
 //! [`Error::Io`]; no input makes the readers panic (proptest in `tests/io.rs`).
 
+pub mod alta;
 pub mod arrays;
 pub mod astm;
 pub mod csv;
@@ -65,6 +68,9 @@ pub struct ReadOptions {
     /// unit, or `532nm`) selecting the rows of that `wavelength`; `all` on a CSV without a
     /// `group` column makes each wavelength a channel (see [`select_csv_channel`]).
     pub channel: Option<String>,
+    /// MERL tables: keep every k-th θd and φd cell (k² fewer samples; 0 or 1 keeps all).
+    /// Other formats refuse k > 1.
+    pub subsample: usize,
 }
 
 /// A dataset as read: angles validated, values parsed, raw rows kept for pass-through.
@@ -91,6 +97,9 @@ pub struct Dataset {
     /// Unit of `wavelength` when the file states it: `nm` for ASTM channel names, `µm` for
     /// the NIST PTFE layout; None for a plain `wavelength` column (unit unknown).
     pub wavelength_unit: Option<String>,
+    /// Where `wavelength` comes from, in the report's words (e.g. `channel name`, `nominal
+    /// wavelength of the sRGB channel`); None for a `wavelength` column.
+    pub wavelength_origin: Option<&'static str>,
     /// Per-sample channel/group label (ASTM channel, or a `group` column).
     pub channel: Option<Vec<String>>,
     /// The measured quantity the file states (ASTM `MEAS_NAME BRDF`, NIST `f_r11`, a CSV
@@ -154,6 +163,7 @@ impl Dataset {
             sigma_l: self.sigma_l.as_deref().map(|v| pick(v, idx)),
             wavelength: self.wavelength.as_deref().map(|v| pick(v, idx)),
             wavelength_unit: self.wavelength_unit.clone(),
+            wavelength_origin: self.wavelength_origin,
             channel: self.channel.as_deref().map(|v| pick(v, idx)),
             quantity: self.quantity,
         }
@@ -234,9 +244,14 @@ fn read_file(
     let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
     let head = reader.fill_buf().map_err(io_err)?;
     if merl::is_merl(head, len) || merl_by_extension(path) {
-        return merl::read(path, reader, len, opts, 1);
+        return merl::read(path, reader, len, opts, opts.subsample);
     }
-    if !is_binary(path, head) && !astm_by_extension(path) && surely_csv(head) {
+    refuse_subsample(path, opts)?;
+    if !is_binary(path, head)
+        && !astm_by_extension(path)
+        && !alta::is_alta(head)
+        && surely_csv(head)
+    {
         let rows_hint = estimate_rows(head, len);
         let stated = quantity::from_comments(path, head)?;
         let stopped = std::cell::Cell::new(None);
@@ -310,6 +325,17 @@ fn is_binary(path: &Path, head: &[u8]) -> bool {
             .is_some_and(|e| e.eq_ignore_ascii_case("bsdf"))
 }
 
+/// `subsample` is for MERL tables only.
+fn refuse_subsample(path: &Path, opts: &ReadOptions) -> Result<()> {
+    if opts.subsample > 1 {
+        return Err(Error::Usage(format!(
+            "{}: --subsample thins MERL tables only (this file is not one)",
+            shown(path)
+        )));
+    }
+    Ok(())
+}
+
 /// Whether the extension says MERL (`.binary`, any case).
 fn merl_by_extension(path: &Path) -> bool {
     path.extension()
@@ -356,13 +382,16 @@ fn estimate_rows(head: &[u8], len: u64) -> usize {
 /// the format by extension as [`read_dataset`] does.
 pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
     if merl::is_merl(bytes, bytes.len() as u64) || merl_by_extension(path) {
-        return merl::read(path, bytes, bytes.len() as u64, opts, 1);
+        return merl::read(path, bytes, bytes.len() as u64, opts, opts.subsample);
     }
+    refuse_subsample(path, opts)?;
     if is_binary(path, bytes) {
         return rgl::read(path, bytes, opts);
     }
     let text = decode_utf8(path, bytes)?;
-    if is_astm(path, text) {
+    if alta::is_alta(text.as_bytes()) {
+        alta::parse(path, text, opts)
+    } else if is_astm(path, text) {
         astm::parse(path, text, opts)
     } else {
         let stated = quantity::from_comments(path, text.as_bytes())?;

@@ -44,6 +44,9 @@ pub const CHANNELS: [&str; 3] = ["r", "g", "b"];
 /// primaries, rounded to the nanometre.
 pub const NOMINAL_NM: [f64; 3] = [612.0, 549.0, 465.0];
 
+/// How the report names a wavelength taken from [`NOMINAL_NM`].
+pub const NOMINAL_ORIGIN: &str = "nominal wavelength of the sRGB channel";
+
 /// Incidences with cos θi at or below this are not sampled (grazing).
 const GRAZING_COS: f64 = 1e-6;
 
@@ -381,6 +384,7 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
         sigma_l: None,
         wavelength: Some(Vec::with_capacity(n)),
         wavelength_unit: Some("nm".into()),
+        wavelength_origin: Some(NOMINAL_ORIGIN),
         channel: Some(Vec::with_capacity(n)),
         quantity: Some(Quantity::Brdf),
     };

@@ -370,6 +370,7 @@ fn parse_records(
             && !mapped[Role::Wavelength as usize]
             && cols.get(Role::Wavelength).is_some())
         .then(|| "µm".to_string()),
+        wavelength_origin: None,
         channel: cols.get(Role::Group).map(|_| Vec::with_capacity(n)),
         quantity: if nist.is_some() && !mapped[Role::Value as usize] {
             Some(crate::geometry::Quantity::Brdf)
