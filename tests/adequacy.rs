@@ -257,3 +257,34 @@ fn the_text_report_and_summary_csv_carry_the_verdict() {
     );
     assert!(summary.lines().nth(1).unwrap().contains(",misfit,\"runs,"));
 }
+
+/// Values computed from the model itself (no noise): every residual is rounding error, and
+/// the verdict says so instead of testing the rounding's signs.
+#[test]
+fn values_computed_from_the_model_are_exact_not_misfit() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("theta_i,theta_r,phi_r,L\n");
+    for ti in [0.0f64, 20.0, 40.0, 60.0, 75.0] {
+        for k in 0..40 {
+            let tr = 88.0 * k as f64 / 39.0;
+            for pr in [0.0, 90.0, 180.0] {
+                // lambert in radiance: scale × cos θi.
+                csv += &format!("{ti},{tr},{pr},{:e}\n", 0.3 * ti.to_radians().cos());
+            }
+        }
+    }
+    let path = dir.path().join("exact.csv");
+    std::fs::write(&path, csv).unwrap();
+    for residual in ["absolute", "relative", "log"] {
+        let (verdict, reasons, code) = adequacy(&[
+            "--model",
+            "lambert",
+            "--residual",
+            residual,
+            path.to_str().unwrap(),
+        ]);
+        assert_eq!(verdict, "exact", "{residual}: {reasons:?}");
+        assert!(reasons.is_empty());
+        assert_eq!(code, Some(0));
+    }
+}

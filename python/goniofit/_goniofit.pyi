@@ -47,7 +47,7 @@ Termination = Literal[
     "nonfinitestart", "nonfinitejacobian", "noprogress",
 ]
 Verdict = Literal["full", "rough", "smooth", "partial"]
-AdequacyVerdict = Literal["adequate", "misfit", "noise", "not_computed"]
+AdequacyVerdict = Literal["adequate", "misfit", "noise", "not_computed", "exact"]
 
 class AdequacyReason(TypedDict):
     """One reason of a flagged adequacy verdict (docs/adequacy.md explains each code)."""

@@ -109,7 +109,7 @@ impl FitResult {
     }
 
     /// Whether the model describes the data and the weights match the noise: ``{"verdict":
-    /// "adequate" | "misfit" | "noise" | "not_computed", "headline", "reasons": [{"code",
+    /// "adequate" | "misfit" | "noise" | "not_computed" | "exact", "headline", "reasons": [{"code",
     /// "text", "p"}], "alpha", "tests", "r2", "reduced_chi2", "chi2_p", "runs", "spread",
     /// "regions"}``, as the CLI's JSON ``adequacy`` (a verdict, not a failure).
     #[getter]

@@ -55,6 +55,9 @@ pub enum AdequacyVerdict {
     Noise,
     /// Not assessed: no residuals at the reported point, or too few samples for any test.
     NotComputed,
+    /// The model meets every sample to rounding error: the values look computed from the
+    /// model, not measured, and carry no noise to test.
+    Exact,
 }
 
 impl AdequacyVerdict {
@@ -65,6 +68,7 @@ impl AdequacyVerdict {
             AdequacyVerdict::Misfit => "misfit",
             AdequacyVerdict::Noise => "noise",
             AdequacyVerdict::NotComputed => "not_computed",
+            AdequacyVerdict::Exact => "exact",
         }
     }
 
@@ -209,6 +213,10 @@ pub fn assess(fr: &FitResiduals) -> Adequacy {
     }
     let mut out = Adequacy::not_computed(fr.r2);
     let w = Weighted::of(fr);
+    if w.n_used == 0 && w.rounding > 0 {
+        out.verdict = AdequacyVerdict::Exact;
+        return out;
+    }
     let mut outcomes = Vec::new();
     if let Some(o) = chi2_test(fr, &w, &mut out) {
         outcomes.push(o);
@@ -248,14 +256,22 @@ pub fn assess(fr: &FitResiduals) -> Adequacy {
 }
 
 /// The weighted residuals zᵢ = √wᵢ rᵢ, and which samples the tests use: those with a
-/// finite zᵢ at least [`EXACT_FIT`] of the rms of z. A sample the model meets far more
-/// closely than the noise allows carries no noise to test (a value that underflowed to 0,
-/// or a stated σ_L that was capped); its sign would be the model's rounding.
+/// finite zᵢ at least [`EXACT_FIT`] of the rms of z, and a residual above rounding error
+/// ([`ROUNDING`] of the model's value for absolute residuals; of 1 for relative and log
+/// residuals, which are relative already). A sample the model meets far more closely than
+/// the noise allows carries no noise to test (a value that underflowed to 0, a stated σ_L
+/// that was capped, a value computed from the model); its sign would be the model's
+/// rounding.
 struct Weighted {
     z: Vec<f64>,
     used: Vec<bool>,
     n_used: usize,
+    /// Finite residuals at rounding error.
+    rounding: usize,
 }
+
+/// A residual within this fraction of the model's value is rounding error.
+pub const ROUNDING: f64 = 1e-12;
 
 /// Weighted residuals below this fraction of their rms are exactly fitted: not tested.
 pub const EXACT_FIT: f64 = 1e-6;
@@ -267,12 +283,26 @@ impl Weighted {
             .collect();
         let finite: Vec<f64> = z.iter().copied().filter(|v| v.is_finite()).collect();
         let rms = (finite.iter().map(|v| v * v).sum::<f64>() / finite.len().max(1) as f64).sqrt();
-        let used: Vec<bool> = z
-            .iter()
-            .map(|v| v.is_finite() && v.abs() > EXACT_FIT * rms)
+        let at_rounding = |i: usize| {
+            let scale = match fr.kind {
+                ResidualKind::Absolute => fr.fitted[i].abs(),
+                _ => 1.0,
+            };
+            fr.residuals[i].abs() <= ROUNDING * scale
+        };
+        let rounding = (0..z.len())
+            .filter(|&i| z[i].is_finite() && at_rounding(i))
+            .count();
+        let used: Vec<bool> = (0..z.len())
+            .map(|i| z[i].is_finite() && z[i].abs() > EXACT_FIT * rms && !at_rounding(i))
             .collect();
         let n_used = used.iter().filter(|&&u| u).count();
-        Weighted { z, used, n_used }
+        Weighted {
+            z,
+            used,
+            n_used,
+            rounding,
+        }
     }
 }
 

@@ -44,6 +44,9 @@ pub(super) fn headline(a: &Adequacy) -> String {
         AdequacyVerdict::Noise => format!(
             "noise: the model follows the data, but the weights do not match the noise ({tests})"
         ),
+        AdequacyVerdict::Exact => {
+            "exact: the model meets every sample to rounding error, as values computed from the model would; there is no noise to test".into()
+        }
         AdequacyVerdict::NotComputed => {
             "not computed: no residuals at the reported point, or too few samples for a test"
                 .into()
