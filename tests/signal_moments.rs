@@ -1,5 +1,5 @@
 //! SIGINT and SIGTERM at 20 seeded random moments to each command (fit, fit --by-group,
-//! eval, synth, render, figures, recover, plot). Each run must end promptly, with the exit
+//! eval, convert, synth, render, figures, recover, plot). Each run must end promptly, with the exit
 //! code the README gives a stop (`fit`: 3, the code of the fit it finished, or 130 before
 //! its run started; the other commands: 130; any command: 0 when it finished first, or
 //! death by the signal itself when it came before the handler was installed), every output
@@ -125,6 +125,11 @@ fn cases(h: &Path, g: &Path, json: &Path) -> Vec<Case> {
                 v(&[&["eval"][..], &kbs[..], &["--wavelength", "1"][..]].concat()),
                 &[p(h)],
             ),
+            fit: false,
+        },
+        Case {
+            name: "convert",
+            args: with(v(&["convert", "--channel", "all", "--out", "c.csv"]), &[p(g)]),
             fit: false,
         },
         Case {
