@@ -129,7 +129,10 @@ fn cases(h: &Path, g: &Path, json: &Path) -> Vec<Case> {
         },
         Case {
             name: "convert",
-            args: with(v(&["convert", "--channel", "all", "--out", "c.csv"]), &[p(g)]),
+            args: with(
+                v(&["convert", "--channel", "all", "--out", "c.csv"]),
+                &[p(g)],
+            ),
             fit: false,
         },
         Case {

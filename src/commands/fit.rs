@@ -133,8 +133,9 @@ pub struct FitArgs {
     /// reading, fitting, writing); exit 3 with what exists (see docs/guide.md, "Stopping a fit").
     #[arg(long)]
     pub timeout: Option<f64>,
-    /// Show progress on standard error (reading, datasets done of total, solver
-    /// iterations). This is the default on a terminal; piped, nothing is drawn.
+    /// Show progress on standard error (reading, datasets done of total with the time
+    /// left, solver iterations). This is the default on a terminal; when standard error is
+    /// not a terminal, a run longer than 2 s prints one line every 5 s instead.
     #[arg(long)]
     pub progress: bool,
     /// No progress display and no summary line on standard error.
@@ -371,9 +372,15 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         eprintln!("goniofit: {note}");
     }
     let opts = args.read_options()?;
+    let heartbeat = super::heartbeat::Heartbeat::start(!args.quiet);
+    heartbeat.stage(format!("reading {}", io::shown(&args.file[0])));
     // Every input is read (and checked) before any fit starts.
     let (jobs, files) = read_jobs(&args, &opts, &stop)?;
     let single = jobs.len() == 1;
+    heartbeat.stage(match single {
+        true => format!("fitting {} (model {})", jobs[0].0, args.model),
+        false => format!("fitting {} datasets (model {})", jobs.len(), args.model),
+    });
     if !single && (args.residuals.is_some() || args.plot.is_some() || args.html.is_some()) {
         return Err(Error::Usage(
             "--residuals and --plot take one dataset; fit several files one at a time for those"
@@ -386,8 +393,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .num_threads(threads)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, &pool)?;
+    let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat))?;
     let wall = t0.elapsed().as_secs_f64();
+    heartbeat.stage("writing the reports and outputs");
     let infos: Vec<RunInfo> = outcomes
         .iter()
         .map(|o| run_info(&args, o, &files))
@@ -474,7 +482,7 @@ fn fit_jobs(
     args: &FitArgs,
     mut jobs: Vec<(String, Dataset)>,
     stop: &Stop,
-    pool: &rayon::ThreadPool,
+    (pool, heartbeat): (&rayon::ThreadPool, &super::heartbeat::Heartbeat),
 ) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
     if jobs.len() == 1 {
         let (label, ds) = jobs.pop().expect("one job");
@@ -487,6 +495,7 @@ fn fit_jobs(
     } else {
         indicatif::ProgressBar::hidden()
     };
+    heartbeat.count(jobs.len() as u64);
     let done: Vec<anyhow::Result<Outcome>> = pool.install(|| {
         jobs.into_par_iter()
             .map(|(label, ds)| {
@@ -496,6 +505,7 @@ fn fit_jobs(
                 }
                 let outcome = fit_one(args, label, ds, false, stop);
                 bar.inc(1);
+                heartbeat.inc();
                 outcome
             })
             .collect()

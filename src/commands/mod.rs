@@ -8,6 +8,7 @@ pub mod convert;
 pub mod eval;
 pub mod figures;
 pub mod fit;
+pub mod heartbeat;
 pub mod plot;
 pub mod recover;
 pub mod render;
