@@ -28,6 +28,10 @@ pub enum Command {
     /// Generate synthetic measurements from known parameters, with seeded noise; writes the
     /// CSV and the truth beside it as JSON.
     Synth(Box<commands::synth::SynthArgs>),
+    /// Propose the next geometries to measure: those that most reduce the predicted
+    /// uncertainty of a target (σ, T, T/σ, … or every parameter), from a fit's report or a
+    /// model with parameter values, with the standard errors before and after.
+    Design(Box<commands::design::DesignArgs>),
     /// Synthetic recovery: draw scenes across regimes, fit each, and report the recovery
     /// error of what the data determines and the coverage of the reported uncertainties.
     Recover(Box<commands::recover::RecoverArgs>),

@@ -4,6 +4,7 @@
 //! [`fit`] (Levenberg–Marquardt as an argmin solver, statistics), [`io`] (readers and
 //! writers), [`report`] and [`plot`].
 
+pub mod design;
 pub mod error;
 pub mod fit;
 pub mod geometry;

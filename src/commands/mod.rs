@@ -5,6 +5,7 @@
 pub mod args;
 pub mod bench;
 pub mod convert;
+pub mod design;
 pub mod eval;
 pub mod figures;
 pub mod fit;
@@ -28,6 +29,7 @@ impl Command {
             Command::Recover(_) => FileSet::new().stdout(),
             Command::Bench(a) => a.files(),
             Command::Convert(a) => a.files(),
+            Command::Design(a) => a.files(),
             Command::Render(a) => a.files(),
             Command::Figures(a) => a.files(),
         })
@@ -47,6 +49,7 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Recover(a) => recover::run(*a),
         Command::Bench(a) => bench::run(*a),
         Command::Convert(a) => convert::run(a),
+        Command::Design(a) => design::run(*a),
         Command::Render(a) => render::run(a),
         Command::Figures(a) => figures::run(a),
     }

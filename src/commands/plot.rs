@@ -44,13 +44,28 @@ fn saved_input(json: &serde_json::Value) -> Option<PathBuf> {
         .map(PathBuf::from)
 }
 
-pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
-    let text = std::fs::read_to_string(&args.report).map_err(|source| Error::Io {
-        path: args.report.clone(),
+/// A fit report read back with the data it fitted: the fit's arguments, model, fitted
+/// values (layout order), settings and input, and the unit of λ.
+pub struct SavedFit {
+    pub json: serde_json::Value,
+    pub model: String,
+    pub values: Vec<f64>,
+    pub config: FitConfig,
+    pub input: FitInput,
+    pub layout: ParamLayout,
+    pub unit: Option<String>,
+}
+
+/// Read a report written by `goniofit fit --json` and re-read the file it fitted (warning
+/// when the file changed since). Errors: not such a report (a bad input, exit 2), or the
+/// data no longer readable.
+pub fn read_saved_fit(report: &Path) -> anyhow::Result<SavedFit> {
+    let text = std::fs::read_to_string(report).map_err(|source| Error::Io {
+        path: report.to_path_buf(),
         source,
     })?;
     let bad = |what: &str| Error::File {
-        path: args.report.clone(),
+        path: report.to_path_buf(),
         message: format!(
             "not a goniofit fit report ({what}); write one with `goniofit fit --json`"
         ),
@@ -75,17 +90,13 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         Some(p) => p,
         None => fa.file.first().ok_or_else(|| bad("no input file"))?.clone(),
     };
-    let ds = io::read_dataset(&file, &opts).with_context(|| {
-        format!(
-            "re-reading the data of {}",
-            goniofit::io::shown(&args.report)
-        )
-    })?;
+    let ds = io::read_dataset(&file, &opts)
+        .with_context(|| format!("re-reading the data of {}", goniofit::io::shown(report)))?;
     if let Some(want) = saved["sha256"].as_str() {
         let now = super::fit::input_info(&file)?.sha256;
         if now != want {
             eprintln!(
-                "goniofit: warning: {} changed since the fit (sha256 {now}, the report has {want}); the pictures show the file as it is now",
+                "goniofit: warning: {} changed since the fit (sha256 {now}, the report has {want}); what follows uses the file as it is now",
                 goniofit::io::shown(&file)
             );
         }
@@ -97,8 +108,29 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     if layout.len() != values.len() {
         return Err(bad("parameter count does not match the model").into());
     }
-    let status = plot_status(&json);
     let unit = super::fit::wavelength_unit(&fa, &ds);
+    Ok(SavedFit {
+        json,
+        model,
+        values,
+        config,
+        input,
+        layout,
+        unit,
+    })
+}
+
+pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
+    let SavedFit {
+        json,
+        values,
+        config,
+        input,
+        layout,
+        unit,
+        ..
+    } = read_saved_fit(&args.report)?;
+    let status = plot_status(&json);
     let written = plot_fit(
         &args.out,
         &config,

@@ -9,6 +9,7 @@
 //! [`write_picture`] writes a file, [`svg_string`] and [`rgb_buffer`] render in memory.
 
 pub mod contour;
+pub mod design;
 pub mod figures;
 pub mod fit;
 pub mod legend;

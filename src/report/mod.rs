@@ -2,6 +2,7 @@
 //! and units of a fit, the input's checksum).
 
 pub mod checksum;
+pub mod design;
 pub mod html;
 pub mod json;
 pub mod outcome;
