@@ -1,21 +1,23 @@
 #!/usr/bin/env bash
 # Every test of the project in one command: the Rust suite (`cargo test --release`), then
-# the Python package's (python/tests, pytest) against a fresh build of the binding in a
-# virtual environment (`target/py-venv`, or $GONIOFIT_VENV) that this script creates and
-# fills from PyPI: maturin, pytest, numpy, pandas, dask[dataframe,distributed].
+# the README's Python examples and the Python package's tests (python/tests, pytest)
+# against a fresh build of the binding in a virtual environment (`target/py-venv`, or
+# $GONIOFIT_VENV) that this script creates afresh with `pip install './python[dask]'`
+# (numpy, pandas, dask[dataframe,distributed] from PyPI), then pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 cargo test --release
 
+# The documented install in a fresh environment, exactly as the README gives it (pip
+# builds the abi3 wheel with maturin in its own build environment); the README's Python
+# examples (the Dask one included) run with nothing else installed; then pytest joins.
 venv="${GONIOFIT_VENV:-target/py-venv}"
-if [ ! -x "$venv/bin/python" ]; then
-    python3 -m venv "$venv"
-fi
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
-    maturin pytest numpy pandas "dask[dataframe,distributed]"
-# The documented install: `pip install ./python` builds the abi3 wheel with maturin.
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check ./python
+python3 -m venv --clear "$venv"
+pip=("$venv/bin/python" -m pip install --quiet --disable-pip-version-check)
+"${pip[@]}" './python[dask]'
+"$venv/bin/python" tests/readme_python.py > /dev/null
+"${pip[@]}" pytest
 
 # The CLI the Python results are compared with is the one `cargo test --release` built.
 export GONIOFIT_BIN="${CARGO_TARGET_DIR:-$PWD/target}/release/goniofit"

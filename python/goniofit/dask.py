@@ -110,7 +110,8 @@ def fit_groups(ddf: Any, by: Any = "group", *, meta: Optional[Any] = None, **fit
 
 def _quantities(fit_options: Dict[str, Any]) -> List[str]:
     """Every parameter and derived quantity a fit with these options can report, in a fixed
-    order: each candidate model's parameters, then the KBS derived quantities."""
+    order: each candidate model's parameters (and the Fresnel factor's), then the KBS
+    derived quantities and, for a BRDF with a Lambertian term, its reflectance factor."""
     model = str(fit_options.get("model", "kbs")).lower()
     candidates = AUTO_MODELS if model == "auto" else (model,)
     models = goniofit.models()
@@ -120,7 +121,15 @@ def _quantities(fit_options: Dict[str, Any]) -> List[str]:
         params = [p[0] for p in models.get(m, [])]
         kbs |= "sigma" in params and "T" in params
         names += [p for p in params if p not in names]
-    return names + (list(KBS_DERIVED) if kbs else [])
+    fresnel = str(fit_options.get("fresnel", "none")).lower()
+    if kbs and fresnel != "none":
+        names += ["n", "kappa"] if fresnel == "conductor" else ["n"]
+    derived = list(KBS_DERIVED) if kbs else []
+    # A BRDF's Lambertian term is also reported as a reflectance factor (π times it).
+    lambertian = {"lambert", "lambert-specular", "kbs+lambert"} & set(candidates)
+    if lambertian and str(fit_options.get("quantity", "radiance")).lower() == "brdf":
+        derived.append("reflectance_factor")
+    return names + derived
 
 
 def _meta(ddf: Any, keys: List[str], fit_options: Dict[str, Any]) -> Any:

@@ -88,3 +88,26 @@ def test_dask_fits_a_group_split_across_partitions_once():
     table = out.compute(scheduler="sync").set_index("group")
     assert len(table) == 10
     same_table(serial, table)
+
+
+def test_dask_reports_the_reflectance_factor_of_a_brdf_and_every_model_s_columns():
+    """A BRDF fitted with a Lambertian term also reports π·scale (the reflectance factor):
+    the result's columns announce it, and it equals π times the fitted scale."""
+    df = pd.read_csv(goniofit_data("curet/curet.csv"), comment="#")
+    df = df[df["group"].isin([2, 3, 7])]
+    ddf = dd.from_pandas(df, npartitions=2)
+    for model in ("lambert", "lambert-specular", "auto"):
+        extra = {"wavelength": 0.55} if model == "auto" else {}
+        out = goniofit.dask.fit_groups(ddf, by="group", model=model, quantity="brdf",
+                                       residual="log", **extra).compute(scheduler="synchronous")
+        assert sorted(out["group"]) == [2, 3, 7]
+        lambertian = out["model"].isin(["lambert", "lambert-specular"])
+        assert lambertian.any(), model
+        got = out.loc[lambertian, "reflectance_factor"].to_numpy()
+        want = np.pi * out.loc[lambertian, "scale"].to_numpy()
+        np.testing.assert_allclose(got, want, rtol=1e-14)
+
+
+def goniofit_data(name):
+    import os
+    return os.path.join(os.path.dirname(__file__), "..", "..", "data", name)
