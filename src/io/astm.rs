@@ -118,11 +118,44 @@ impl Header {
     }
 }
 
-/// Parse an ASTM file (text already decoded, BOM removed).
+/// Parse an ASTM file (text already decoded, BOM removed): the header, the columns it
+/// names, the row count it states, then every data row.
 pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Dataset> {
-    let input_err = |line, column: &str, message| Error::input(path, line, column, message);
-    let file_err = |message| Error::file(path, message);
+    let (header, data) = split_header(path, text)?;
+    let cols = columns(path, &header, opts)?;
+    if data.is_empty() {
+        return Err(Error::file(
+            path,
+            format!(
+                "no data rows after the VARS line (line {})",
+                header.vars_line
+            ),
+        ));
+    }
+    check_row_count(path, text, &header, data.len())?;
+    let mut ds = empty_dataset(path, &header, &cols, data.len());
+    for (line_no, line) in data {
+        push_row(path, (&header, &cols), opts, (line_no, line), &mut ds)?;
+    }
+    if opts.require_value {
+        if let Some(v) = &ds.value {
+            if v.iter().all(|&x| x == 0.0) {
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "all {} values of the selected channel(s) are zero: nothing to fit",
+                        v.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(ds)
+}
 
+/// The header (KEY value lines up to and with VARS) and the data lines after it (1-based
+/// line number, trimmed text); blank and `#` lines are skipped.
+fn split_header<'t>(path: &Path, text: &'t str) -> Result<(Header, Vec<(usize, &'t str)>)> {
     let mut header = Header::default();
     let mut data: Vec<(usize, &str)> = Vec::new();
     for (k, raw) in text.lines().enumerate() {
@@ -133,48 +166,18 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         }
         let first = line.split_whitespace().next().unwrap_or("");
         if data.is_empty() && is_key(first) && !first.contains(',') {
-            let value = line[first.len()..].trim().to_string();
-            if first == "VARS" {
-                if !header.vars.is_empty() {
-                    return Err(input_err(line_no, "VARS", "a second VARS line".into()));
-                }
-                header.vars = split_row(&value, super::csv::MAX_FIELDS)
-                    .map_err(|_| {
-                        input_err(
-                            line_no,
-                            "VARS",
-                            format!(
-                                "more than {} column names (a BRDF file has a few dozen)",
-                                super::csv::MAX_FIELDS
-                            ),
-                        )
-                    })?
-                    .into_iter()
-                    .filter(|v| !v.is_empty())
-                    .map(str::to_string)
-                    .collect();
-                header.vars_line = line_no;
-                check_vars(path, line_no, &header.vars)?;
-            }
-            if let Some((_, earlier, old)) = header.lines.iter().find(|(k, _, _)| k == first) {
-                if first == "NUM_POINTS" && old != &value {
-                    return Err(input_err(
-                        line_no,
-                        "NUM_POINTS",
-                        format!(
-                            "a second NUM_POINTS line says '{value}', line {earlier} said '{old}': which is the row count?"
-                        ),
-                    ));
-                }
-            }
-            header
-                .lines
-                .push((first.to_string(), line_no, value.clone()));
-            header.keys.push((first.to_string(), value));
+            header_line(
+                path,
+                &mut header,
+                line_no,
+                first,
+                line[first.len()..].trim(),
+            )?;
             continue;
         }
         if header.vars.is_empty() {
-            return Err(input_err(
+            return Err(Error::input(
+                path,
                 line_no,
                 "(header)",
                 format!(
@@ -185,23 +188,82 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         }
         data.push((line_no, line));
     }
-
     if header.keys.is_empty() && data.is_empty() {
-        return Err(file_err("empty file: no ASTM header".into()));
+        return Err(Error::file(path, "empty file: no ASTM header".into()));
     }
     if header.vars.is_empty() {
-        return Err(file_err(
+        return Err(Error::file(
+            path,
             "no VARS line (expected e.g. VARS theta_i,phi_i,theta_s,phi_s,550nm)".into(),
         ));
     }
-    let vars_line = header.vars_line;
+    Ok((header, data))
+}
+
+/// Add the header line `key value` at `line_no` to `header` (VARS: its column names, once;
+/// NUM_POINTS: not contradicting an earlier one).
+fn header_line(
+    path: &Path,
+    header: &mut Header,
+    line_no: usize,
+    key: &str,
+    value: &str,
+) -> Result<()> {
+    let input_err = |column: &str, message| Error::input(path, line_no, column, message);
+    if key == "VARS" {
+        if !header.vars.is_empty() {
+            return Err(input_err("VARS", "a second VARS line".into()));
+        }
+        let max = super::csv::MAX_FIELDS;
+        header.vars = split_row(value, max)
+            .map_err(|_| {
+                input_err(
+                    "VARS",
+                    format!("more than {max} column names (a BRDF file has a few dozen)"),
+                )
+            })?
+            .into_iter()
+            .filter(|v| !v.is_empty())
+            .map(str::to_string)
+            .collect();
+        header.vars_line = line_no;
+        check_vars(path, line_no, &header.vars)?;
+    }
+    if let Some((_, earlier, old)) = header.lines.iter().find(|(k, _, _)| k == key) {
+        if key == "NUM_POINTS" && old != value {
+            return Err(input_err(
+                "NUM_POINTS",
+                format!(
+                    "a second NUM_POINTS line says '{value}', line {earlier} said '{old}': which is the row count?"
+                ),
+            ));
+        }
+    }
+    header
+        .lines
+        .push((key.to_string(), line_no, value.to_string()));
+    header.keys.push((key.to_string(), value.to_string()));
+    Ok(())
+}
+
+/// The columns of an ASTM file: the four angles, the channels selected, their wavelengths.
+struct Columns {
+    /// θi, φi, θs, φs.
+    angles: [usize; 4],
+    selected: Vec<usize>,
+    /// Each selected channel's wavelength in nm, from its name.
+    wavelength: Vec<Option<f64>>,
+}
+
+/// The angle columns VARS names, and the value columns `opts.channel` selects (one
+/// channel needs no choice).
+fn columns(path: &Path, header: &Header, opts: &ReadOptions) -> Result<Columns> {
+    let vars = &header.vars;
     let find = |names: &[&str]| {
-        header
-            .vars
-            .iter()
+        vars.iter()
             .position(|v| names.iter().any(|n| v.eq_ignore_ascii_case(n)))
     };
-    let separator = match header.vars.as_slice() {
+    let separator = match vars.as_slice() {
         [one] if one.contains(';') => {
             " (the names seem to be separated by ';': ASTM files use commas or blanks)"
         }
@@ -211,109 +273,111 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         _ => "",
     };
     let missing = |what: &str| {
-        input_err(
-            vars_line,
-            what,
-            format!(
-                "VARS has no {what} column (it has: {}){separator}",
-                header.vars.join(", ")
-            ),
-        )
+        let have = vars.join(", ");
+        let m = format!("VARS has no {what} column (it has: {have}){separator}");
+        Error::input(path, header.vars_line, what, m)
     };
-    let c_ti = find(&["theta_i"]).ok_or_else(|| missing("theta_i"))?;
-    let c_pi = find(&["phi_i"]).ok_or_else(|| missing("phi_i"))?;
-    let c_ts = find(&["theta_s", "theta_r"]).ok_or_else(|| missing("theta_s"))?;
-    let c_ps = find(&["phi_s", "phi_r"]).ok_or_else(|| missing("phi_s"))?;
-    let angle_cols = [c_ti, c_pi, c_ts, c_ps];
-    let channels: Vec<usize> = (0..header.vars.len())
-        .filter(|i| !angle_cols.contains(i))
-        .collect();
+    let angles = [
+        find(&["theta_i"]).ok_or_else(|| missing("theta_i"))?,
+        find(&["phi_i"]).ok_or_else(|| missing("phi_i"))?,
+        find(&["theta_s", "theta_r"]).ok_or_else(|| missing("theta_s"))?,
+        find(&["phi_s", "phi_r"]).ok_or_else(|| missing("phi_s"))?,
+    ];
+    let channels: Vec<usize> = (0..vars.len()).filter(|i| !angles.contains(i)).collect();
     if channels.is_empty() {
-        return Err(input_err(
-            vars_line,
+        return Err(Error::input(
+            path,
+            header.vars_line,
             "VARS",
             "no value column after the angles (expected e.g. 550nm)".into(),
         ));
     }
+    let selected = select_channels(path, vars, &channels, opts.channel.as_deref())?;
+    let wavelength = selected
+        .iter()
+        .map(|&i| wavelength_nm_of_channel(&vars[i]))
+        .collect();
+    Ok(Columns {
+        angles,
+        selected,
+        wavelength,
+    })
+}
+
+/// The value columns `channel` selects among `channels` (indices into `vars`).
+fn select_channels(
+    path: &Path,
+    vars: &[String],
+    channels: &[usize],
+    channel: Option<&str>,
+) -> Result<Vec<usize>> {
     let channel_list = || {
-        channels
-            .iter()
-            .map(|&i| header.vars[i].as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
+        let names: Vec<&str> = channels.iter().map(|&i| vars[i].as_str()).collect();
+        names.join(", ")
     };
-    let selected: Vec<usize> = match opts.channel.as_deref().map(str::trim) {
-        Some(c) if c.eq_ignore_ascii_case("all") => channels.clone(),
-        Some(c) => match channels
-            .iter()
-            .find(|&&i| header.vars[i].eq_ignore_ascii_case(c))
-        {
-            Some(&i) => vec![i],
-            None => {
-                return Err(Error::Usage(format!(
-                    "{}: no channel '{c}' (channels: {}; or 'all')",
-                    shown(path),
-                    channel_list()
-                )))
-            }
-        },
-        None if channels.len() == 1 => channels.clone(),
-        None => {
-            return Err(Error::Usage(format!(
-                "{}: {} channels; choose one with --channel NAME or all with --channel all (channels: {})",
+    match channel.map(str::trim) {
+        Some(c) if c.eq_ignore_ascii_case("all") => Ok(channels.to_vec()),
+        Some(c) => match channels.iter().find(|&&i| vars[i].eq_ignore_ascii_case(c)) {
+            Some(&i) => Ok(vec![i]),
+            None => Err(Error::Usage(format!(
+                "{}: no channel '{c}' (channels: {}; or 'all')",
                 shown(path),
-                channels.len(),
                 channel_list()
-            )))
-        }
+            ))),
+        },
+        None if channels.len() == 1 => Ok(channels.to_vec()),
+        None => Err(Error::Usage(format!(
+            "{}: {} channels; choose one with --channel NAME or all with --channel all (channels: {})",
+            shown(path),
+            channels.len(),
+            channel_list()
+        ))),
+    }
+}
+
+/// The file's NUM_POINTS, if stated, is its count of data rows.
+fn check_row_count(path: &Path, text: &str, header: &Header, rows: usize) -> Result<()> {
+    let Some(np) = header.get("NUM_POINTS") else {
+        return Ok(());
     };
-
-    if data.is_empty() {
-        return Err(file_err(format!(
-            "no data rows after the VARS line (line {vars_line})"
-        )));
-    }
-    if let Some(np) = header.get("NUM_POINTS") {
-        match np.trim().parse::<usize>() {
-            Ok(n) if n == data.len() => {}
-            Ok(n) => {
-                return Err(file_err(format!(
-                "NUM_POINTS says {n} rows but the file has {} data rows (truncated or damaged?)",
-                data.len()
-            )))
-            }
-            Err(_) => {
-                let line = text
-                    .lines()
-                    .position(|l| l.trim_start().starts_with("NUM_POINTS"))
-                    .map_or(1, |p| p + 1);
-                return Err(input_err(
-                    line,
-                    "NUM_POINTS",
-                    format!("'{}' is not a row count", np.trim()),
-                ));
-            }
+    match np.trim().parse::<usize>() {
+        Ok(n) if n == rows => Ok(()),
+        Ok(n) => Err(Error::file(
+            path,
+            format!(
+                "NUM_POINTS says {n} rows but the file has {rows} data rows (truncated or damaged?)"
+            ),
+        )),
+        Err(_) => {
+            let line = text
+                .lines()
+                .position(|l| l.trim_start().starts_with("NUM_POINTS"))
+                .map_or(1, |p| p + 1);
+            let m = format!("'{}' is not a row count", np.trim());
+            Err(Error::input(path, line, "NUM_POINTS", m))
         }
     }
+}
 
+/// A dataset with room for `rows` data rows of the selected channels: pass-through
+/// columns the four angles, the channel and the value (named by MEAS_NAME).
+fn empty_dataset(path: &Path, header: &Header, cols: &Columns, rows: usize) -> Dataset {
     let value_name = header
         .get("MEAS_NAME")
         .map(str::trim)
         .filter(|s| !s.is_empty() && !s.contains(','))
         .unwrap_or("value")
         .to_string();
-    let mut headers: Vec<String> = angle_cols.iter().map(|&i| header.vars[i].clone()).collect();
+    let mut headers: Vec<String> = cols
+        .angles
+        .iter()
+        .map(|&i| header.vars[i].clone())
+        .collect();
     headers.push("channel".into());
     headers.push(value_name);
-
-    let wl: Vec<Option<f64>> = selected
-        .iter()
-        .map(|&i| wavelength_nm_of_channel(&header.vars[i]))
-        .collect();
-    let have_wl = wl.iter().all(Option::is_some);
-
-    let n = data.len() * selected.len();
-    let mut ds = Dataset {
+    let have_wl = cols.wavelength.iter().all(Option::is_some);
+    let n = rows * cols.selected.len();
+    Dataset {
         path: path.to_path_buf(),
         headers,
         rows: Vec::with_capacity(n),
@@ -327,92 +391,95 @@ pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Datas
         wavelength_origin: have_wl.then_some("channel name"),
         channel: Some(Vec::with_capacity(n)),
         quantity: stated_quantity(header.get("MEAS_NAME")),
-    };
-    for (line_no, line) in data {
-        let fields = split_row(line, header.vars.len()).map_err(|()| {
-            input_err(
-                line_no,
-                "(row)",
-                format!(
-                    "row has more than {} fields, VARS (line {vars_line}) names {}{}",
-                    header.vars.len(),
-                    header.vars.len(),
-                    super::csv::decimal_comma_hint(line)
-                ),
-            )
-        })?;
-        if fields.len() != header.vars.len() {
-            return Err(input_err(
-                line_no,
-                "(row)",
-                format!(
-                    "row has {} fields, VARS (line {vars_line}) names {}",
-                    fields.len(),
-                    header.vars.len()
-                ),
-            ));
+    }
+}
+
+/// Read the data row `line` (at `line_no`) into `ds`: its angles, checked and turned into
+/// goniofit's convention, and one sample per selected channel.
+fn push_row(
+    path: &Path,
+    (header, cols): (&Header, &Columns),
+    opts: &ReadOptions,
+    (line_no, line): (usize, &str),
+    ds: &mut Dataset,
+) -> Result<()> {
+    let input_err = |column: &str, message| Error::input(path, line_no, column, message);
+    let (vars, vars_line) = (&header.vars, header.vars_line);
+    let fields = split_row(line, vars.len()).map_err(|()| {
+        input_err(
+            "(row)",
+            format!(
+                "row has more than {} fields, VARS (line {vars_line}) names {}{}",
+                vars.len(),
+                vars.len(),
+                super::csv::decimal_comma_hint(line)
+            ),
+        )
+    })?;
+    if fields.len() != vars.len() {
+        let m = format!(
+            "row has {} fields, VARS (line {vars_line}) names {}",
+            fields.len(),
+            vars.len()
+        );
+        return Err(input_err("(row)", m));
+    }
+    let num =
+        |i: usize| -> Result<f64> { parse_finite(fields[i]).map_err(|m| input_err(&vars[i], m)) };
+    let sample = row_sample(path, line_no, vars, cols.angles, &num, opts.signed_theta_r)?;
+    for (k, &c) in cols.selected.iter().enumerate() {
+        let v = num(c)?;
+        if let Some(vals) = ds.value.as_mut() {
+            vals.push(v);
         }
-        let num = |i: usize| -> Result<f64> {
-            parse_finite(fields[i]).map_err(|m| input_err(line_no, &header.vars[i], m))
+        if let Some(w) = ds.wavelength.as_mut() {
+            w.push(cols.wavelength[k].unwrap_or(f64::NAN));
+        }
+        if let Some(ch) = ds.channel.as_mut() {
+            ch.push(vars[c].clone());
+        }
+        let mut row: Vec<String> = cols.angles.iter().map(|&i| fields[i].to_string()).collect();
+        row.push(vars[c].clone());
+        row.push(fields[c].to_string());
+        ds.rows.push(row);
+        ds.lines.push(line_no);
+        ds.samples.push(sample);
+    }
+    Ok(())
+}
+
+/// The sample of a row's angles (radians; `num` reads column i), checked and converted to
+/// goniofit's convention (φr = φs − φi − π).
+fn row_sample(
+    path: &Path,
+    line_no: usize,
+    vars: &[String],
+    [c_ti, c_pi, c_ts, c_ps]: [usize; 4],
+    num: &dyn Fn(usize) -> Result<f64>,
+    signed_theta_r: bool,
+) -> Result<crate::geometry::Sample> {
+    let input_err = |column: &str, message| Error::input(path, line_no, column, message);
+    let (mut ti, mut pi) = (num(c_ti)?, num(c_pi)?);
+    let (ts, ps) = (num(c_ts)?, num(c_ps)?);
+    if ti < 0.0 && signed_theta_r {
+        ti = -ti;
+        pi += PI;
+    }
+    for (name, c, v) in [("phi_i", c_pi, pi), ("phi_s", c_ps, ps)] {
+        if v.abs() > 2.0 * PI * (1.0 + 1e-12) {
+            let m = format!("{name} = {v} rad is outside [-2π, 2π] (ASTM angles are radians)");
+            return Err(input_err(&vars[c], m));
+        }
+    }
+    let phi_r = crate::geometry::wrap_phi(ps - pi - PI);
+    check_angles(ti, ts, phi_r, true, signed_theta_r).map_err(|(c, m)| {
+        let col = match c {
+            "theta_i" => c_ti,
+            "theta_r" => c_ts,
+            _ => c_ps,
         };
-        let (mut ti, mut pi) = (num(c_ti)?, num(c_pi)?);
-        let (ts, ps) = (num(c_ts)?, num(c_ps)?);
-        if ti < 0.0 && opts.signed_theta_r {
-            ti = -ti;
-            pi += PI;
-        }
-        for (name, c, v) in [("phi_i", c_pi, pi), ("phi_s", c_ps, ps)] {
-            if v.abs() > 2.0 * PI * (1.0 + 1e-12) {
-                return Err(input_err(
-                    line_no,
-                    &header.vars[c],
-                    format!("{name} = {v} rad is outside [-2π, 2π] (ASTM angles are radians)"),
-                ));
-            }
-        }
-        let phi_r = crate::geometry::wrap_phi(ps - pi - PI);
-        let sample = check_angles(ti, ts, phi_r, true, opts.signed_theta_r).map_err(|(c, m)| {
-            let col = match c {
-                "theta_i" => c_ti,
-                "theta_r" => c_ts,
-                _ => c_ps,
-            };
-            input_err(
-                line_no,
-                &header.vars[col],
-                format!("{m} (ASTM angles are radians)"),
-            )
-        })?;
-        for (k, &c) in selected.iter().enumerate() {
-            let v = num(c)?;
-            if let Some(vals) = ds.value.as_mut() {
-                vals.push(v);
-            }
-            if let Some(w) = ds.wavelength.as_mut() {
-                w.push(wl[k].unwrap_or(f64::NAN));
-            }
-            if let Some(ch) = ds.channel.as_mut() {
-                ch.push(header.vars[c].clone());
-            }
-            let mut row: Vec<String> = angle_cols.iter().map(|&i| fields[i].to_string()).collect();
-            row.push(header.vars[c].clone());
-            row.push(fields[c].to_string());
-            ds.rows.push(row);
-            ds.lines.push(line_no);
-            ds.samples.push(sample);
-        }
-    }
-    if opts.require_value {
-        if let Some(v) = &ds.value {
-            if v.iter().all(|&x| x == 0.0) {
-                return Err(file_err(format!(
-                    "all {} values of the selected channel(s) are zero: nothing to fit",
-                    v.len()
-                )));
-            }
-        }
-    }
-    Ok(ds)
+        input_err(&vars[col], format!("{m} (ASTM angles are radians)"))
+    })
 }
 
 /// The quantity a `MEAS_NAME` states: `BRDF` (any case) is a BRDF, a name with `radiance`
