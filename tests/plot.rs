@@ -390,14 +390,15 @@ fn with_synthetic_input<R>(wiggle: f64, f: impl FnOnce(&FitPlotInput) -> R) -> R
 }
 
 #[test]
-fn fit_plots_write_twelve_valid_files() {
+fn fit_plots_write_valid_files_with_a_hemisphere_per_incidence_angle() {
     with_synthetic_input(0.03, check_fit_plots);
 }
 
 fn check_fit_plots(input: &FitPlotInput) {
     let dir = tempfile::tempdir().unwrap();
     let paths = write_fit_plots(dir.path(), input).unwrap();
-    assert_eq!(paths.len(), 12);
+    // Six pictures and one hemisphere for each of the three incidence angles, PNG and SVG.
+    assert_eq!(paths.len(), 18);
     for stem in [
         "fit_linear",
         "fit_log",
@@ -405,6 +406,9 @@ fn check_fit_plots(input: &FitPlotInput) {
         "residuals_phi",
         "polar",
         "contour",
+        "hemisphere_1",
+        "hemisphere_2",
+        "hemisphere_3",
     ] {
         let png = std::fs::read(dir.path().join(format!("{stem}.png"))).unwrap();
         let (w, h) = png_size(&png);
@@ -464,7 +468,8 @@ fn fit_plots_cope_with_awkward_data() {
     };
     let dir = tempfile::tempdir().unwrap();
     let paths = write_fit_plots(&dir.path().join("new/sub"), &input).unwrap();
-    assert_eq!(paths.len(), 12);
+    // Six pictures and a hemisphere for each of the two incidence angles.
+    assert_eq!(paths.len(), 16);
     // Nearest-to-plane: the 30° group shows its sample at φr = 40° (nearest), not 45°.
     let chart = goniofit::plot::fit::fit_chart(&input, false).unwrap();
     let measured_pts: Vec<usize> = chart
@@ -682,4 +687,113 @@ fn a_joint_fit_draws_every_channel_with_its_own_scales() {
             "{stem}: {texts:?}"
         );
     }
+}
+
+/// The (cx, cy) of the filled SVG circles left of `x_max` (the measured panel's dots; the
+/// legend's grey sample glyph, #5A5A5A, left out).
+fn filled_circles(svg: &str, x_max: f64) -> Vec<(f64, f64)> {
+    let attr = |c: &str, name: &str| -> f64 {
+        let i = c.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+        c[i..].split('"').next().unwrap().parse().unwrap()
+    };
+    svg.split("<circle")
+        .skip(1)
+        .filter(|c| {
+            let head = c.split("/>").next().unwrap();
+            !head.contains("fill=\"none\"") && !head.contains("fill=\"#5A5A5A\"")
+        })
+        .map(|c| (attr(c, "cx"), attr(c, "cy")))
+        .filter(|p| p.0 < x_max)
+        .collect()
+}
+
+#[test]
+fn hemisphere_dots_land_where_the_projection_puts_the_samples() {
+    use goniofit::plot::hemisphere::{hemisphere_plots, project, DISC_R};
+    with_synthetic_input(0.03, |input| {
+        let pics = hemisphere_plots(input).unwrap();
+        assert_eq!(pics.len(), 3);
+        let h45 = &pics[1];
+        assert!((h45.theta_i.to_degrees() - 45.0).abs() < 1e-9);
+        // θr = 30°, φr = 60°: (sin 30° cos 60°, sin 30° sin 60°) = (1/4, √3/4).
+        let (x, y) = project(30f64.to_radians(), 60f64.to_radians());
+        assert!((x - 0.25).abs() < 1e-15 && (y - 3f64.sqrt() / 4.0).abs() < 1e-15);
+        assert!(h45
+            .points
+            .iter()
+            .any(|p| (p.0 - 0.25).abs() < 1e-12 && (p.1 - 3f64.sqrt() / 4.0).abs() < 1e-12));
+        // In the drawing: the θr = 0 sample is the disc's centre; the others sit at
+        // centre + DISC_R (x, −y) pixels (y up), to the pixel.
+        let svg = svg_string(h45).unwrap();
+        let dots = filled_circles(&svg, 430.0);
+        assert_eq!(dots.len(), h45.points.len());
+        let centre = dots[h45
+            .points
+            .iter()
+            .position(|p| p.0 == 0.0 && p.1 == 0.0)
+            .unwrap()];
+        for (p, d) in h45.points.iter().zip(&dots) {
+            let want = (centre.0 + DISC_R * p.0, centre.1 - DISC_R * p.1);
+            assert!(
+                (d.0 - want.0).abs() <= 0.5 && (d.1 - want.1).abs() <= 0.5,
+                "{p:?}: {d:?} vs {want:?}"
+            );
+        }
+        // Measured and fitted share one scale; the values span two decades: logarithmic.
+        assert!(h45.scale.log);
+        assert!(svg.contains("log scale"));
+    });
+}
+
+#[test]
+fn hemisphere_pictures_are_capped_at_the_busiest_incidence_angles() {
+    use goniofit::plot::hemisphere::{hemisphere_plots, MAX_HEMISPHERES};
+    let m = model("lambert");
+    let params = vec![0.2];
+    // Six incidence angles; 60° and 10° have the most samples.
+    let mut samples = Vec::new();
+    for (ti, n) in [
+        (0.0, 3),
+        (10.0, 8),
+        (20.0, 4),
+        (30.0, 2),
+        (50.0, 5),
+        (60.0, 9),
+    ] {
+        for k in 0..n {
+            samples.push(Sample::from_degrees(
+                ti,
+                5.0 + 8.0 * k as f64,
+                20.0 * k as f64,
+            ));
+        }
+    }
+    let geo = Geometry::new(&samples, &[1.0], Quantity::Brdf).unwrap();
+    let mut fitted = vec![0.0; geo.len()];
+    m.eval(&geo, &params, &mut fitted, None);
+    let res = vec![0.0; geo.len()];
+    let input = FitPlotInput {
+        title: "lambert".into(),
+        subtitle: String::new(),
+        model: m.as_ref(),
+        params: &params,
+        geo: &geo,
+        measured: &fitted,
+        fitted: &fitted,
+        std_residuals: &res,
+        wavelength_unit: None,
+        channels: Default::default(),
+    };
+    let pics = hemisphere_plots(&input).unwrap();
+    assert_eq!(pics.len(), MAX_HEMISPHERES);
+    let angles: Vec<f64> = pics
+        .iter()
+        .map(|p| p.theta_i.to_degrees().round())
+        .collect();
+    assert_eq!(angles, vec![10.0, 20.0, 50.0, 60.0]);
+    assert!(pics[0]
+        .caption
+        .contains("one of the 4 incidence angles with the most samples, of 6"));
+    // A constant BRDF: a linear scale around its one value.
+    assert!(!pics[0].scale.log);
 }

@@ -1,11 +1,10 @@
 //! `goniofit fit`: a measurement file in, a fit report out.
 
 use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
-use super::plot::{plot_fit, plot_status};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
-use goniofit::fit::driver::{FitConfig, FitInput, FitResult};
+use goniofit::fit::driver::{FitConfig, FitInput};
 use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
@@ -150,7 +149,8 @@ pub struct FitArgs {
     #[arg(long)]
     pub no_intervals: bool,
     /// Also write the report as one self-contained HTML page (tables, the pictures inline,
-    /// the command that reproduces it); one dataset only.
+    /// the command that reproduces it). Several fits (`--by-group`, several files): one
+    /// page with the sortable summary table, an overview, and a section per fit.
     #[arg(long)]
     pub html: Option<PathBuf>,
     /// Print the report as one JSON object.
@@ -159,7 +159,8 @@ pub struct FitArgs {
     /// Write the input rows with L_fit, residual, std_residual, mode.
     #[arg(long)]
     pub residuals: Option<PathBuf>,
-    /// Write the fit's pictures (PNG and SVG) into this folder.
+    /// Write the fit's pictures (PNG and SVG) into this folder; several fits: one folder
+    /// per fit inside it (numbered in the summary's order).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Also write the one-line-per-fit summary (group, n, converged, cost, R², σ, T, T/σ,
@@ -381,9 +382,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         true => format!("fitting {} (model {})", jobs[0].0, args.model),
         false => format!("fitting {} datasets (model {})", jobs.len(), args.model),
     });
-    if !single && (args.residuals.is_some() || args.plot.is_some() || args.html.is_some()) {
+    if !single && args.residuals.is_some() {
         return Err(Error::Usage(
-            "--residuals and --plot take one dataset; fit several files one at a time for those"
+            "--residuals takes one dataset; fit several files or groups one at a time for it"
                 .into(),
         )
         .into());
@@ -409,7 +410,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         pool.current_num_threads(),
     )?;
     if single {
-        write_single_outputs(&args, &outcomes[0], &infos[0])?;
+        super::fit_outputs::write_single_outputs(&args, &outcomes[0], &infos[0])?;
+    } else {
+        super::fit_outputs::write_batch_outputs(&args, &outcomes, &infos, &skipped)?;
     }
     // A signal that came after the fits (while the outputs were written) still says the
     // run was interrupted: every output is complete, and the exit code is 3.
@@ -639,53 +642,6 @@ fn print_reports(
     Ok(())
 }
 
-/// The outputs of a single fit: `--residuals`, `--html`, `--plot`.
-/// A fit whose stop request cut the evaluation of its fitted values (see
-/// [`FitResult::fitted_computed`]) writes neither the residuals file nor pictures, and
-/// says so.
-fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
-    if !o.result.fitted_computed {
-        if args.residuals.is_some() || args.plot.is_some() {
-            eprintln!("goniofit: no residuals file and no pictures written: the fit was stopped before its fitted values were evaluated");
-        }
-    } else if let Some(path) = &args.residuals {
-        write_residuals(path, &o.dataset, &o.result)?;
-    }
-    if let Some(path) = &args.html {
-        write_html(args, path, o, info)?;
-    }
-    if let Some(dir) = args.plot.as_ref().filter(|_| o.result.fitted_computed) {
-        let written = draw_pictures(args, dir, o, info)?;
-        eprintln!(
-            "goniofit: wrote {} pictures to {}",
-            written.len(),
-            goniofit::io::shown(dir)
-        );
-    }
-    Ok(())
-}
-
-/// Draw the pictures of one outcome into `dir` (PNG and SVG; see [`plot_fit`]), with the
-/// status line of its report; returns the files written.
-fn draw_pictures(
-    args: &FitArgs,
-    dir: &Path,
-    o: &Outcome,
-    info: &RunInfo,
-) -> anyhow::Result<Vec<PathBuf>> {
-    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
-    let json = report::json::to_json(&o.result, info);
-    let status = plot_status(&json);
-    plot_fit(
-        dir,
-        &config,
-        &o.input,
-        (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
-        (&status, &super::plot::undetermined_params(&json)),
-        wavelength_unit(args, &o.dataset).as_deref(),
-    )
-}
-
 /// A bar of bytes read from `file` on standard error (hidden unless `show`).
 fn reading_bar(file: &Path, show: bool) -> indicatif::ProgressBar {
     let len = std::fs::metadata(file).map(|m| m.len()).unwrap_or(0);
@@ -703,42 +659,6 @@ fn reading_bar(file: &Path, show: bool) -> indicatif::ProgressBar {
 /// Files smaller than this are read without a bar (they take milliseconds).
 const READING_BAR_BYTES: u64 = 4 << 20;
 
-/// Write the HTML page of one outcome: its pictures drawn into a temporary folder and
-/// inlined as SVG.
-fn write_html(args: &FitArgs, path: &Path, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
-    let dir = tempfile::tempdir().context("a temporary folder for the pictures")?;
-    let written = if o.result.fitted_computed {
-        draw_pictures(args, dir.path(), o, info)?
-    } else {
-        Vec::new()
-    };
-    let mut pictures = Vec::new();
-    for p in written
-        .iter()
-        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
-    {
-        let svg = std::fs::read_to_string(p).map_err(|source| Error::Io {
-            path: p.clone(),
-            source,
-        })?;
-        let title = p
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        pictures.push((title, svg));
-    }
-    let text = report::outcome::to_text(o, info);
-    let comparison = report::outcome::comparison(o);
-    let page = report::html::page(&o.result, info, &text, &comparison, &pictures);
-    io::write_bytes(path, page.as_bytes())?;
-    eprintln!(
-        "goniofit: wrote {} (one page, {} pictures inline)",
-        io::shown(path),
-        pictures.len()
-    );
-    Ok(())
-}
-
 /// The summary rows as JSON objects (the CSV's columns).
 fn summary_json(rows: &[report::summary::Row]) -> serde_json::Value {
     let csv = report::summary::csv_rows(rows);
@@ -754,27 +674,6 @@ fn summary_json(rows: &[report::summary::Row]) -> serde_json::Value {
             })
             .collect(),
     )
-}
-
-/// Write the input rows with L_fit, residual, std_residual and mode (atomically).
-fn write_residuals(path: &Path, ds: &Dataset, r: &FitResult) -> anyhow::Result<()> {
-    let mut headers = ds.headers.clone();
-    headers.extend(["L_fit", "residual", "std_residual", "mode"].map(String::from));
-    let rows: Vec<Vec<String>> = ds
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(i, row)| {
-            let mut row = row.clone();
-            row.push(format!("{:e}", r.fitted[i]));
-            row.push(format!("{:e}", r.residuals[i]));
-            row.push(format!("{:e}", r.std_residuals[i]));
-            row.push(r.sample_modes[i].name().to_string());
-            row
-        })
-        .collect();
-    io::write_csv(path, &headers, &rows)?;
-    Ok(())
 }
 
 /// The fit's command-line arguments (without the program name), for the JSON report's

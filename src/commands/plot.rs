@@ -200,20 +200,62 @@ pub fn plot_status(json: &serde_json::Value) -> String {
     parts.join("; ")
 }
 
-/// Draw the pictures of a fit at parameter values `fit.1` (layout `fit.0`; `fit.2` its
-/// fitted values when the fit has them, else they are evaluated here), with `status.0`
-/// (see [`plot_status`]) under their titles, the parameters of `status.1` (not determined
-/// by the data) named in the title without a value, and λ in `unit`. A joint fit draws every
-/// channel with its own parameters (the polar and contour maps: the busiest θi's channel,
-/// named in their titles).
+/// A fit to draw: its layout, parameter values, and fitted values when the fit has them
+/// (else they are evaluated here).
+pub type FitToDraw<'a> = (
+    &'a goniofit::fit::problem::ParamLayout,
+    &'a [f64],
+    Option<&'a [f64]>,
+);
+
+/// Draw the pictures of a fit (see [`FitToDraw`]) into `dir` as PNG and SVG (see
+/// [`with_plot_input`] for what `status` and `unit` are); returns the files written.
 pub fn plot_fit(
     dir: &Path,
     config: &FitConfig,
     input: &FitInput,
-    (layout, values, fitted): (&goniofit::fit::problem::ParamLayout, &[f64], Option<&[f64]>),
+    fit: FitToDraw,
     status: (&str, &[String]),
     unit: Option<&str>,
 ) -> anyhow::Result<Vec<PathBuf>> {
+    with_plot_input(config, input, fit, status, unit, |p| {
+        goniofit::plot::fit::write_fit_plots(dir, p)
+    })
+}
+
+/// The pictures of a fit rendered in memory: (name, SVG document), named as
+/// [`goniofit::plot::fit::PICTURES`].
+pub fn svg_of_fit(
+    config: &FitConfig,
+    input: &FitInput,
+    fit: FitToDraw,
+    status: (&str, &[String]),
+    unit: Option<&str>,
+) -> anyhow::Result<Vec<(String, String)>> {
+    with_plot_input(
+        config,
+        input,
+        fit,
+        status,
+        unit,
+        goniofit::plot::fit::svg_pictures,
+    )
+}
+
+/// Call `draw` with the picture input of a fit at parameter values `fit.1` (layout
+/// `fit.0`; `fit.2` its fitted values when the fit has them, else they are evaluated
+/// here), with `status.0` (see [`plot_status`]) under the titles, the parameters of
+/// `status.1` (not determined by the data) named in the title without a value, and λ in
+/// `unit`. A joint fit draws every channel with its own parameters (the polar and contour
+/// maps: the busiest θi's channel, named in their titles).
+pub fn with_plot_input<T>(
+    config: &FitConfig,
+    input: &FitInput,
+    (layout, values, fitted): FitToDraw,
+    status: (&str, &[String]),
+    unit: Option<&str>,
+    draw: impl FnOnce(&goniofit::plot::fit::FitPlotInput) -> goniofit::error::Result<T>,
+) -> anyhow::Result<T> {
     use goniofit::fit::problem::FitProblem;
     let model = goniofit::model::by_name(&config.model, &config.model_opts)?;
     let floor = driver::residual_floor(config, &input.y);
@@ -259,7 +301,7 @@ pub fn plot_fit(
             names: &layout.channel_names,
         },
     };
-    Ok(goniofit::plot::fit::write_fit_plots(dir, &plot_input)?)
+    Ok(draw(&plot_input)?)
 }
 
 /// "kbs: sigma=… T=… scale=…"; for a joint fit only the shared parameters, and which are

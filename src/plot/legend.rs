@@ -218,6 +218,18 @@ pub struct ColorKey {
 }
 
 impl ColorKey {
+    /// The labelled ticks of the colour bar: nice numbers ([`super::ticks::linear_ticks`])
+    /// inside the range, about five (the range's ends when it is a single value).
+    pub fn ticks(&self) -> Vec<f64> {
+        let (lo, hi) = self.range;
+        let t = super::ticks::linear_ticks(lo, hi, 5);
+        if t.is_empty() {
+            vec![lo]
+        } else {
+            t
+        }
+    }
+
     /// The colour of value `v` on this key.
     pub fn color(&self, v: f64) -> RGBColor {
         let (lo, hi) = self.range;
@@ -226,7 +238,7 @@ impl ColorKey {
 }
 
 /// The height (pixels) a colour bar takes in a legend panel.
-pub const COLORBAR_H: u32 = 240;
+pub const COLORBAR_H: u32 = 256;
 
 /// Draw the colour bar of `key` in a legend panel at pixel (x, y): its name, a vertical
 /// bar, and a labelled tick at each series' value.
@@ -239,7 +251,7 @@ pub fn draw_color_key<DB: DrawingBackend>(
         .color(&BLACK)
         .pos(Pos::new(HPos::Left, VPos::Top));
     area.draw_text(&format!("colour: {}", key.label), &title, (x, y))?;
-    let (top, h, w) = (y + 26, COLORBAR_H as i32 - 40, 22);
+    let (top, h, w) = (y + 26, COLORBAR_H as i32 - 60, 22);
     let (lo, hi) = key.range;
     let span = if hi > lo { hi - lo } else { 1.0 };
     let to_y = |v: f64| top + h - ((v - lo) / span * h as f64).round() as i32;
@@ -254,21 +266,31 @@ pub fn draw_color_key<DB: DrawingBackend>(
         [(x, top), (x + w, top + h)],
         RGBColor(120, 120, 120).stroke_width(1),
     ))?;
+    // The values of the series as short marks on the left edge; labels at nice values
+    // on the right.
+    for &v in &key.values {
+        let yy = to_y(v);
+        area.draw(&PathElement::new(
+            vec![(x - 5, yy), (x, yy)],
+            BLACK.stroke_width(1),
+        ))?;
+    }
     let label = font(13.0)
         .color(&BLACK)
         .pos(Pos::new(HPos::Left, VPos::Center));
-    let mut last = i32::MIN;
-    for &v in &key.values {
+    for v in key.ticks() {
         let yy = to_y(v);
         area.draw(&PathElement::new(
             vec![(x + w, yy), (x + w + 5, yy)],
             BLACK.stroke_width(1),
         ))?;
-        // Labels at least 14 px apart (the ticks are all drawn).
-        if (yy - last).abs() >= 14 {
-            area.draw_text(&super::fmt_num(v), &label, (x + w + 8, yy))?;
-            last = yy;
-        }
+        area.draw_text(&super::fmt_tick(v), &label, (x + w + 8, yy))?;
+    }
+    let note = font(12.0)
+        .color(&RGBColor(90, 90, 90))
+        .pos(Pos::new(HPos::Left, VPos::Top));
+    for (k, line) in ["left marks: the", "values drawn"].iter().enumerate() {
+        area.draw_text(line, &note, (x - 6, top + h + 4 + 14 * k as i32))?;
     }
     Ok(())
 }
@@ -276,6 +298,23 @@ pub fn draw_color_key<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn colour_bar_ticks_are_nice_numbers() {
+        // The CUReT incidence angles: the values themselves are uneven; the labelled ticks
+        // are multiples of a 1-2-2.5-5 step.
+        let key = ColorKey {
+            label: "θi (degrees)".into(),
+            range: (0.0, 77.8),
+            values: vec![0.0, 11.25, 22.5, 33.75, 45.0, 50.24, 56.25, 64.76, 77.8],
+        };
+        assert_eq!(key.ticks(), vec![0.0, 20.0, 40.0, 60.0]);
+        let key = ColorKey {
+            range: (0.351, 1.064),
+            ..key
+        };
+        assert_eq!(key.ticks(), vec![0.4, 0.6, 0.8, 1.0]);
+    }
 
     #[test]
     fn sequential_scale_ends_and_is_monotone_in_lightness() {

@@ -18,11 +18,11 @@ pub fn escape(s: &str) -> String {
 }
 
 /// An SVG document as an inline element: the XML declaration and doctype dropped.
-fn inline_svg(svg: &str) -> &str {
+pub fn inline_svg(svg: &str) -> &str {
     svg.find("<svg").map_or(svg, |i| &svg[i..])
 }
 
-const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\
+pub const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\
 table{border-collapse:collapse;margin:0.5em 0 1em}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}\
 th{background:#eee}td.num{font-family:monospace;text-align:right;white-space:nowrap}pre{background:#f6f6f6;padding:0.5em;overflow-x:auto}\
 figure{margin:1em 0}figure svg{width:100%;max-width:1100px;height:auto}\
@@ -56,6 +56,8 @@ fn quantity_tables(s: &mut String, r: &FitResult, info: &RunInfo) {
             "fixed".to_string()
         } else if p.determined {
             "yes".into()
+        } else if i68.is_empty() && i95.is_empty() {
+            "no (no interval computed)".into()
         } else {
             "no: see the interval".into()
         };
@@ -142,6 +144,22 @@ pub fn page(
         escape(&r.model),
         escape(&info.input)
     );
+    s += &body(r, info, text, comparison, pictures);
+    s.push_str("</body></html>\n");
+    s
+}
+
+/// One fit's report under its title (headings `<h2>`): status, the command that
+/// reproduces it, setting, model comparison, results, pictures (inline SVG with their
+/// names as captions) and the text report folded away.
+pub fn body(
+    r: &FitResult,
+    info: &RunInfo,
+    text: &str,
+    comparison: &[super::outcome::Candidate],
+    pictures: &[(String, String)],
+) -> String {
+    let mut s = String::new();
     status(&mut s, r);
     s.push_str("<h2>Reproduce</h2>\n");
     let _ = writeln!(s, "<pre id=\"command\">{}</pre>", escape(&info.command));
@@ -160,7 +178,6 @@ pub fn page(
     }
     s.push_str("<h2>Text report</h2>\n<details><summary>the report as printed</summary>\n");
     let _ = writeln!(s, "<pre>{}</pre></details>", escape(text));
-    s.push_str("</body></html>\n");
     s
 }
 

@@ -1,6 +1,7 @@
 //! Reporters for a finished fit: one per output format, and what they share (the setting
 //! and units of a fit, the input's checksum).
 
+pub mod batch_html;
 pub mod checksum;
 pub mod design;
 pub mod html;

@@ -72,7 +72,7 @@ pub fn verdict_word(v: Verdict) -> &'static str {
 
 /// A value for the table: 4 significant digits, in parentheses when undetermined, `-` when
 /// the model has no such parameter.
-fn cell(v: Option<(f64, bool)>) -> String {
+pub fn cell(v: Option<(f64, bool)>) -> String {
     match v {
         Some((x, true)) => format!("{x:.4e}"),
         Some((x, false)) => format!("({x:.3e})"),
@@ -157,7 +157,7 @@ pub fn table(rows: &[Row]) -> String {
 
 /// The adequacy verdict with its reason codes, as in the table: `misfit (runs,floor)`; past
 /// [`ADEQUACY_WIDTH`] characters of codes the rest are counted (`+2`; the CSV has them all).
-fn adequacy_cell(r: &Row) -> String {
+pub fn adequacy_cell(r: &Row) -> String {
     if r.adequacy_reasons.is_empty() {
         return r.adequacy.name().to_string();
     }
