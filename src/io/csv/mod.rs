@@ -183,7 +183,8 @@ fn fault_error(path: &Path, fault: Fault) -> Error {
     }
 }
 
-/// Parse CSV records (header first) into a dataset; see the module docs.
+/// Parse CSV records (header first) into a dataset; see the module docs. The stages: the
+/// header's columns ([`map_columns`], the NIST layout), their checks, then every record.
 fn parse_records(
     path: &Path,
     records: impl Iterator<Item = Result<Record>>,
@@ -191,30 +192,74 @@ fn parse_records(
     keep_rows: bool,
     rows_hint: usize,
 ) -> Result<Dataset> {
-    let input_err = |line, column: &str, message| Error::input(path, line, column, message);
-    let file_err = |message| Error::file(path, message);
-
     let mut records = records.peekable();
     let Some((header_line, headers)) = records.next().transpose()? else {
-        return Err(file_err(
+        return Err(Error::file(
+            path,
             "empty file: no header row (expected e.g. theta_i,theta_r,phi_r,L)".into(),
         ));
     };
     if records.peek().is_none() {
-        return Err(file_err(format!(
-            "no data rows after the header on line {header_line}"
-        )));
+        return Err(Error::file(
+            path,
+            format!("no data rows after the header on line {header_line}"),
+        ));
     }
-
-    // Resolve the columns.
-    let find = |name: &str| -> Vec<usize> {
-        headers
-            .iter()
-            .enumerate()
-            .filter(|(_, h)| h.trim().eq_ignore_ascii_case(name.trim()))
-            .map(|(i, _)| i)
-            .collect()
+    let table = Table::of(path, header_line, &headers, opts)?;
+    let first_row = match records.peek() {
+        Some(Ok((_, f))) => f.join(","),
+        _ => String::new(),
     };
+    table.check(path, &first_row, opts)?;
+    let mut ds = table.empty_dataset(path, keep_rows, rows_hint);
+    for record in records {
+        table.push_record(path, opts, record?, &mut ds, keep_rows)?;
+    }
+    ds.shrink_to_fit();
+    if opts.require_value {
+        if let Some(v) = &ds.value {
+            if v.iter().all(|&x| x == 0.0) {
+                let i = table.cols.get(Role::Value).unwrap_or(0);
+                let m = format!(
+                    "all {} values are zero: nothing to fit (wrong column?)",
+                    v.len()
+                );
+                return Err(Error::input(path, header_line, &headers[i], m));
+            }
+        }
+    }
+    Ok(ds)
+}
+
+/// What the header says about the table: its columns' roles, which `--columns` mapped, and
+/// the NIST layout when the file is one.
+struct Table<'h> {
+    header_line: usize,
+    headers: &'h [String],
+    cols: Columns,
+    mapped: [bool; 8],
+    nist: Option<Nist>,
+}
+
+/// The header's columns named `name` (trimmed, case-insensitive).
+fn find_column(headers: &[String], name: &str) -> Vec<usize> {
+    headers
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| h.trim().eq_ignore_ascii_case(name.trim()))
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// The columns of each role: first those `--columns` maps, then the usual names; a role
+/// that two columns could fill is an error naming both.
+fn map_columns(
+    path: &Path,
+    header_line: usize,
+    headers: &[String],
+    opts: &ReadOptions,
+) -> Result<(Columns, [bool; 8])> {
+    let input_err = |column: &str, message| Error::input(path, header_line, column, message);
     let mut cols = Columns::default();
     let mut mapped = [false; 8];
     for (role_text, name) in &opts.columns {
@@ -224,30 +269,22 @@ fn parse_records(
                 ROLE_NAMES.join(", ")
             ))
         })?;
-        let hits = find(name);
+        let hits = find_column(headers, name);
         let Some(&i) = hits.first() else {
-            return Err(input_err(
-                header_line,
-                name,
-                format!(
-                    "no column named '{name}' (mapped to {} by --columns); the header has: {}",
-                    role_name(role),
-                    headers.join(", ")
-                ),
-            ));
+            let m = format!(
+                "no column named '{name}' (mapped to {} by --columns); the header has: {}",
+                role_name(role),
+                headers.join(", ")
+            );
+            return Err(input_err(name, m));
         };
         if hits.len() > 1 {
-            return Err(input_err(
-                header_line,
-                name,
-                format!("the header names '{name}' {} times", hits.len()),
-            ));
+            let m = format!("the header names '{name}' {} times", hits.len());
+            return Err(input_err(name, m));
         }
         if mapped[role as usize] {
-            return Err(Error::Usage(format!(
-                "--columns maps {} twice",
-                role_name(role)
-            )));
+            let m = format!("--columns maps {} twice", role_name(role));
+            return Err(Error::Usage(m));
         }
         mapped[role as usize] = true;
         cols.idx[role as usize] = Some(i);
@@ -256,263 +293,268 @@ fn parse_records(
         if mapped[role as usize] {
             continue;
         }
-        let hits: Vec<usize> = names.iter().flat_map(|n| find(n)).collect();
+        let hits: Vec<usize> = names.iter().flat_map(|n| find_column(headers, n)).collect();
         match hits.len() {
             0 => {}
             1 => cols.idx[role as usize] = Some(hits[0]),
             _ => {
-                return Err(input_err(
-                    header_line,
-                    &headers[hits[1]],
-                    format!(
-                        "columns {} can all be {canon}; choose one with --columns {canon}=NAME",
-                        hits.iter()
-                            .map(|&i| format!("'{}'", headers[i]))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                ))
+                let named: Vec<String> =
+                    hits.iter().map(|&i| format!("'{}'", headers[i])).collect();
+                let m = format!(
+                    "columns {} can all be {canon}; choose one with --columns {canon}=NAME",
+                    named.join(", ")
+                );
+                return Err(input_err(&headers[hits[1]], m));
             }
         }
     }
+    Ok((cols, mapped))
+}
 
-    // The NIST layout, when no standard angle columns are named or mapped.
-    let angle_mapped = mapped[Role::ThetaI as usize]
-        || mapped[Role::ThetaR as usize]
-        || mapped[Role::PhiR as usize];
-    let mut nist: Option<Nist> = None;
-    if !angle_mapped && cols.get(Role::ThetaI).is_none() && cols.get(Role::ThetaR).is_none() {
-        let one = |n: &str| find(n).first().copied();
-        if let (Some(ti), Some(tr), Some(pr)) = (one("thetai"), one("thetar"), one("phir")) {
-            nist = Some(Nist {
-                theta_i: ti,
-                phi_i: one("phi").or_else(|| one("phii")),
-                theta_r: tr,
-                phi_r: pr,
-            });
-            if !mapped[Role::Value as usize] && cols.get(Role::Value).is_none() {
-                cols.idx[Role::Value as usize] = one("f_r11").or_else(|| one("fr11"));
-            }
-            if !mapped[Role::Wavelength as usize] && cols.get(Role::Wavelength).is_none() {
-                cols.idx[Role::Wavelength as usize] = one("lambda");
+impl<'h> Table<'h> {
+    /// The table of a header: its columns, and the NIST layout when no standard angle
+    /// columns are named or mapped and its `thetai`, `thetar`, `phir` columns are there.
+    fn of(
+        path: &Path,
+        header_line: usize,
+        headers: &'h [String],
+        opts: &ReadOptions,
+    ) -> Result<Self> {
+        let (mut cols, mapped) = map_columns(path, header_line, headers, opts)?;
+        let angle_mapped = mapped[Role::ThetaI as usize]
+            || mapped[Role::ThetaR as usize]
+            || mapped[Role::PhiR as usize];
+        let mut nist: Option<Nist> = None;
+        if !angle_mapped && cols.get(Role::ThetaI).is_none() && cols.get(Role::ThetaR).is_none() {
+            let one = |n: &str| find_column(headers, n).first().copied();
+            if let (Some(ti), Some(tr), Some(pr)) = (one("thetai"), one("thetar"), one("phir")) {
+                nist = Some(Nist {
+                    theta_i: ti,
+                    phi_i: one("phi").or_else(|| one("phii")),
+                    theta_r: tr,
+                    phi_r: pr,
+                });
+                if !mapped[Role::Value as usize] && cols.get(Role::Value).is_none() {
+                    cols.idx[Role::Value as usize] = one("f_r11").or_else(|| one("fr11"));
+                }
+                if !mapped[Role::Wavelength as usize] && cols.get(Role::Wavelength).is_none() {
+                    cols.idx[Role::Wavelength as usize] = one("lambda");
+                }
             }
         }
-    }
-
-    let first_row = match records.peek() {
-        Some(Ok((_, f))) => f.join(","),
-        _ => String::new(),
-    };
-    if let Some(m) = delimiter_hint(&headers, &first_row) {
-        return Err(input_err(header_line, "(header)", m));
-    }
-    let missing = |what: &str, hint: &str| {
-        input_err(
+        Ok(Table {
             header_line,
-            what,
-            format!(
+            headers,
+            cols,
+            mapped,
+            nist,
+        })
+    }
+
+    /// The columns a read needs are there (angles, the value when required) and do not
+    /// contradict each other; a header that looks split by the wrong delimiter says so.
+    fn check(&self, path: &Path, first_row: &str, opts: &ReadOptions) -> Result<()> {
+        let (headers, cols) = (self.headers, &self.cols);
+        let input_err =
+            |column: &str, message| Error::input(path, self.header_line, column, message);
+        if let Some(m) = delimiter_hint(headers, first_row) {
+            return Err(input_err("(header)", m));
+        }
+        let missing = |what: &str, hint: &str| {
+            let m = format!(
                 "missing column {what}{hint}; the header has: {}",
                 headers.join(", ")
-            ),
-        )
-    };
-    if nist.is_none() {
-        if cols.get(Role::ThetaI).is_none() {
-            return Err(missing(
-                "theta_i",
-                " (name it theta_i or map it with --columns theta_i=NAME)",
-            ));
-        }
-        if cols.get(Role::ThetaR).is_none() {
-            return Err(missing(
-                "theta_r",
-                " (name it theta_r or map it with --columns theta_r=NAME)",
-            ));
-        }
-        if cols.get(Role::PhiR).is_none() && !opts.signed_theta_r {
-            return Err(missing(
-                "phi_r",
-                " (name it phi_r, map it with --columns phi_r=NAME, or for in-plane data with signed view angles use --signed-theta-r)",
-            ));
-        }
-    }
-    if opts.require_value && cols.get(Role::Value).is_none() {
-        return Err(missing(
-            "L",
-            " (the measured value: name it L, value or brdf, or map it with --columns L=NAME)",
-        ));
-    }
-    if cols.get(Role::Weight).is_some() && cols.get(Role::SigmaL).is_some() {
-        return Err(input_err(
-            header_line,
-            "sigma_L",
-            "both a weight and a sigma_L column: give one (weights are 1/sigma_L²)".into(),
-        ));
-    }
-
-    // The rows.
-    let n = rows_hint;
-    let mut ds = Dataset {
-        path: path.to_path_buf(),
-        headers: headers.clone(),
-        rows: Vec::with_capacity(if keep_rows { n } else { 0 }),
-        lines: Vec::with_capacity(n),
-        samples: Vec::with_capacity(n),
-        value: cols.get(Role::Value).map(|_| Vec::with_capacity(n)),
-        weight: cols
-            .get(Role::Weight)
-            .or(cols.get(Role::SigmaL))
-            .map(|_| Vec::with_capacity(n)),
-        sigma_l: cols.get(Role::SigmaL).map(|_| Vec::with_capacity(n)),
-        wavelength: cols.get(Role::Wavelength).map(|_| Vec::with_capacity(n)),
-        // Germer's files give lambda in µm and f_r11, a BRDF.
-        wavelength_unit: (nist.is_some()
-            && !mapped[Role::Wavelength as usize]
-            && cols.get(Role::Wavelength).is_some())
-        .then(|| "µm".to_string()),
-        wavelength_origin: None,
-        channel: cols.get(Role::Group).map(|_| Vec::with_capacity(n)),
-        quantity: if nist.is_some() && !mapped[Role::Value as usize] {
-            Some(crate::geometry::Quantity::Brdf)
-        } else {
-            cols.get(Role::Value)
-                .and_then(|i| super::quantity::from_column_name(&headers[i]))
-        },
-    };
-    for record in records {
-        let (line, fields) = record?;
-        if fields.len() != headers.len() {
-            return Err(input_err(
-                line,
-                "(row)",
-                format!(
-                    "row has {} fields, the header on line {header_line} has {}{}",
-                    fields.len(),
-                    headers.len(),
-                    if fields.len() > headers.len() {
-                        decimal_comma_hint(&fields.join(","))
-                    } else {
-                        ""
-                    }
-                ),
-            ));
-        }
-        let num = |i: usize| -> Result<f64> {
-            parse_finite(&fields[i]).map_err(|m| input_err(line, &headers[i], m))
+            );
+            input_err(what, m)
         };
-        let sample: Sample = if let Some(nc) = &nist {
-            let ti = num(nc.theta_i)?;
-            let pi = match nc.phi_i {
-                Some(i) => num(i)?,
-                None => 0.0,
-            };
-            let tr = num(nc.theta_r)?;
-            let pr = num(nc.phi_r)?;
-            nist_sample(ti, pi, tr, pr, opts.radians).map_err(|(c, m)| {
-                let i = match c {
-                    "theta_i" => nc.theta_i,
-                    "theta_r" => nc.theta_r,
-                    "phi_i" => nc.phi_i.unwrap_or(nc.phi_r),
-                    _ => nc.phi_r,
-                };
-                input_err(line, &headers[i], m)
-            })?
-        } else {
-            let ti_c = cols.get(Role::ThetaI).unwrap_or(0);
-            let tr_c = cols.get(Role::ThetaR).unwrap_or(0);
-            let ti = num(ti_c)?;
-            let tr = num(tr_c)?;
-            let pr = match cols.get(Role::PhiR) {
-                Some(i) => num(i)?,
-                None => 0.0,
-            };
-            check_angles(ti, tr, pr, opts.radians, opts.signed_theta_r).map_err(|(c, m)| {
-                let i = match c {
-                    "theta_i" => ti_c,
-                    "theta_r" => tr_c,
-                    _ => cols.get(Role::PhiR).unwrap_or(tr_c),
-                };
-                input_err(line, &headers[i], m)
-            })?
-        };
-        if let (Some(i), Some(v)) = (cols.get(Role::Value), ds.value.as_mut()) {
-            v.push(num(i)?);
-        }
-        if let Some(i) = cols.get(Role::Weight) {
-            let w = num(i)?;
-            if w <= 0.0 {
-                return Err(input_err(
-                    line,
-                    &headers[i],
-                    format!("weight {} must be positive", fields[i]),
+        if self.nist.is_none() {
+            if cols.get(Role::ThetaI).is_none() {
+                return Err(missing(
+                    "theta_i",
+                    " (name it theta_i or map it with --columns theta_i=NAME)",
                 ));
             }
-            if let Some(v) = ds.weight.as_mut() {
-                v.push(w);
+            if cols.get(Role::ThetaR).is_none() {
+                return Err(missing(
+                    "theta_r",
+                    " (name it theta_r or map it with --columns theta_r=NAME)",
+                ));
+            }
+            if cols.get(Role::PhiR).is_none() && !opts.signed_theta_r {
+                return Err(missing(
+                    "phi_r",
+                    " (name it phi_r, map it with --columns phi_r=NAME, or for in-plane data with signed view angles use --signed-theta-r)",
+                ));
             }
         }
-        if let Some(i) = cols.get(Role::SigmaL) {
+        if opts.require_value && cols.get(Role::Value).is_none() {
+            return Err(missing(
+                "L",
+                " (the measured value: name it L, value or brdf, or map it with --columns L=NAME)",
+            ));
+        }
+        if cols.get(Role::Weight).is_some() && cols.get(Role::SigmaL).is_some() {
+            return Err(input_err(
+                "sigma_L",
+                "both a weight and a sigma_L column: give one (weights are 1/sigma_L²)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A dataset with the table's columns and room for `n` rows.
+    fn empty_dataset(&self, path: &Path, keep_rows: bool, n: usize) -> Dataset {
+        let (cols, nist) = (&self.cols, self.nist.is_some());
+        let with = |r: Role| cols.get(r).map(|_| Vec::with_capacity(n));
+        Dataset {
+            path: path.to_path_buf(),
+            headers: self.headers.to_vec(),
+            rows: Vec::with_capacity(if keep_rows { n } else { 0 }),
+            lines: Vec::with_capacity(n),
+            samples: Vec::with_capacity(n),
+            value: with(Role::Value),
+            weight: cols
+                .get(Role::Weight)
+                .or(cols.get(Role::SigmaL))
+                .map(|_| Vec::with_capacity(n)),
+            sigma_l: with(Role::SigmaL),
+            wavelength: with(Role::Wavelength),
+            // Germer's files give lambda in µm and f_r11, a BRDF.
+            wavelength_unit: (nist
+                && !self.mapped[Role::Wavelength as usize]
+                && cols.get(Role::Wavelength).is_some())
+            .then(|| "µm".to_string()),
+            wavelength_origin: None,
+            channel: cols.get(Role::Group).map(|_| Vec::with_capacity(n)),
+            quantity: if nist && !self.mapped[Role::Value as usize] {
+                Some(crate::geometry::Quantity::Brdf)
+            } else {
+                cols.get(Role::Value)
+                    .and_then(|i| super::quantity::from_column_name(&self.headers[i]))
+            },
+        }
+    }
+
+    /// Read one record (`line`, `fields`) into `ds`: its sample and the columns the table
+    /// has, each checked (weights, σ_L and wavelengths positive).
+    fn push_record(
+        &self,
+        path: &Path,
+        opts: &ReadOptions,
+        (line, fields): Record,
+        ds: &mut Dataset,
+        keep_rows: bool,
+    ) -> Result<()> {
+        let headers = self.headers;
+        let input_err = |column: &str, message| Error::input(path, line, column, message);
+        if fields.len() != headers.len() {
+            let hint = if fields.len() > headers.len() {
+                decimal_comma_hint(&fields.join(","))
+            } else {
+                ""
+            };
+            let m = format!(
+                "row has {} fields, the header on line {} has {}{hint}",
+                fields.len(),
+                self.header_line,
+                headers.len(),
+            );
+            return Err(input_err("(row)", m));
+        }
+        let num = |i: usize| -> Result<f64> {
+            parse_finite(&fields[i]).map_err(|m| input_err(&headers[i], m))
+        };
+        let sample = self
+            .sample(&num, opts)
+            .map_err(|(i, m)| input_err(&headers[i], m))?;
+        let positive = |i: usize, what: &str| -> Result<f64> {
+            let v = num(i)?;
+            match v > 0.0 {
+                true => Ok(v),
+                false => Err(input_err(
+                    &headers[i],
+                    format!("{what} {} must be positive", fields[i]),
+                )),
+            }
+        };
+        if let (Some(i), Some(v)) = (self.cols.get(Role::Value), ds.value.as_mut()) {
+            v.push(num(i)?);
+        }
+        if let (Some(i), Some(v)) = (self.cols.get(Role::Weight), ds.weight.as_mut()) {
+            v.push(positive(i, "weight")?);
+        }
+        if let Some(i) = self.cols.get(Role::SigmaL) {
             let s = num(i)?;
             let w = 1.0 / (s * s);
             if s <= 0.0 || !w.is_finite() || w == 0.0 {
-                return Err(input_err(
-                    line,
-                    &headers[i],
-                    format!(
-                        "sigma_L {} must be positive (and 1/sigma_L² finite)",
-                        fields[i]
-                    ),
-                ));
+                let m = format!(
+                    "sigma_L {} must be positive (and 1/sigma_L² finite)",
+                    fields[i]
+                );
+                return Err(input_err(&headers[i], m));
             }
-            if let Some(v) = ds.sigma_l.as_mut() {
-                v.push(s);
-            }
-            if let Some(v) = ds.weight.as_mut() {
-                v.push(w);
+            if let (Some(sv), Some(wv)) = (ds.sigma_l.as_mut(), ds.weight.as_mut()) {
+                sv.push(s);
+                wv.push(w);
             }
         }
-        if let Some(i) = cols.get(Role::Wavelength) {
-            let l = num(i)?;
-            if l <= 0.0 {
-                return Err(input_err(
-                    line,
-                    &headers[i],
-                    format!("wavelength {} must be positive", fields[i]),
-                ));
-            }
-            if let Some(v) = ds.wavelength.as_mut() {
-                v.push(l);
-            }
+        if let (Some(i), Some(v)) = (self.cols.get(Role::Wavelength), ds.wavelength.as_mut()) {
+            v.push(positive(i, "wavelength")?);
         }
-        if let Some(i) = cols.get(Role::Group) {
-            if let Some(v) = ds.channel.as_mut() {
-                v.push(fields[i].clone());
-            }
+        if let (Some(i), Some(v)) = (self.cols.get(Role::Group), ds.channel.as_mut()) {
+            v.push(fields[i].clone());
         }
         ds.samples.push(sample);
         ds.lines.push(line);
         if keep_rows {
             ds.rows.push(fields);
         }
+        Ok(())
     }
-    ds.shrink_to_fit();
 
-    if opts.require_value {
-        if let Some(v) = &ds.value {
-            if v.iter().all(|&x| x == 0.0) {
-                let i = cols.get(Role::Value).unwrap_or(0);
-                return Err(input_err(
-                    header_line,
-                    &headers[i],
-                    format!(
-                        "all {} values are zero: nothing to fit (wrong column?)",
-                        v.len()
-                    ),
-                ));
-            }
+    /// A record's sample from its angle columns (`num` reads column i), checked; an error
+    /// names the column at fault.
+    fn sample(
+        &self,
+        num: &dyn Fn(usize) -> Result<f64>,
+        opts: &ReadOptions,
+    ) -> std::result::Result<Sample, (usize, String)> {
+        let read = |i: usize| num(i).map_err(|e| (i, input_message(e)));
+        if let Some(nc) = &self.nist {
+            let ti = read(nc.theta_i)?;
+            let pi = nc.phi_i.map_or(Ok(0.0), read)?;
+            let (tr, pr) = (read(nc.theta_r)?, read(nc.phi_r)?);
+            return nist_sample(ti, pi, tr, pr, opts.radians).map_err(|(c, m)| {
+                let i = match c {
+                    "theta_i" => nc.theta_i,
+                    "theta_r" => nc.theta_r,
+                    "phi_i" => nc.phi_i.unwrap_or(nc.phi_r),
+                    _ => nc.phi_r,
+                };
+                (i, m)
+            });
         }
+        let ti_c = self.cols.get(Role::ThetaI).unwrap_or(0);
+        let tr_c = self.cols.get(Role::ThetaR).unwrap_or(0);
+        let (ti, tr) = (read(ti_c)?, read(tr_c)?);
+        let pr = self.cols.get(Role::PhiR).map_or(Ok(0.0), read)?;
+        check_angles(ti, tr, pr, opts.radians, opts.signed_theta_r).map_err(|(c, m)| {
+            let i = match c {
+                "theta_i" => ti_c,
+                "theta_r" => tr_c,
+                _ => self.cols.get(Role::PhiR).unwrap_or(tr_c),
+            };
+            (i, m)
+        })
     }
-    Ok(ds)
+}
+
+/// The message of a value's error, for re-locating it at its column.
+fn input_message(e: Error) -> String {
+    match e {
+        Error::Input { message, .. } => message,
+        other => other.to_string(),
+    }
 }
 
 /// A hint when `text` looks like numbers written with decimal commas (`0,5`): a comma
