@@ -27,6 +27,7 @@ Example::
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
@@ -35,7 +36,9 @@ from . import _goniofit
 from ._goniofit import FitResult, models, read
 
 __all__ = [
+    "Design",
     "FitResult",
+    "design",
     "evaluate",
     "fit",
     "fit_frame",
@@ -379,4 +382,134 @@ def evaluate(
         patch=None if patch is None else tuple(float(x) for x in patch),
         jacobian=jacobian,
         radians=radians,
+    )
+
+
+Angles = Union[Mapping[str, ArrayLike], Sequence[ArrayLike]]
+
+
+def _angle_arrays(name: str, x: Optional[Angles]):
+    """(theta_i, theta_r, phi_r) float64 arrays from a DataFrame/mapping with those columns
+    or a sequence of three arrays (degrees); None stays None."""
+    if x is None:
+        return None
+    if hasattr(x, "keys"):
+        missing = [k for k in ("theta_i", "theta_r", "phi_r") if k not in x.keys()]
+        if missing:
+            raise ValueError(f"{name}: no column {', '.join(missing)} (needs theta_i, theta_r, phi_r in degrees)")
+        cols = [x["theta_i"], x["theta_r"], x["phi_r"]]
+    else:
+        cols = list(x)
+        if len(cols) != 3:
+            raise ValueError(f"{name}: expected three arrays theta_i, theta_r, phi_r (degrees)")
+    return tuple(_f64(f"{name}.{k}", c) for k, c in zip(("theta_i", "theta_r", "phi_r"), cols))
+
+
+def _table(columns: Dict[str, Any]):
+    """A pandas DataFrame of the columns when pandas is installed, else the dict of arrays."""
+    try:
+        import pandas as pd
+    except ImportError:
+        return {k: np.asarray(v) for k, v in columns.items()}
+    return pd.DataFrame(columns)
+
+
+@dataclasses.dataclass
+class Design:
+    """A design: the proposed geometries and the standard errors they give.
+
+    ``chosen``: the proposed geometries (``theta_i``, ``theta_r``, ``phi_r`` in degrees, in
+    the order chosen), a pandas DataFrame when pandas is installed, else a dict of numpy
+    arrays; ``candidates`` likewise, every candidate with its predicted ``value``, its
+    ``gain`` (what it alone would add), ``reachable`` and ``chosen``. ``before`` and
+    ``after``: every parameter and derived quantity, name → dict (``value``, ``stderr``,
+    ``relative``, ``determined``), linearised, with the measured geometries alone and with
+    the proposed ones added; ``simulated``: the scatter of fits of simulated measurements
+    (``simulate=N``), else None; ``target``: its name, criterion and relative standard
+    error before, after and simulated; ``alternatives``: the design at each other
+    wavelength offered; ``sentence``: what to do, in words. ``to_dict()`` gives the CLI's
+    JSON report.
+    """
+
+    chosen: Any
+    candidates: Any
+    before: Dict[str, Dict[str, Any]]
+    after: Dict[str, Dict[str, Any]]
+    simulated: Optional[Dict[str, Any]]
+    target: Dict[str, Any]
+    alternatives: List[Dict[str, Any]]
+    sentence: str
+    report: Dict[str, Any] = dataclasses.field(repr=False)
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The design as ``goniofit design --json`` prints it."""
+        return dict(self.report)
+
+
+def design(
+    model: str,
+    params: Union[Mapping[str, float], Sequence[float]],
+    *,
+    noise: float,
+    residual: str = "relative",
+    wavelength: float = 1.0,
+    wavelength_unit: Optional[str] = None,
+    quantity: str = "radiance",
+    existing: Optional[Angles] = None,
+    candidates: Optional[Angles] = None,
+    theta_max: float = 85.0,
+    step: float = 2.5,
+    in_plane: bool = False,
+    n: int = 20,
+    target: str = "all",
+    dynamic_range: float = 1e4,
+    wavelengths: Optional[Sequence[float]] = None,
+    simulate: int = 0,
+    seed: int = 1,
+) -> Design:
+    """The next ``n`` geometries to measure, as ``goniofit design`` chooses them.
+
+    ``model`` at ``params`` (σ, T in the unit of ``wavelength``), the noise of one sample
+    (``residual="relative"``: ``noise`` a fraction of L; ``"log"``: in ln L;
+    ``"absolute"``: in the unit of L), the geometries already measured (``existing``: a
+    DataFrame or mapping with ``theta_i``, ``theta_r``, ``phi_r`` in degrees, or three
+    arrays) and the candidates (``candidates``, the same; default a grid up to
+    ``theta_max`` in steps of ``step``, ``in_plane`` for φr = 0 and 180° only). ``target``:
+    a parameter (``"sigma"``), a derived quantity (``"T/sigma"``) or ``"all"``
+    (D-optimal). ``wavelengths``: other wavelengths to plan for (same unit).
+    ``simulate=N`` fits N simulated measurements at the measured and proposed geometries.
+    Bad input raises ``ValueError``.
+    """
+    raw = _goniofit._design(
+        model,
+        params,
+        _angle_arrays("existing", existing),
+        _angle_arrays("candidates", candidates),
+        noise=float(noise),
+        residual=residual,
+        wavelength=float(wavelength),
+        unit=wavelength_unit,
+        quantity=quantity,
+        theta_max=float(theta_max),
+        step=float(step),
+        in_plane=bool(in_plane),
+        n=int(n),
+        target=target,
+        dynamic_range=float(dynamic_range),
+        wavelengths=[float(w) for w in (wavelengths or [])],
+        simulate=int(simulate),
+        seed=int(seed),
+    )
+    table = raw.pop("candidate_table")
+    chosen = raw["chosen"]
+    return Design(
+        chosen=_table({k: np.array([c[k] for c in chosen], dtype=float) for k in ("theta_i", "theta_r", "phi_r")}),
+        candidates=_table(table),
+        before=raw["before"],
+        after=raw["after"],
+        simulated=raw["simulated"],
+        target=raw["target"],
+        alternatives=raw["alternatives"],
+        sentence=raw["sentence"],
+        report=raw,
     )

@@ -161,3 +161,29 @@ def read(
 def models() -> Dict[str, List[Tuple[str, str, str]]]:
     """Model name → [(parameter, unit, meaning), ...]."""
 def _json_roundtrip(text: str) -> Any: ...
+
+def _design(
+    model: str,
+    params: Union[Mapping[str, float], Sequence[float]],
+    existing: Optional[Tuple[F64Array, F64Array, F64Array]],
+    candidates: Optional[Tuple[F64Array, F64Array, F64Array]],
+    *,
+    noise: float,
+    residual: str = "relative",
+    wavelength: float = 1.0,
+    unit: Optional[str] = None,
+    quantity: str = "radiance",
+    theta_max: float = 85.0,
+    step: float = 2.5,
+    in_plane: bool = False,
+    n: int = 20,
+    target: str = "all",
+    dynamic_range: float = 1e4,
+    wavelengths: Sequence[float] = ...,
+    simulate: int = 0,
+    seed: int = 1,
+) -> Dict[str, Any]:
+    """The engine of ``goniofit.design``: the JSON report as a dict, plus
+    ``candidate_table`` (arrays ``theta_i``, ``theta_r``, ``phi_r``, ``value``, ``gain``,
+    ``reachable``, ``chosen``)."""
+    ...

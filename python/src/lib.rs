@@ -13,6 +13,7 @@
 //! handlers so that Ctrl-C stops them (the library's own signal handler is not installed).
 
 mod convert;
+mod design;
 mod options;
 mod result;
 mod run;
@@ -247,6 +248,7 @@ fn _goniofit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read, m)?)?;
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(_json_roundtrip, m)?)?;
+    m.add_function(wrap_pyfunction!(design::_design, m)?)?;
     m.add_class::<FitResult>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add(

@@ -167,15 +167,16 @@ pub fn run(a: DesignArgs) -> anyhow::Result<u8> {
         wavelengths: alternatives(&a, &setup.wavelength)?,
     };
     let d = design::design(&scene, &request)?;
-    let simulation = match a.simulate {
-        Some(draws) => Some(simulated(&scene, &setup, &d, draws, a.seed)?),
-        None => None,
+    let (before, after) = match a.simulate {
+        Some(draws) => simulated(&scene, &setup, &d, draws, a.seed)?,
+        None => (None, None),
     };
     let run = Run {
         design: &d,
         scene: &scene,
         source: &setup.source,
-        simulation: simulation.as_ref(),
+        simulation: after.as_ref(),
+        simulation_before: before.as_ref(),
     };
     write_outputs(&a, &run)
 }
@@ -337,27 +338,35 @@ fn from_model(a: &DesignArgs) -> anyhow::Result<Setup> {
     })
 }
 
-/// The simulation at the measured and the proposed geometries.
+/// The simulations at the measured geometries alone (None without any) and with the
+/// proposed ones added.
 fn simulated(
     scene: &Scene,
     setup: &Setup,
     d: &design::Design,
     draws: usize,
     seed: u64,
-) -> anyhow::Result<simulate::Simulation> {
+) -> anyhow::Result<(Option<simulate::Simulation>, Option<simulate::Simulation>)> {
+    let defs = design::quantities(scene.model, &scene.params);
+    let fit = setup.fit.as_ref();
+    let before = if setup.existing.len() > scene.params.len() {
+        Some(simulate::simulate(
+            scene,
+            &setup.existing,
+            &defs,
+            draws,
+            seed,
+            fit,
+        )?)
+    } else {
+        None
+    };
     let mut samples = setup.existing.clone();
     samples.extend(
         d.chosen
             .iter()
             .map(|c| Sample::from_degrees(c[0], c[1], c[2])),
     );
-    let defs = design::quantities(scene.model, &scene.params);
-    Ok(simulate::simulate(
-        scene,
-        &samples,
-        &defs,
-        draws,
-        seed,
-        setup.fit.as_ref(),
-    )?)
+    let after = simulate::simulate(scene, &samples, &defs, draws, seed, fit)?;
+    Ok((before, Some(after)))
 }

@@ -38,37 +38,58 @@ fn span(name: &str, (lo, hi): (f64, f64)) -> String {
     }
 }
 
-/// Where a set of geometries (degrees) lies, in words: `θi = θr from 77.5 to 85° in the
-/// plane of incidence (specular side)`, or the ranges of θi, θr and φr.
-pub fn where_(angles: &[[f64; 3]]) -> String {
-    if angles.is_empty() {
-        return "no geometry".into();
-    }
+/// Where a group of geometries (degrees) on one side lies: `θi = θr from 77.5° to 85°`,
+/// or the ranges of θi and θr (and of |φr| when out of the plane of incidence).
+fn group(angles: &[[f64; 3]]) -> String {
     let ti = range(angles.iter().map(|a| a[0]));
     let tr = range(angles.iter().map(|a| a[1]));
     let phi = range(angles.iter().map(|a| a[2].abs()));
-    let forward = phi.1 == 0.0;
-    let mirror = forward && angles.iter().all(|a| (a[0] - a[1]).abs() < 1e-9);
+    let in_plane = angles
+        .iter()
+        .all(|a| a[2].abs() == 0.0 || a[2].abs() == 180.0);
+    let mirror = phi.1 == 0.0 && angles.iter().all(|a| (a[0] - a[1]).abs() < 1e-9);
     if mirror {
         return if ti.0 == ti.1 {
-            format!("θi = θr = {}° (the mirror direction)", ti.0)
+            format!("θi = θr = {}°", ti.0)
         } else {
-            format!("θi = θr from {}° to {}° (the mirror direction)", ti.0, ti.1)
+            format!("θi = θr from {}° to {}°", ti.0, ti.1)
         };
     }
-    let side = if forward {
-        " in the plane of incidence, specular side (φr = 0)".to_string()
-    } else if phi.0 == 180.0 {
-        " in the plane of incidence, back side (φr = 180°)".to_string()
-    } else if angles
+    let mut s = format!("{}, {}", span("θi", ti), span("θr", tr));
+    if !in_plane {
+        s += &format!(", {}", span("|φr|", phi));
+    }
+    s
+}
+
+/// Where a set of geometries (degrees) lies, as the rest of a phrase `with 20 samples…`:
+/// ` at θi 77.5–85°, θr 77.5–85° on the specular side, in the plane of incidence`, or for
+/// both sides `: 11 at … on the specular side and 9 at … on the back side`.
+pub fn where_(angles: &[[f64; 3]]) -> String {
+    if angles.is_empty() {
+        return " (none)".into();
+    }
+    let (front, back): (Vec<[f64; 3]>, Vec<[f64; 3]>) =
+        angles.iter().partition(|a| a[2].abs() <= 90.0);
+    let plane = if angles
         .iter()
         .all(|a| a[2].abs() == 0.0 || a[2].abs() == 180.0)
     {
-        " in the plane of incidence".to_string()
+        ", in the plane of incidence"
     } else {
-        format!(", {}", span("|φr|", phi))
+        ""
     };
-    format!("{}, {}{side}", span("θi", ti), span("θr", tr))
+    match (front.is_empty(), back.is_empty()) {
+        (false, true) => format!(" at {} on the specular side{plane}", group(&front)),
+        (true, false) => format!(" at {} on the back side{plane}", group(&back)),
+        _ => format!(
+            ": {} at {} on the specular side and {} at {} on the back side{plane}",
+            front.len(),
+            group(&front),
+            back.len(),
+            group(&back)
+        ),
+    }
 }
 
 /// The design's sentence (see the module doc).
@@ -82,7 +103,8 @@ pub(super) fn sentence(d: &Design, scene: &Scene, n: usize) -> String {
     }
     let determined = |r: Option<f64>| r.is_some_and(|r| r <= DETERMINED_RELATIVE_SE);
     let now = match d.target_before {
-        Some(r) => format!("now {}", percent(r)),
+        Some(r) if r <= DETERMINED_RELATIVE_SE => format!("now {}", percent(r)),
+        Some(r) => format!("now not determined: {} linearised", percent(r)),
         None => "now not determined".into(),
     };
     let samples = if k < n {
@@ -102,10 +124,7 @@ pub(super) fn sentence(d: &Design, scene: &Scene, n: usize) -> String {
         } else {
             "becomes determined to"
         };
-        return format!(
-            "{subject} {verb} {} with {samples} at {at} ({now})",
-            percent(a)
-        );
+        return format!("{subject} {verb} {} with {samples}{at} ({now})", percent(a));
     }
     let helps = match (d.target_before, d.target_after) {
         (_, None) => false,
@@ -114,28 +133,21 @@ pub(super) fn sentence(d: &Design, scene: &Scene, n: usize) -> String {
     };
     let mut s = format!("no reachable geometry determines {label} at this wavelength");
     s += &match (helps, d.target_after) {
-        (true, Some(a)) => format!(
-            ": the best {samples}, at {at}, bring it to {} ({now})",
-            percent(a)
-        ),
+        (true, Some(a)) => format!(" ({now}; {} with the best {samples}{at})", percent(a)),
         _ => format!(" ({now}; the best {samples} leave it so)"),
     };
     let unit = &scene_unit(scene);
     let best = d
         .alternatives
         .iter()
-        .filter(|a| determined(a.target_after))
-        .min_by(|a, b| {
-            a.target_after
-                .partial_cmp(&b.target_after)
-                .unwrap_or(std::cmp::Ordering::Equal)
-        });
+        .filter_map(|a| Some((a, a.target_after.filter(|&r| determined(Some(r)))?)))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
     match best {
-        Some(a) => {
+        Some((a, r)) => {
             s += &format!(
-                "; a measurement at {}{unit} would: {} with {} samples at {}",
+                "; a measurement at {}{unit} would: {} with {} samples{}",
                 a.wavelength,
-                percent(a.target_after.unwrap_or(f64::NAN)),
+                percent(r),
                 a.chosen.len(),
                 where_(&a.chosen)
             );
@@ -162,11 +174,18 @@ mod tests {
     #[test]
     fn where_names_the_mirror_direction_and_the_ranges() {
         let m = [[80.0, 80.0, 0.0], [85.0, 85.0, 0.0]];
-        assert_eq!(where_(&m), "θi = θr from 80° to 85° (the mirror direction)");
-        let back = [[10.0, 20.0, 180.0], [30.0, 40.0, -180.0]];
         assert_eq!(
-            where_(&back),
-            "θi 10–30°, θr 20–40° in the plane of incidence, back side (φr = 180°)"
+            where_(&m),
+            " at θi = θr from 80° to 85° on the specular side, in the plane of incidence"
+        );
+        let both = [
+            [10.0, 20.0, 180.0],
+            [30.0, 40.0, -180.0],
+            [80.0, 70.0, 45.0],
+        ];
+        assert_eq!(
+            where_(&both),
+            ": 1 at θi = 80°, θr = 70°, |φr| = 45° on the specular side and 2 at θi 10–30°, θr 20–40° on the back side"
         );
         assert_eq!(percent(0.083), "±8.3 %");
         assert_eq!(percent(0.5), "±50 %");

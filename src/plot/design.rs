@@ -36,6 +36,8 @@ pub struct Point {
 pub struct DesignPlot {
     pub title: String,
     pub subtitle: String,
+    /// The design's sentence, in lines that fit above the hemisphere.
+    pub sentence: Vec<String>,
     /// The projected hemisphere (best over θi).
     pub hemisphere: Vec<Point>,
     /// θi against signed θr (best over φr).
@@ -107,7 +109,13 @@ impl DesignPlot {
                 if unit.is_empty() { "" } else { " " },
                 unit
             ),
-            subtitle: d.sentence.clone(),
+            subtitle: format!(
+                "{}: {} → {} (relative standard error, linearised)",
+                target_label(&d.target),
+                se_words(d.target_before),
+                se_words(d.target_after)
+            ),
+            sentence: wrap(&d.sentence, SENTENCE_WIDTH),
             hemisphere,
             incidence,
             key: ColorKey {
@@ -117,6 +125,37 @@ impl DesignPlot {
             },
         })
     }
+}
+
+/// Characters per line of the sentence drawn above the hemisphere.
+const SENTENCE_WIDTH: usize = 62;
+
+fn se_words(r: Option<f64>) -> String {
+    match r {
+        Some(r) if r <= 1.0 => crate::design::percent(r),
+        Some(_) => "> ±100 %".into(),
+        None => "not determined".into(),
+    }
+}
+
+/// `text` in lines of at most `width` characters, broken at spaces (a longer word keeps
+/// its own line).
+pub fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > width {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
 }
 
 const OUT_OF_REACH: RGBColor = RGBColor(215, 215, 215);
@@ -192,6 +231,10 @@ impl Picture for DesignPlot {
             RGBColor(150, 150, 150).stroke_width(1),
         )))?;
         draw_points(&mut hemi, &self.hemisphere, &self.key, 4)?;
+        let text = font(14.0).color(&BLACK);
+        for (k, line) in self.sentence.iter().enumerate() {
+            left.draw_text(line, &text, (24, 12 + 20 * k as i32))?;
+        }
         let mut inc = ChartBuilder::on(&right)
             .caption("incidence and view (each point: the best φr)", font(15.0))
             .margin(16)
@@ -220,5 +263,17 @@ impl Picture for DesignPlot {
         legend.draw(&Circle::new((18, y0 + 26), 5, OUT_OF_REACH.filled()))?;
         legend.draw_text("out of reach", &note, (32, y0 + 18))?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_breaks_at_spaces_within_the_width() {
+        assert_eq!(wrap("aa bb cc dd", 5), vec!["aa bb", "cc dd"]);
+        assert_eq!(wrap("abcdefg h", 3), vec!["abcdefg", "h"]);
+        assert!(wrap("", 5).is_empty());
     }
 }

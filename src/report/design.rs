@@ -12,7 +12,10 @@ pub struct Run<'a> {
     pub scene: &'a Scene<'a>,
     /// Where the measured geometries came from (a path, or `none`).
     pub source: &'a str,
+    /// Fits of simulated measurements at the measured and proposed geometries.
     pub simulation: Option<&'a Simulation>,
+    /// The same at the measured geometries alone (None without any).
+    pub simulation_before: Option<&'a Simulation>,
 }
 
 /// The proposed geometries as CSV: a `theta_i,theta_r,phi_r` header and one row per
@@ -97,7 +100,7 @@ pub fn text(run: &Run) -> String {
     s += &estimates_table(run);
     for a in &d.alternatives {
         s += &format!(
-            "    at {}{}: {} after {} geometries at {}\n",
+            "    at {}{}: {} after {} geometries{}\n",
             fmt_num(a.wavelength),
             unit(scene),
             match a.target_after {
@@ -119,37 +122,41 @@ fn estimates_table(run: &Run) -> String {
     let mut s = String::from("[[Standard errors]] (relative; linearised");
     if let Some(sim) = run.simulation {
         s += &format!(
-            "; simulated: scatter of {} fits of {} simulated measurements",
-            sim.used, sim.draws
+            "; simulated: the scatter of fits of {} simulated measurements, {} usable",
+            sim.draws, sim.used
         );
     }
     s += ")\n";
-    s += &format!(
-        "    {:<20}{:>14}  {:>16}  {:>16}",
-        "quantity", "value", "before", "after"
-    );
-    if run.simulation.is_some() {
-        s += &format!("  {:>16}", "simulated");
+    let sims = [run.simulation_before, run.simulation];
+    let mut head = format!("    {:<20}{:>12}  {:>14}", "quantity", "value", "before");
+    if sims[0].is_some() {
+        head += &format!("  {:>14}", "sim. before");
     }
+    head += &format!("  {:>14}", "after");
+    if sims[1].is_some() {
+        head += &format!("  {:>14}", "sim. after");
+    }
+    s += &head;
     s += "\n";
+    let sim_of = |sim: &Simulation, name: &str| se_text(sim.spread.iter().find(|e| e.name == name));
     for (b, a) in d.before.iter().zip(&d.after) {
         let mark = if b.name.eq_ignore_ascii_case(&d.target) {
             " *"
         } else {
             ""
         };
+        let label = format!("{}{mark}", target_label(&b.name));
         s += &format!(
-            "    {:<20}{:>14}  {:>16}  {:>16}",
-            format!("{}{mark}", target_label(&b.name)),
+            "    {label:<20}{:>12}  {:>14}",
             fmt_num(b.value),
-            se_text(Some(b)),
-            se_text(Some(a))
+            se_text(Some(b))
         );
-        if let Some(sim) = run.simulation {
-            s += &format!(
-                "  {:>16}",
-                se_text(sim.spread.iter().find(|e| e.name == b.name))
-            );
+        if let Some(sim) = sims[0] {
+            s += &format!("  {:>14}", sim_of(sim, &b.name));
+        }
+        s += &format!("  {:>14}", se_text(Some(a)));
+        if let Some(sim) = sims[1] {
+            s += &format!("  {:>14}", sim_of(sim, &b.name));
         }
         s += "\n";
     }
@@ -164,16 +171,21 @@ pub fn json(run: &Run) -> serde_json::Value {
     let by_name = |v: &[Estimate]| -> BTreeMap<String, Estimate> {
         v.iter().map(|e| (e.name.clone(), e.clone())).collect()
     };
-    let target_sim = run.simulation.and_then(|s| {
-        if d.target.eq_ignore_ascii_case("all") {
-            None
-        } else {
-            s.spread
-                .iter()
-                .find(|e| e.name.eq_ignore_ascii_case(&d.target))
-                .and_then(|e| e.relative)
-        }
-    });
+    let target_sim = |sim: Option<&Simulation>| {
+        sim.filter(|_| !d.target.eq_ignore_ascii_case("all"))
+            .and_then(|s| {
+                s.spread
+                    .iter()
+                    .find(|e| e.name.eq_ignore_ascii_case(&d.target))
+            })
+            .and_then(|e| e.relative)
+    };
+    let sim_json = |s: &Simulation| {
+        serde_json::json!({
+            "draws": s.draws, "used": s.used, "failed": s.failed,
+            "not_converged": s.not_converged, "spread": by_name(&s.spread),
+        })
+    };
     serde_json::json!({
         "version": env!("CARGO_PKG_VERSION"),
         "model": scene.model.name(),
@@ -191,16 +203,15 @@ pub fn json(run: &Run) -> serde_json::Value {
             .collect::<Vec<_>>(),
         "before": by_name(&d.before),
         "after": by_name(&d.after),
-        "simulated": run.simulation.map(|s| serde_json::json!({
-            "draws": s.draws, "used": s.used, "failed": s.failed,
-            "not_converged": s.not_converged, "spread": by_name(&s.spread),
-        })),
+        "simulated": run.simulation.map(sim_json),
+        "simulated_before": run.simulation_before.map(sim_json),
         "target": {
             "name": d.target,
             "criterion": d.criterion,
             "before": d.target_before,
             "after": d.target_after,
-            "simulated": target_sim,
+            "simulated": target_sim(run.simulation),
+            "simulated_before": target_sim(run.simulation_before),
         },
         "alternatives": d.alternatives,
         "sentence": d.sentence,
