@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Result};
 use nalgebra::Vector3;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// One per-sample column (of a [`Geometry`], or a fit's values), read as a slice. The
 /// storage is shared:
@@ -307,6 +307,20 @@ pub struct Geometry {
     /// v_xy²/k², computed without cancellation near the mirror direction.
     pub vxy2: Column,
     pub quantity: Quantity,
+    /// The columns of the Fresnel and shadowing factors, computed on first use
+    /// ([`Geometry::factor_columns`]): a fit without factors does not hold them.
+    factors: OnceLock<Arc<FactorColumns>>,
+}
+
+/// Per-sample quantities of the KBS lobe's Fresnel and shadowing factors that depend on
+/// the angles only: cos θ_loc = √(h/2), sin θi, cos θr, sin θr (each from its angle, to a
+/// few ulps).
+#[derive(Debug, Clone)]
+pub struct FactorColumns {
+    pub cos_loc: Vec<f64>,
+    pub sin_i: Vec<f64>,
+    pub cos_r: Vec<f64>,
+    pub sin_r: Vec<f64>,
 }
 
 /// The columns of a [`Geometry`] while they are computed.
@@ -404,6 +418,7 @@ impl Geometry {
             h: g.h.into(),
             vxy2: g.vxy2.into(),
             quantity,
+            factors: OnceLock::new(),
         })
     }
 
@@ -449,6 +464,31 @@ impl Geometry {
         self.vxy2[i] * (2.0 * std::f64::consts::PI * corr_len / self.wavelength[i]).powi(2) * 0.25
     }
 
+    /// The factors' columns ([`FactorColumns`]), computed on the first call and kept.
+    pub fn factor_columns(&self) -> &FactorColumns {
+        self.factors.get_or_init(|| {
+            let (sin_i, (cos_r, sin_r)) = self
+                .theta_i
+                .iter()
+                .zip(self.theta_r.iter())
+                .map(|(ti, tr)| {
+                    let (sr, cr) = tr.sin_cos();
+                    (ti.sin(), (cr, sr))
+                })
+                .unzip();
+            Arc::new(FactorColumns {
+                cos_loc: self
+                    .h
+                    .iter()
+                    .map(|&h| crate::model::fresnel::cos_local(h))
+                    .collect(),
+                sin_i,
+                cos_r,
+                sin_r,
+            })
+        })
+    }
+
     /// The samples `range`, sharing this geometry's storage (no copy).
     pub fn slice(&self, range: std::ops::Range<usize>) -> Geometry {
         let s = |c: &Column| c.slice(range.clone());
@@ -462,6 +502,7 @@ impl Geometry {
             h: s(&self.h),
             vxy2: s(&self.vxy2),
             quantity: self.quantity,
+            factors: OnceLock::new(),
         }
     }
 
@@ -484,6 +525,7 @@ impl Geometry {
             h: pick(&self.h),
             vxy2: pick(&self.vxy2),
             quantity: self.quantity,
+            factors: OnceLock::new(),
         }
     }
 }

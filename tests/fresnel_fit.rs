@@ -114,3 +114,66 @@ fn factors_are_named_in_the_report_and_shadowing_in_validity() {
         "{text}"
     );
 }
+
+/// `--model auto` fits the extended candidate (kbs+lambert with the dielectric factor and
+/// Smith shadowing) beside the four plain models; on data made with those factors BIC
+/// chooses it and recovers n; its cost is no higher than the same model fitted on its own
+/// (auto also starts it from the plain kbs+lambert optimum and keeps the lower cost); the
+/// report's replay names the factors, so `goniofit plot` redraws the chosen model (with
+/// the index among its parameters, which the plain model would refuse).
+#[test]
+fn auto_chooses_the_extended_lobe_on_data_made_with_it_and_plot_redraws_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = synth(dir.path(), "hemisphere", 3);
+    let auto = fit_json(&[
+        "fit",
+        "--model",
+        "auto",
+        "--residual",
+        "relative",
+        "--no-intervals",
+        "--json",
+        &file,
+    ]);
+    let names: Vec<&str> = auto["comparison"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["model"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, goniofit::fit::dataset::AUTO_CANDIDATES);
+    assert_eq!(auto["model"], "kbs+lambert");
+    assert_eq!(auto["factors"], "--fresnel dielectric --shadowing smith");
+    assert_eq!(auto["replay"]["factors"], auto["factors"]);
+    let chosen = &auto["comparison"][4];
+    assert_eq!(chosen["chosen"], true);
+    // The plain kbs+lambert misses the grazing rise and the shadowed wings: far worse BIC.
+    assert!(auto["comparison"][3]["delta_bic"].as_f64().unwrap() > 100.0);
+    let n = &auto["params"]["n"];
+    let (x, se) = (n["value"].as_f64().unwrap(), n["stderr"].as_f64().unwrap());
+    assert!((x - 1.5).abs() < 3.0 * se, "n = {x} ± {se}");
+    let own = fit(&file);
+    let (c_auto, c_own) = (
+        auto["cost"].as_f64().unwrap(),
+        own["cost"].as_f64().unwrap(),
+    );
+    assert!(
+        c_auto <= c_own * (1.0 + 1e-9),
+        "auto {c_auto} vs alone {c_own}"
+    );
+    let report = dir.path().join("auto.json");
+    std::fs::write(&report, auto.to_string()).unwrap();
+    let out = common::goniofit()
+        .arg("plot")
+        .arg(&report)
+        .arg("--out")
+        .arg(dir.path().join("pics"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

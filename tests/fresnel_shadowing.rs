@@ -5,7 +5,7 @@
 //!
 //! Claims checked (module docs of `src/model/fresnel.rs` and `src/model/shadowing.rs`):
 //! F and G to 1e-13 relative; ∂F/∂n, ∂F/∂κ to 1e-12 (|∂F| + F); ∂ln G/∂ln T to
-//! 1e-13 (1 + |·|). Run with `-- --nocapture` to see the worst errors found.
+//! 1e-13 (1 + |·|); Λ(ν) to 1e-15 (1 + Λ) (`tests/ref/smith_lambda.py`). Run with `-- --nocapture` to see the worst errors found.
 
 use goniofit::model::fresnel::{complex_ratio, schlick_ratio, Fresnel};
 use goniofit::model::shadowing::{lambda, Shadowing};
@@ -74,21 +74,56 @@ fn smith_matches_the_reference_at_extreme_angles() {
             (Shadowing::Smith, g.unwrap(), dg.unwrap()),
             (Shadowing::SmithCorrelated, gc.unwrap(), dgc.unwrap()),
         ] {
-            let got = kind.eval(ci, cr, t);
-            let (eg, ed) = (rel(got.g, g, g), rel(got.d_ln_t, d, 1.0 + d.abs()));
-            assert!(
-                eg < 1e-13,
-                "{kind:?} cot {ci}, {cr}, T/σ {t}: {} vs {g}",
-                got.g
-            );
-            assert!(
-                ed < 1e-11,
-                "{kind:?} cot {ci}, {cr}, T/σ {t}: {got:?} vs {d}"
-            );
-            (worst_g, worst_d) = (worst_g.max(eg), worst_d.max(ed));
+            // The lobe's path from cosines and sines (one division) and the cotangent path.
+            let cos_sin = |cot: f64| {
+                let s = 1.0 / cot.mul_add(cot, 1.0).sqrt();
+                if cot.is_infinite() {
+                    (1.0, 0.0)
+                } else {
+                    (cot * s, s)
+                }
+            };
+            for got in [
+                kind.eval(ci, cr, t),
+                kind.eval_cos_sin(cos_sin(ci), cos_sin(cr), t),
+            ] {
+                let (eg, ed) = (rel(got.g, g, g), rel(got.d_ln_t, d, 1.0 + d.abs()));
+                assert!(
+                    eg < 1e-13,
+                    "{kind:?} cot {ci}, {cr}, T/σ {t}: {} vs {g}",
+                    got.g
+                );
+                assert!(
+                    ed < 1e-11,
+                    "{kind:?} cot {ci}, {cr}, T/σ {t}: {got:?} vs {d}"
+                );
+                (worst_g, worst_d) = (worst_g.max(eg), worst_d.max(ed));
+            }
         }
     }
     println!("Smith: worst relative error of G {worst_g:.1e}, of ∂lnG/∂lnT {worst_d:.1e}");
+}
+
+/// Λ(ν) across its three evaluations (libm's erfc below ν = 1.25, the Chebyshev pieces
+/// [1.25, 2], [2, 3.5], [3.5, 6] and their edges, 0 beyond 6) against the dense table of
+/// `tests/ref/smith_lambda.py`: Λ to 1e-15 (1 + Λ), ν ∂Λ/∂ν to 1e-15 (1 + |·|).
+#[test]
+fn smith_lambda_matches_the_dense_reference() {
+    let (mut worst_l, mut worst_d) = (0.0f64, 0.0f64);
+    for r in rows(include_str!("ref/lambda_reference.csv")) {
+        let [nu, l, d] = r[..] else {
+            panic!("row {r:?}")
+        };
+        let (nu, l, d) = (nu.unwrap(), l.unwrap(), d.unwrap());
+        let (got_l, got_d) = lambda(nu);
+        let (el, ed) = (rel(got_l, l, 1.0 + l), rel(got_d, d, 1.0 + d.abs()));
+        assert!(el < 1e-15, "ν = {nu}: Λ {got_l} vs {l}");
+        assert!(ed < 1e-15, "ν = {nu}: ν∂Λ/∂ν {got_d} vs {d}");
+        (worst_l, worst_d) = (worst_l.max(el), worst_d.max(ed));
+    }
+    println!(
+        "Smith Λ: worst error of Λ {worst_l:.1e}, of ν∂Λ/∂ν {worst_d:.1e} (relative to 1 + |·|)"
+    );
 }
 
 #[test]

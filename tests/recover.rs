@@ -238,3 +238,51 @@ fn an_interrupted_recovery_has_no_summary_and_counts_no_errors() {
     let fitted = done.load(std::sync::atomic::Ordering::SeqCst);
     assert!((3..40).contains(&fitted), "{fitted} scenes fitted");
 }
+
+/// A slice of the extended-lobe run (`benches/recover_factors.sh` runs 450 scenes): scenes
+/// of every regime with the dielectric Fresnel factor and Smith shadowing recover n and
+/// T/σ within 3 standard errors, and the scene measured in-plane up to 40° (no sample
+/// beyond θ_loc = 60°) says n is not determined and scores no n.
+#[test]
+fn dielectric_smith_scenes_recover_n_or_say_it_is_not_determined() {
+    use goniofit::model::{fresnel::Fresnel, shadowing::Shadowing};
+    let config = RecoverConfig {
+        scenes: 12,
+        seed: 29,
+        only: Some(vec![0, 1, 2, 3, 5]),
+        fresnel: Fresnel::Dielectric,
+        shadowing: Shadowing::Smith,
+        ..RecoverConfig::default()
+    };
+    let report = recover::run(&config, &Stop::new(None, None), &|_| {}).unwrap();
+    assert_eq!(report.errors, 0, "{}", report.table());
+    for r in &report.results {
+        let truth = r.scene.n.expect("every scene has an index");
+        assert!((1.3..=2.5).contains(&truth));
+        let n = r.checks.iter().find(|c| c.name == "n");
+        if r.scene.id == 5 {
+            assert_eq!(r.scene.layout, recover::NARROW_LAYOUT);
+            assert_eq!(r.n_determined, Some(false), "{}", report.table());
+            assert!(n.is_none());
+            continue;
+        }
+        assert!(r.converged, "{}", report.table());
+        assert_eq!(r.n_determined, Some(true), "{}", report.table());
+        for name in ["n", "T/sigma"] {
+            let c = r.checks.iter().find(|c| c.name == name);
+            let c = c.unwrap_or_else(|| panic!("scene {}: {name} scored", r.scene.id));
+            let se = c.stderr.expect("a standard error");
+            assert!(
+                (c.value - c.truth).abs() <= 3.0 * se,
+                "scene {} {name}: {} ± {se} vs truth {}",
+                r.scene.id,
+                c.value,
+                c.truth
+            );
+        }
+    }
+    assert!(report
+        .index_line()
+        .unwrap()
+        .contains("n determined in 4 of 5 scenes"));
+}

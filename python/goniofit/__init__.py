@@ -188,7 +188,11 @@ def fit(
         ``--by-group``); returns a dict label → FitResult in first-appearance order. A
         missing label (None, NaN) is a ValueError, as in :func:`fit_frame`.
     **options
-        ``radians`` (bool), ``signed_theta_r`` (bool: θr < 0 is the back side), ``mode``
+        ``radians`` (bool), ``signed_theta_r`` (bool: θr < 0 is the back side),
+        ``fresnel`` (``none``/``dielectric``/``conductor``/``schlick``: the Fresnel factor
+        on the KBS lobe, parameters ``n`` and with ``conductor`` ``kappa``), ``shadowing``
+        (``none``/``smith``/``smith-correlated``: Smith's shadowing–masking through T/σ),
+        ``mode``
         (``auto``/``series``/``smooth``/``rough``, the KBS evaluation), ``tol`` (its
         relative accuracy, default 1e-10), ``patch`` ((X, Y) half-sizes in the unit of λ:
         the coherent term), ``floor`` (for relative/log residuals; default 1e-6 × max |L|),
@@ -356,6 +360,8 @@ def evaluate(
     patch: Optional[Sequence[float]] = None,
     jacobian: bool = False,
     radians: bool = False,
+    fresnel: str = "none",
+    shadowing: str = "none",
 ):
     """Evaluate a model at sample angles, as ``goniofit eval`` does.
 
@@ -364,6 +370,8 @@ def evaluate(
     Returns the values (radiance, or BRDF with ``quantity="brdf"``), and with
     ``jacobian=True`` the pair (values, J) with J[i, j] = ∂value_i/∂p_j (shape n × p). The
     KBS sum meets relative accuracy ``tol`` in ``mode="auto"`` and ``"series"``.
+    ``fresnel`` and ``shadowing`` put the CLI's ``--fresnel``/``--shadowing`` factors on a
+    KBS lobe (``n``, ``kappa`` then follow ``scale`` among the parameters).
     """
     ti = _f64("theta_i", theta_i)
     w = wavelength
@@ -382,6 +390,8 @@ def evaluate(
         patch=None if patch is None else tuple(float(x) for x in patch),
         jacobian=jacobian,
         radians=radians,
+        fresnel=fresnel,
+        shadowing=shadowing,
     )
 
 

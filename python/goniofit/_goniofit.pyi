@@ -47,6 +47,10 @@ Termination = Literal[
     "nonfinitestart", "nonfinitejacobian", "noprogress",
 ]
 Verdict = Literal["full", "rough", "smooth", "partial"]
+Fresnel = Literal["none", "dielectric", "conductor", "schlick"]
+"""The Fresnel factor on a KBS lobe (``--fresnel``): parameters ``n`` (and ``kappa``)."""
+Shadowing = Literal["none", "smith", "smith-correlated"]
+"""Smith shadowing–masking on a KBS lobe (``--shadowing``), through T/σ: no parameter."""
 AdequacyVerdict = Literal["adequate", "misfit", "noise", "not_computed", "exact"]
 
 class AdequacyReason(TypedDict):
@@ -80,6 +84,10 @@ class FitResult:
 
     @property
     def model(self) -> str: ...
+    @property
+    def factors(self) -> str:
+        """The lobe's factors as CLI options (``"--fresnel dielectric --shadowing smith"``),
+        empty for the paper's model."""
     @property
     def params(self) -> Dict[str, ParamReport]: ...
     @property
@@ -142,6 +150,8 @@ def evaluate(
     patch: Optional[Tuple[float, float]] = ...,
     jacobian: bool = ...,
     radians: bool = ...,
+    fresnel: Fresnel = ...,
+    shadowing: Shadowing = ...,
 ) -> Union[F64Array, Tuple[F64Array, F64Array]]:
     """The values, or with ``jacobian=True`` (values, J) with J of shape (n, p)."""
 def read(

@@ -88,8 +88,10 @@ fn _fit_codes<'py>(
 /// (radiance, or BRDF with ``quantity="brdf"``), and with ``jacobian=True`` also the
 /// analytic Jacobian, shape (n, number of parameters), columns in the model's parameter
 /// order. ``params``: a dict name → value, or a sequence in the model's order.
+/// ``fresnel`` and ``shadowing``: the factors on a KBS lobe (the CLI's ``--fresnel``,
+/// ``--shadowing``; ``n``, ``kappa`` then follow ``scale`` among the parameters).
 #[pyfunction]
-#[pyo3(signature = (model, params, theta_i, theta_r, phi_r, *, wavelength=None, quantity="radiance", mode="auto", tol=1e-10, patch=None, jacobian=false, radians=false))]
+#[pyo3(signature = (model, params, theta_i, theta_r, phi_r, *, wavelength=None, quantity="radiance", mode="auto", tol=1e-10, patch=None, jacobian=false, radians=false, fresnel="none", shadowing="none"))]
 #[allow(clippy::too_many_arguments)]
 fn evaluate<'py>(
     py: Python<'py>,
@@ -105,13 +107,19 @@ fn evaluate<'py>(
     patch: Option<(f64, f64)>,
     jacobian: bool,
     radians: bool,
+    fresnel: &str,
+    shadowing: &str,
 ) -> PyResult<Py<PyAny>> {
-    let model_opts = options::checked(settings::model_options(
-        options::PY,
-        options::eval_mode(mode)?,
-        tol,
-        patch,
-    ))?;
+    let model_opts = model::ModelOptions {
+        fresnel: options::fresnel(fresnel)?,
+        shadowing: options::shadowing(shadowing)?,
+        ..options::checked(settings::model_options(
+            options::PY,
+            options::eval_mode(mode)?,
+            tol,
+            patch,
+        ))?
+    };
     let m = model::by_name(model, &model_opts).map_err(to_py_err)?;
     let p = options::param_vector(m.as_ref(), params)?;
     let quantity = options::quantity(quantity)?;

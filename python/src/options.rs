@@ -11,6 +11,8 @@ use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::arrays;
+use goniofit::model::fresnel::Fresnel;
+use goniofit::model::shadowing::Shadowing;
 use goniofit::model::{self, EvalMode, Model, ModelOptions};
 use goniofit::report::outcome::SettingSource;
 use goniofit::settings::{self, Front};
@@ -25,7 +27,7 @@ use std::sync::Arc;
 pub const PY: Front = Front::Python;
 
 /// The option names the fit functions take (besides the four sample arrays).
-pub const OPTION_NAMES: [&str; 24] = [
+pub const OPTION_NAMES: [&str; 26] = [
     "model",
     "wavelength",
     "quantity",
@@ -50,6 +52,8 @@ pub const OPTION_NAMES: [&str; 24] = [
     "intervals",
     "loss",
     "f_scale",
+    "fresnel",
+    "shadowing",
 ];
 
 /// The fit options of one call.
@@ -150,6 +154,26 @@ pub fn eval_mode(name: &str) -> PyResult<EvalMode> {
             "mode '{name}': expected 'auto', 'series', 'smooth' or 'rough'"
         ))),
     }
+}
+
+/// A Fresnel factor by its CLI name: `none`, `dielectric`, `conductor`, `schlick`.
+pub fn fresnel(name: &str) -> PyResult<Fresnel> {
+    Fresnel::parse(name).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "fresnel '{name}': expected one of {}",
+            Fresnel::ALL.map(Fresnel::name).join(", ")
+        ))
+    })
+}
+
+/// A shadowing factor by its CLI name: `none`, `smith`, `smith-correlated`.
+pub fn shadowing(name: &str) -> PyResult<Shadowing> {
+    Shadowing::parse(name).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "shadowing '{name}': expected one of {}",
+            Shadowing::ALL.map(Shadowing::name).join(", ")
+        ))
+    })
 }
 
 /// A robust loss by scipy's name: `linear`, `soft_l1`, `huber`, `cauchy`, `arctan`.
@@ -312,7 +336,11 @@ impl FitOptions {
             "patch" => {
                 let opts = self.model_opts;
                 let patch = Some(v.extract::<(f64, f64)>()?);
-                self.model_opts = checked(settings::model_options(PY, opts.mode, opts.tol, patch))?;
+                self.model_opts = ModelOptions {
+                    fresnel: opts.fresnel,
+                    shadowing: opts.shadowing,
+                    ..checked(settings::model_options(PY, opts.mode, opts.tol, patch))?
+                };
             }
             "floor" => self.floor = checked(settings::floor(PY, Some(v.extract()?)))?,
             "max_iter" => self.max_iter = v.extract()?,
@@ -334,6 +362,8 @@ impl FitOptions {
             "intervals" => self.intervals = Some(v.extract()?),
             "loss" => self.loss = loss(&v.extract::<String>()?)?,
             "f_scale" => self.f_scale = checked(settings::f_scale(PY, v.extract()?))?,
+            "fresnel" => self.model_opts.fresnel = fresnel(&v.extract::<String>()?)?,
+            "shadowing" => self.model_opts.shadowing = shadowing(&v.extract::<String>()?)?,
             _ => return Err(unknown(key)),
         }
         Ok(())
@@ -436,6 +466,12 @@ impl FitOptions {
         }
         if let Some((x, y)) = self.model_opts.patch {
             flag("patch", format!("{x},{y}"));
+        }
+        if self.model_opts.fresnel != Fresnel::None {
+            flag("fresnel", self.model_opts.fresnel.name().into());
+        }
+        if self.model_opts.shadowing != Shadowing::None {
+            flag("shadowing", self.model_opts.shadowing.name().into());
         }
         if let Some(f) = self.floor {
             flag("floor", f.to_string());

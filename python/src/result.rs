@@ -69,6 +69,13 @@ impl FitResult {
         &self.outcome.result.model
     }
 
+    /// The lobe's factors as CLI options (``"--fresnel dielectric --shadowing smith"``),
+    /// empty for the paper's model (the JSON report's ``factors``).
+    #[getter]
+    fn factors(&self) -> &str {
+        self.outcome.result.factors.trim()
+    }
+
     /// Parameter name → {value, stderr, determined, fixed, unit}.
     #[getter]
     fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -195,7 +202,7 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
         &o.result
     }
     let text = |f: &dyn Fn(&Outcome) -> String| outcomes.iter().map(f).collect::<Vec<String>>();
-    out.set_item("model", text(&|o| r(o).model.clone()))?;
+    out.set_item("model", text(&|o| r(o).full_model()))?;
     out.set_item(
         "n",
         outcomes

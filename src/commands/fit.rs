@@ -57,7 +57,8 @@ Examples:
 #[command(after_help = FIT_EXAMPLES)]
 pub struct FitArgs {
     /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
-    /// (fits lambert, lambert-specular, kbs, kbs+lambert and keeps the lowest BIC).
+    /// (fits lambert, lambert-specular, kbs, kbs+lambert and kbs+lambert with --fresnel
+    /// dielectric --shadowing smith, and keeps the lowest BIC).
     #[arg(long, default_value = "kbs")]
     pub model: String,
     /// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi). Default:

@@ -210,7 +210,7 @@ fn svg_pictures(
     if !o.result.fitted_computed {
         return Ok(Vec::new());
     }
-    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+    let config = outcome_config(args, o)?;
     let json = report::json::to_json(&o.result, info);
     svg_of_fit(
         &config,
@@ -221,6 +221,14 @@ fn svg_pictures(
     )
 }
 
+/// The fit configuration of an outcome's chosen model, with its factors (an `auto`
+/// choice's are not among the arguments).
+fn outcome_config(args: &FitArgs, o: &Outcome) -> anyhow::Result<FitConfig> {
+    let mut config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+    config.model_opts = config.model_opts.with_factors_of(&o.result.full_model()).1;
+    Ok(config)
+}
+
 /// Draw the pictures of one outcome into `dir` (PNG and SVG; see [`plot_fit`]), with the
 /// status line of its report; returns the files written.
 fn draw_pictures(
@@ -229,7 +237,7 @@ fn draw_pictures(
     o: &Outcome,
     info: &RunInfo,
 ) -> anyhow::Result<Vec<PathBuf>> {
-    let config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
+    let config = outcome_config(args, o)?;
     let json = report::json::to_json(&o.result, info);
     plot_fit(
         dir,

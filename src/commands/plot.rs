@@ -102,7 +102,13 @@ pub fn read_saved_fit(report: &Path) -> anyhow::Result<SavedFit> {
         }
     }
     let input = input_of(&fa, &ds, model.starts_with("kbs"))?;
-    let config = fit_config(&fa, &model, ds.sigma_l.is_some())?;
+    // The factors of the fitted model (an `auto` choice's are not among the arguments).
+    let factors = replay["factors"].as_str().unwrap_or_default();
+    let mut config = fit_config(&fa, &model, ds.sigma_l.is_some())?;
+    config.model_opts = config
+        .model_opts
+        .with_factors_of(&format!("{model} {factors}"))
+        .1;
     let m = goniofit::model::by_name(&model, &config.model_opts)?;
     let layout = ParamLayout::new(m.as_ref(), &input.channel_names);
     if layout.len() != values.len() {

@@ -39,6 +39,11 @@ pub struct RecoverArgs {
     /// Print one JSON object (summary per regime and every scene) instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Fresnel and shadowing factors on every scene's lobe (truth and fit): n drawn from
+    /// 1.3 to 2.5 (κ from 0.5 to 5), and every twelfth scene on in-plane scans up to 40°,
+    /// where n must come out not determined.
+    #[command(flatten)]
+    pub factors: super::args::FactorArgs,
 }
 
 /// Run `goniofit recover`.
@@ -67,6 +72,8 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
         noise: args.noise,
         fit_timeout,
         only: args.only.clone(),
+        fresnel: args.factors.fresnel.into(),
+        shadowing: args.factors.shadowing.into(),
     };
     let fitted = args.only.as_ref().map_or(args.scenes, Vec::len);
     let bar = progress_bar(fitted as u64, "fitting scenes");

@@ -155,6 +155,12 @@ pub struct SampleVectors {
 }
 
 impl FitResult {
+    /// The model's name with its factor options (`kbs+lambert --fresnel dielectric
+    /// --shadowing smith`): what tells two candidates of one model apart.
+    pub fn full_model(&self) -> String {
+        format!("{}{}", self.model, self.factors)
+    }
+
     /// Moves out the per-sample vectors (fitted values, residuals, standardised residuals,
     /// modes), leaving them empty: a candidate of a model comparison keeps only its summary,
     /// and a copy of the summary costs nothing per sample.

@@ -152,17 +152,20 @@ pub fn complex_ratio(c: f64, n: f64, kappa: f64) -> FresnelValue {
 }
 
 /// [`complex_ratio`] at κ = 0 for n > 1, in real arithmetic (w² = n² − 1 + c² > 0): the
-/// same formulas, the same accuracy.
+/// same formulas, the same accuracy, one division.
 #[inline]
 pub fn real_ratio(c: f64, n: f64) -> FresnelValue {
     let (n2, c2) = (n * n, c * c);
     let w = (n2 - 1.0 + c2).sqrt();
-    let dw = n / w;
-    let u_inv = 1.0 / (c + w);
+    // One division for w⁻¹, (c + w)⁻¹ and (n²c + w)⁻¹ (all factors ≥ √(n² − 1) > 0).
+    let (u, d) = (c + w, n2 * c + w);
+    let inv = 1.0 / (w * u * d);
+    let dw = n * (u * d) * inv;
+    let u_inv = w * d * inv;
     let a_s = u_inv * u_inv;
     let da_s = -2.0 * a_s * dw * u_inv;
     let num = n2 * c2 + (c2 - 1.0);
-    let d_inv = 1.0 / (n2 * c + w);
+    let d_inv = w * u * inv;
     let a_p = num * d_inv * d_inv;
     let da_p = 2.0 * c2 * n * d_inv * d_inv - 2.0 * a_p * (2.0 * n * c + dw) * d_inv;
     let m = 0.5 * (a_s * a_s + a_p * a_p);

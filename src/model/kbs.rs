@@ -37,7 +37,7 @@
 
 use super::{series, EvalMode, Mode, Model, ModelOptions, ParamSpec};
 use crate::error::{Error, Result};
-use crate::geometry::Geometry;
+use crate::geometry::{FactorColumns, Geometry};
 use std::f64::consts::PI;
 
 /// The KBS model with a chosen evaluation mode.
@@ -116,14 +116,30 @@ impl Kbs {
         out: &mut [f64],
         jac: Option<(&mut [f64], &mut [f64])>,
     ) {
-        let (sigma, corr, s) = (p[0], p[1], p[2]);
+        let (sigma, corr) = (p[0], p[1]);
         let fp = &p[3..];
         let n = geo.len();
         let (g, a, q) = self.batch_ln_q(geo, sigma, corr);
-        let point = |i: usize| {
-            let pt = self.point_from(geo, i, sigma, corr, s, g[i], a[i], q[i]);
-            self.with_factors(geo, i, pt, sigma, corr, fp)
-        };
+        // What every sample's factors share: 1/σ, 1/T and T/σ.
+        let shared = (1.0 / sigma, 1.0 / corr, corr / sigma);
+        let fc = self.opts.has_factors().then(|| geo.factor_columns());
+        // Inlined into each loop below, so that the values-only loop computes no derivative.
+        #[inline(always)]
+        fn at(
+            m: &Kbs,
+            geo: &Geometry,
+            i: usize,
+            (p, fp, shared): (&[f64], &[f64], (f64, f64, f64)),
+            (g, a, q): (&[f64], &[f64], &[series::LnQ]),
+            fc: Option<&FactorColumns>,
+        ) -> (KbsPoint, f64, f64) {
+            let pt = m.point_from(geo, i, p[0], p[1], p[2], g[i], a[i], q[i]);
+            match fc {
+                Some(fc) => m.with_factors(geo, fc, i, pt, shared, fp),
+                None => (pt, 0.0, 0.0),
+            }
+        }
+        let point = |i: usize| at(self, geo, i, (p, fp, shared), (&g, &a, &q), fc);
         match jac {
             None => {
                 for (i, o) in out.iter_mut().enumerate() {
@@ -150,35 +166,30 @@ impl Kbs {
         }
     }
 
-    /// The point times the Fresnel and shadowing factors of sample i (`fp`: the Fresnel
-    /// parameters), with ∂L/∂n and ∂L/∂κ; the point unchanged without factors.
+    /// The point times the Fresnel and shadowing factors of sample i (`fc`: the batch's
+    /// [`FactorColumns`]; `fp`: the Fresnel parameters; `(1/σ, 1/T, T/σ)` computed once per
+    /// batch), with ∂L/∂n and ∂L/∂κ.
     #[inline(always)]
     fn with_factors(
         &self,
         geo: &Geometry,
+        fc: &FactorColumns,
         i: usize,
         pt: KbsPoint,
-        sigma: f64,
-        corr: f64,
+        (inv_sigma, inv_corr, t_over_sigma): (f64, f64, f64),
         fp: &[f64],
     ) -> (KbsPoint, f64, f64) {
-        use super::{fresnel::Fresnel, shadowing::Shadowing};
+        use super::shadowing::Shadowing;
         let (fresnel, shadowing) = (self.opts.fresnel, self.opts.shadowing);
-        if fresnel == Fresnel::None && shadowing == Shadowing::None {
-            return (pt, 0.0, 0.0);
-        }
-        let f = fresnel.eval(super::fresnel::cos_local(geo.h[i]), fp);
+        let f = fresnel.eval(fc.cos_loc[i], fp);
         let sh = if shadowing == Shadowing::None {
-            super::shadowing::ShadowValue {
-                g: 1.0,
-                d_ln_t: 0.0,
-            }
+            super::shadowing::ShadowValue::ONE
         } else {
-            // cot θi from the stored cos θi (θi < 90°): one square root, no sin_cos.
-            let ci = geo.cos_i[i];
-            let cot_i = ci / ((1.0 - ci) * (1.0 + ci)).sqrt();
-            let cot_r = super::shadowing::cot(geo.theta_r[i]);
-            shadowing.eval(cot_i, cot_r, corr / sigma)
+            shadowing.eval_cos_sin(
+                (geo.cos_i[i], fc.sin_i[i]),
+                (fc.cos_r[i], fc.sin_r[i]),
+                t_over_sigma,
+            )
         };
         let m = f.f * sh.g;
         let value = pt.value * m;
@@ -187,8 +198,8 @@ impl Kbs {
         let lit = pt.value * sh.g;
         let out = KbsPoint {
             value,
-            d_sigma: pt.d_sigma * m - d_ln / sigma,
-            d_corr: pt.d_corr * m + d_ln / corr,
+            d_sigma: pt.d_sigma * m - d_ln * inv_sigma,
+            d_corr: pt.d_corr * m + d_ln * inv_corr,
             d_scale: pt.d_scale * m,
         };
         (out, lit * f.d_n, lit * f.d_kappa)
@@ -211,7 +222,7 @@ impl Kbs {
 
     /// Radiance at sample i from its g, a and ln Q.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn point_from(
         &self,
         geo: &Geometry,

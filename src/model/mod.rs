@@ -113,6 +113,34 @@ impl ModelOptions {
         }
         s
     }
+
+    /// A model name followed by factor options as [`Self::factors_label`] writes them
+    /// (`kbs+lambert --fresnel dielectric --shadowing smith`): the bare name and these
+    /// options with the factors named there (the others as they are). Tokens that are not
+    /// a known factor option are left out.
+    pub fn with_factors_of(self, named: &str) -> (String, ModelOptions) {
+        let mut words = named.split_whitespace();
+        let name = words.next().unwrap_or_default().to_string();
+        let mut opts = self;
+        while let Some(flag) = words.next() {
+            let value = words.next().unwrap_or_default();
+            match flag {
+                "--fresnel" => {
+                    opts.fresnel = fresnel::Fresnel::parse(value).unwrap_or(opts.fresnel)
+                }
+                "--shadowing" => {
+                    opts.shadowing = shadowing::Shadowing::parse(value).unwrap_or(opts.shadowing)
+                }
+                _ => {}
+            }
+        }
+        (name, opts)
+    }
+
+    /// Whether a factor multiplies the KBS lobe.
+    pub fn has_factors(&self) -> bool {
+        self.fresnel != fresnel::Fresnel::None || self.shadowing != shadowing::Shadowing::None
+    }
 }
 
 /// Checks that `params` has one value per parameter of `model`.

@@ -29,6 +29,8 @@ use crate::fit::lm::{LmConfig, Stop, Termination};
 use crate::fit::problem::Channels;
 use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
+use crate::model::fresnel::Fresnel;
+use crate::model::shadowing::Shadowing;
 use crate::model::{self, ModelOptions};
 use crate::synth::{self, Layout, Noise, NoiseKind};
 use rand::rngs::StdRng;
@@ -39,6 +41,7 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 
 pub mod outliers;
+mod text;
 pub use outliers::Outlier;
 
 /// Two-sided normal coverage of ±2 standard errors.
@@ -96,9 +99,39 @@ pub struct Scene {
     pub scale: f64,
     pub wavelength: f64,
     pub noise: Noise,
+    /// The factors on the lobe ([`RecoverConfig`]) and their truths: the index n (with a
+    /// Fresnel factor) and κ (conductor).
+    #[serde(skip_serializing_if = "is_default")]
+    pub fresnel: Fresnel,
+    #[serde(skip_serializing_if = "is_default")]
+    pub shadowing: Shadowing,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f64>,
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
 }
 
 impl Scene {
+    /// The parameters of the scene's model: σ, T, scale, then n (and κ) with a Fresnel factor.
+    fn model_options(&self) -> ModelOptions {
+        ModelOptions {
+            fresnel: self.fresnel,
+            shadowing: self.shadowing,
+            ..ModelOptions::default()
+        }
+    }
+
+    fn params(&self) -> Vec<f64> {
+        let mut p = vec![self.sigma, self.corr_len, self.scale];
+        p.extend(self.n);
+        p.extend(self.kappa);
+        p
+    }
+
     fn layout_value(&self) -> Result<Layout> {
         Layout::parse(&self.layout)
     }
@@ -134,6 +167,10 @@ pub struct SceneResult {
     /// [`crate::fit::adequacy::ALPHA`] of the scenes.
     pub adequacy: Option<AdequacyVerdict>,
     pub adequacy_reasons: Vec<&'static str>,
+    /// With a Fresnel factor: whether the fit says the data determines n (None without
+    /// the factor, or when the fit failed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_determined: Option<bool>,
 }
 
 /// Error statistics of one quantity within a regime.
@@ -202,6 +239,9 @@ pub struct RecoverConfig {
     /// Fit only the scenes with these ids (all `scenes` are still drawn, so each keeps the
     /// truth and noise it has in the whole run); None fits every scene.
     pub only: Option<Vec<usize>>,
+    /// The factors on the lobe of every scene's truth and fit ([`draw_scenes_with`]).
+    pub fresnel: Fresnel,
+    pub shadowing: Shadowing,
 }
 
 impl Default for RecoverConfig {
@@ -212,6 +252,8 @@ impl Default for RecoverConfig {
             noise: 0.01,
             fit_timeout: Some(Duration::from_secs(60)),
             only: None,
+            fresnel: Fresnel::None,
+            shadowing: Shadowing::None,
         }
     }
 }
@@ -277,9 +319,52 @@ pub fn draw_scenes(n: usize, seed: u64, noise: f64) -> Vec<Scene> {
                 scale,
                 wavelength: 1.0,
                 noise,
+                fresnel: Fresnel::None,
+                shadowing: Shadowing::None,
+                n: None,
+                kappa: None,
             }
         })
         .collect()
+}
+
+/// Seed offset of the index draws of [`draw_scenes_with`] (their own stream, so that the
+/// scenes' other draws are those of [`draw_scenes`]).
+const INDEX_STREAM: u64 = 0x006e_5f6b_6170_7061;
+
+/// The layout of every twelfth scene (id ≡ 5 mod 12, an intermediate one) of a run with a
+/// Fresnel factor: in-plane scans with θi, |θr| ≤ 40°, so no sample reaches θ_loc = 60°
+/// and the fit must say that n is not determined.
+pub const NARROW_LAYOUT: &str = "inplane theta_i=10,25,40 step=1 max=40";
+
+/// [`draw_scenes`] with `fresnel` and `shadowing` on every scene's lobe: the same σ, T,
+/// scale, layouts and noise, and n drawn log-uniformly from 1.3 to 2.5 (a paint's or a
+/// glass's; κ from 0.5 to 5 for a conductor) from a stream of its own; with a Fresnel
+/// factor, scenes id ≡ 5 (mod 12) on [`NARROW_LAYOUT`].
+pub fn draw_scenes_with(
+    n: usize,
+    seed: u64,
+    noise: f64,
+    fresnel: Fresnel,
+    shadowing: Shadowing,
+) -> Vec<Scene> {
+    let mut rng = StdRng::seed_from_u64(seed ^ INDEX_STREAM);
+    let mut scenes = draw_scenes(n, seed, noise);
+    for s in &mut scenes {
+        s.fresnel = fresnel;
+        s.shadowing = shadowing;
+        if fresnel == Fresnel::None {
+            continue;
+        }
+        s.n = Some(log_uniform(&mut rng, 1.3, 2.5));
+        if fresnel == Fresnel::Conductor {
+            s.kappa = Some(log_uniform(&mut rng, 0.5, 5.0));
+        }
+        if s.id % 12 == 5 {
+            s.layout = NARROW_LAYOUT.to_string();
+        }
+    }
+    scenes
 }
 
 /// Smallest σ_L a scene's weights use, relative to its largest σ_L: it only keeps the
@@ -294,8 +379,8 @@ pub const SIGMA_L_FLOOR: f64 = 1e-100;
 /// The fit's data for a scene, with weights 1/σ_L² (σ_L floored at [`SIGMA_L_FLOOR`] of its
 /// largest value).
 pub fn scene_input(scene: &Scene) -> Result<FitInput> {
-    let model = model::by_name("kbs", &ModelOptions::default())?;
-    let params = [scene.sigma, scene.corr_len, scene.scale];
+    let model = model::by_name("kbs", &scene.model_options())?;
+    let params = scene.params();
     let angles = scene.layout_value()?.angles();
     let data = synth::generate(
         model.as_ref(),
@@ -328,13 +413,16 @@ pub fn scene_input(scene: &Scene) -> Result<FitInput> {
 /// amplitude depends on the verdict: see [`score`]).
 pub fn truths(scene: &Scene) -> BTreeMap<&'static str, f64> {
     let ratio = scene.corr_len / scene.sigma;
-    BTreeMap::from([
+    let mut t = BTreeMap::from([
         ("sigma", scene.sigma),
         ("T", scene.corr_len),
         ("scale", scene.scale),
         ("T/sigma", ratio),
         ("beckmann_alpha", 2.0 / ratio),
-    ])
+    ]);
+    t.extend(scene.n.map(|n| ("n", n)));
+    t.extend(scene.kappa.map(|k| ("kappa", k)));
+    t
 }
 
 fn check(name: &str, truth: f64, value: f64, stderr: Option<f64>) -> Check {
@@ -388,6 +476,14 @@ pub fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
             }
         }
     }
+    // The Fresnel factor's parameters, whatever the verdict on σ and T, where determined.
+    for name in ["n", "kappa"] {
+        if let (Some(&truth), Some(p)) = (t.get(name), param(name)) {
+            if p.determined {
+                out.push(check(name, truth, p.value, p.stderr));
+            }
+        }
+    }
     out
 }
 
@@ -413,6 +509,7 @@ fn fit_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> SceneResult 
         error: Some(e.to_string()),
         adequacy: None,
         adequacy_reasons: Vec::new(),
+        n_determined: None,
     };
     let input = match scene_input(scene) {
         Ok(i) => i,
@@ -420,6 +517,7 @@ fn fit_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> SceneResult 
     };
     let n = input.y.len();
     let fit_config = FitConfig {
+        model_opts: scene.model_options(),
         weights_are_uncertainties: true,
         lm: LmConfig {
             timeout: config.fit_timeout,
@@ -440,6 +538,11 @@ fn fit_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> SceneResult 
             error: None,
             adequacy: Some(fit.adequacy.verdict),
             adequacy_reasons: fit.adequacy.reasons.iter().map(|r| r.code).collect(),
+            n_determined: fit
+                .params
+                .iter()
+                .find(|p| p.name == "n")
+                .map(|p| p.determined),
         },
         Err(e) => fail(n, e),
     }
@@ -490,7 +593,7 @@ pub fn summarize(
                 }
             }
         }
-        let order = ["sigma", "T", "scale", "T/sigma", "amplitude"];
+        let order = ["sigma", "T", "scale", "T/sigma", "amplitude", "n", "kappa"];
         names.sort_by_key(|n| order.iter().position(|o| o == n).unwrap_or(order.len()));
         let quantities = names
             .iter()
@@ -581,7 +684,13 @@ pub fn run(
     on_done: &(dyn Fn(&SceneResult) + Sync),
 ) -> Result<RecoverReport> {
     let t0 = std::time::Instant::now();
-    let mut scenes = draw_scenes(config.scenes, config.seed, config.noise);
+    let mut scenes = draw_scenes_with(
+        config.scenes,
+        config.seed,
+        config.noise,
+        config.fresnel,
+        config.shadowing,
+    );
     if let Some(only) = &config.only {
         scenes.retain(|s| only.contains(&s.id));
     }
@@ -607,152 +716,4 @@ pub fn run(
     }
     results.sort_by_key(|r| r.scene.id);
     Ok(summarize(results, config, t0.elapsed().as_secs_f64()))
-}
-
-/// Format a number for the table: 3 significant digits, or `-`.
-fn fmt_num(v: Option<f64>) -> String {
-    match v {
-        Some(x) if x.is_finite() => {
-            if x == 0.0 {
-                "0".to_string()
-            } else if (1e-3..1e4).contains(&x.abs()) {
-                format!("{x:.3}")
-            } else {
-                format!("{x:.2e}")
-            }
-        }
-        _ => "-".to_string(),
-    }
-}
-
-impl RecoverReport {
-    /// The report as a text table.
-    pub fn table(&self) -> String {
-        use std::fmt::Write as _;
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "{:<13} {:>6}  {:<18} {:<10} {:>3}  {:>12} {:>12}  {:>8}",
-            "regime", "scenes", "verdicts", "quantity", "n", "median|err|", "max|err|", "coverage"
-        );
-        for r in &self.regimes {
-            let verdicts = r
-                .verdicts
-                .iter()
-                .map(|(k, v)| format!("{k} {v}"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let mut first = true;
-            for q in &r.quantities {
-                let (reg, sc, ver) = if first {
-                    (
-                        r.regime.name().to_string(),
-                        r.scenes.to_string(),
-                        verdicts.clone(),
-                    )
-                } else {
-                    (String::new(), String::new(), String::new())
-                };
-                first = false;
-                let _ = writeln!(
-                    s,
-                    "{:<13} {:>6}  {:<18} {:<10} {:>3}  {:>12} {:>12}  {:>8}",
-                    reg,
-                    sc,
-                    ver,
-                    q.name,
-                    q.n,
-                    fmt_num(Some(q.median_rel_error)),
-                    fmt_num(Some(q.max_rel_error)),
-                    fmt_num(q.coverage)
-                );
-            }
-            if first {
-                let _ = writeln!(
-                    s,
-                    "{:<13} {:>6}  {:<18} (nothing scored)",
-                    r.regime.name(),
-                    r.scenes,
-                    verdicts
-                );
-            }
-            let _ = writeln!(
-                s,
-                "{:<13} {:>6}  coverage {} ({} truths), median fit {} s, stops: {}",
-                "",
-                "",
-                fmt_num(r.coverage),
-                r.n_with_stderr,
-                fmt_num(Some(r.median_seconds)),
-                r.terminations
-                    .iter()
-                    .map(|(k, v)| format!("{k} {v}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-        let _ = writeln!(
-            s,
-            "\ncoverage (truth within ±2 se): {} of {} scored truths (nominal {:.3})",
-            fmt_num(Some(self.coverage)),
-            self.n_with_stderr,
-            self.nominal_coverage
-        );
-        let _ = writeln!(
-            s,
-            "terminations: {}",
-            self.terminations
-                .iter()
-                .map(|(k, v)| format!("{k} {v}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        let _ = writeln!(
-            s,
-            "converged {}/{}, errors {}, median fit time {} s, total {} s",
-            self.converged,
-            self.scenes,
-            self.errors,
-            fmt_num(Some(self.median_seconds)),
-            fmt_num(Some(self.total_seconds))
-        );
-        let _ = writeln!(
-            s,
-            "adequacy: {} of {} scenes flagged (correct model and weights: expected at most {} %){}",
-            self.adequacy_flagged,
-            self.scenes,
-            100.0 * crate::fit::adequacy::ALPHA,
-            if self.adequacy_reasons.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    "; reasons: {}",
-                    self.adequacy_reasons
-                        .iter()
-                        .map(|(k, v)| format!("{k} {v}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            }
-        );
-        let _ = writeln!(
-            s,
-            "truths outside ±{COVERAGE_K} se: {} scenes, {} of them converged and confidently wrong (> {} se and > {:.0} %)",
-            self.outliers.len(),
-            self.wrong_converged,
-            outliers::WRONG_SE,
-            100.0 * outliers::WRONG_REL
-        );
-        s.push_str(&outliers::table(&self.outliers));
-        for r in self.results.iter().filter(|r| r.error.is_some()) {
-            let _ = writeln!(
-                s,
-                "scene {} ({}): {}",
-                r.scene.id,
-                r.scene.regime.name(),
-                r.error.as_deref().unwrap_or("")
-            );
-        }
-        s
-    }
 }

@@ -72,6 +72,14 @@ pub fn outliers(results: &[SceneResult], config: &RecoverConfig) -> Vec<Outlier>
                     .any(|m| m.z.abs() > WRONG_SE && m.rel_error > WRONG_REL);
             let s = &r.scene;
             let file = format!("scene-{}-{}.csv", config.seed, s.id);
+            let factors = crate::model::ModelOptions {
+                fresnel: s.fresnel,
+                shadowing: s.shadowing,
+                ..Default::default()
+            }
+            .factors_label();
+            let index = s.n.map(|n| format!(",n={n}")).unwrap_or_default()
+                + &s.kappa.map(|k| format!(",kappa={k}")).unwrap_or_default();
             Some(Outlier {
                 id: s.id,
                 regime: s.regime,
@@ -81,11 +89,11 @@ pub fn outliers(results: &[SceneResult], config: &RecoverConfig) -> Vec<Outlier>
                 misses,
                 wrong,
                 recover_command: format!(
-                    "goniofit recover --scenes {} --seed {} --noise {} --only {}",
+                    "goniofit recover --scenes {} --seed {} --noise {} --only {}{factors}",
                     config.scenes, config.seed, config.noise, s.id
                 ),
                 synth_command: format!(
-                    "goniofit synth --model kbs --params sigma={},T={},scale={} --wavelength {} --layout '{}' --noise {} --noise-kind {} --seed {} --write-sigma --out {file}",
+                    "goniofit synth --model kbs{factors} --params sigma={},T={},scale={}{index} --wavelength {} --layout '{}' --noise {} --noise-kind {} --seed {} --write-sigma --out {file}",
                     s.sigma,
                     s.corr_len,
                     s.scale,
@@ -95,7 +103,7 @@ pub fn outliers(results: &[SceneResult], config: &RecoverConfig) -> Vec<Outlier>
                     s.noise.kind.name(),
                     s.noise.seed
                 ),
-                fit_command: format!("goniofit fit --model kbs {file}"),
+                fit_command: format!("goniofit fit --model kbs{factors} {file}"),
             })
         })
         .collect()

@@ -109,7 +109,7 @@ fn comparison_table(s: &mut String, rows: &[super::outcome::Candidate]) {
         let _ = writeln!(
             s,
             "<tr><td>{}</td><td class=num>{:.4}</td><td class=num>{:.2}</td><td class=num>{:.4}</td><td class=num>{:.6e}</td><td class={}>{}</td><td>{}</td></tr>",
-            escape(&r.model),
+            escape(&r.full_model()),
             r.bic,
             c.delta_bic,
             r.aic,
@@ -135,13 +135,13 @@ pub fn page(
     let _ = writeln!(
         s,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>goniofit: {} on {}</title><style>{STYLE}</style></head><body>",
-        escape(&r.model),
+        escape(&r.full_model()),
         escape(&info.input)
     );
     let _ = writeln!(
         s,
         "<h1>goniofit fit report: {} on {}</h1>",
-        escape(&r.model),
+        escape(&r.full_model()),
         escape(&info.input)
     );
     s += &body(r, info, text, comparison, pictures);
@@ -195,7 +195,7 @@ pub fn fragment(r: &FitResult, info: &RunInfo) -> String {
     let _ = writeln!(
         s,
         "<h3>goniofit fit: {} on {}</h3>",
-        escape(&r.model),
+        escape(&r.full_model()),
         escape(&info.input)
     );
     status(&mut s, r);

@@ -55,11 +55,11 @@ pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
     let best = o
         .candidates
         .iter()
-        .position(|r| r.model == o.result.model)
+        .position(|r| r.full_model() == o.result.full_model())
         .unwrap_or(0);
-    let tied: Vec<&str> = crate::fit::dataset::tied_with(&o.candidates, best)
+    let tied: Vec<String> = crate::fit::dataset::tied_with(&o.candidates, best)
         .iter()
-        .map(|(r, _)| r.model.as_str())
+        .map(|(r, _)| r.full_model())
         .collect();
     o.candidates
         .iter()
@@ -68,7 +68,7 @@ pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
             result: r,
             delta_bic: r.bic - o.candidates[best].bic,
             chosen: i == best,
-            tie: tied.contains(&r.model.as_str()),
+            tie: tied.contains(&r.full_model()),
         })
         .collect()
 }
@@ -93,7 +93,7 @@ pub fn to_json(o: &Outcome, info: &RunInfo, args: &[String]) -> Value {
             .iter()
             .map(|c| {
                 let r = c.result;
-                serde_json::json!({"model": r.model, "bic": num(r.bic), "aic": num(r.aic),
+                serde_json::json!({"model": r.full_model(), "bic": num(r.bic), "aic": num(r.aic),
                     "cost": num(r.cost), "converged": r.converged(),
                     "termination": termination_name(r), "delta_bic": num(c.delta_bic),
                     "chosen": c.chosen, "tie": c.tie})
@@ -111,6 +111,10 @@ pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
     let rows = comparison(o);
     if !rows.is_empty() {
         s += "[[Model comparison]] (lowest BIC among the usable fits wins; ΔBIC < 2 is a tie)\n";
+        let width = rows
+            .iter()
+            .map(|c| c.result.full_model().chars().count())
+            .fold(17, usize::max);
         for c in &rows {
             let r = c.result;
             let role = match c.role() {
@@ -118,8 +122,8 @@ pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
                 role => format!("  <- {role}"),
             };
             s += &format!(
-                "    {:<17} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}  ΔBIC = {:>10.2}  {}{role}\n",
-                r.model,
+                "    {:<width$} BIC = {:>14.4}  AIC = {:>14.4}  cost = {:.6e}  ΔBIC = {:>10.2}  {}{role}\n",
+                r.full_model(),
                 r.bic,
                 r.aic,
                 r.cost,
@@ -132,11 +136,14 @@ pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
 }
 
 /// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
-/// arguments and the fitted values of every parameter (layout order).
+/// arguments, the model with its factor options (`model`, `factors`: those of an `auto`
+/// choice are not among the arguments) and the fitted values of every parameter (layout
+/// order).
 pub fn replay_json(r: &FitResult, args: &[String]) -> Value {
     serde_json::json!({
         "args": args,
         "model": r.model,
+        "factors": r.factors.trim(),
         "names": r.layout.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
         "values": r.values,
         "n_free": r.n_free,

@@ -29,9 +29,9 @@ pub fn profile_intervals(
     if stop.is_requested() {
         return Ok(Vec::new());
     }
-    let mut config = spec.config_for(&r.model, uncertainties);
+    let mut config = spec.config_for(&r.full_model(), uncertainties);
     config.lm.stop = Some(stop.clone());
-    let model = crate::model::by_name(&r.model, &config.model_opts)?;
+    let model = crate::model::by_name(&config.model, &config.model_opts)?;
     let mut layout = r.layout.clone();
     // Parameters held by the reduction (reported as not fixed) are profiled too.
     for (fp, p) in layout.params.iter_mut().zip(&r.params) {

@@ -1,6 +1,6 @@
 //! A dataset's fit as the CLI and the Python package run it: the fit's data from a
 //! [`Dataset`] (values and weights checked against double-precision overflow), every
-//! candidate model (`auto` compares four by BIC, skipping fits that are not a usable
+//! candidate model (`auto` compares five by BIC, skipping fits that are not a usable
 //! optimum), for a joint multi-channel fit the note on how much narrower σ and T are than
 //! from one channel, and for one dataset the profile-likelihood intervals ([`intervals`]).
 //!
@@ -21,8 +21,21 @@ use crate::report;
 
 pub use intervals::{profile_intervals, MAX_PROFILED};
 
-/// Candidate models for `model = "auto"`, compared by BIC.
-pub const AUTO_CANDIDATES: [&str; 4] = ["lambert", "lambert-specular", "kbs", "kbs+lambert"];
+/// The candidate of `model = "auto"` with the physically based lobe: kbs+lambert with the
+/// dielectric Fresnel factor and Smith shadowing–masking (He, Torrance, Sillion & Greenberg
+/// 1991). A dielectric is what a paint, a plastic or a glaze is; the conductor factor would
+/// add κ, which a single channel rarely determines beside n.
+pub const AUTO_EXTENDED: &str = "kbs+lambert --fresnel dielectric --shadowing smith";
+
+/// Candidate models for `model = "auto"`, compared by BIC (model names with their factor
+/// options, as reports name them).
+pub const AUTO_CANDIDATES: [&str; 5] = [
+    "lambert",
+    "lambert-specular",
+    "kbs",
+    "kbs+lambert",
+    AUTO_EXTENDED,
+];
 
 /// Everything a dataset's fit needs beside the data.
 #[derive(Debug, Clone)]
@@ -46,15 +59,21 @@ pub struct DatasetFit {
 }
 
 impl DatasetFit {
-    /// The candidate model names (lower case): the four of `auto`, or the one given
-    /// (checked to exist).
+    /// The candidate model names (lower case): those of `auto` ([`AUTO_CANDIDATES`]; when
+    /// the caller chose factors, the four plain names, each with those factors), or the one
+    /// given (checked to exist).
     pub fn candidates(&self) -> Result<Vec<String>> {
         if self.model.eq_ignore_ascii_case("auto") {
-            Ok(AUTO_CANDIDATES.iter().map(|s| s.to_string()).collect())
+            let own_factors = self.config.model_opts.has_factors();
+            Ok(AUTO_CANDIDATES
+                .iter()
+                .filter(|c| !(own_factors && **c == AUTO_EXTENDED))
+                .map(|s| s.to_string())
+                .collect())
         } else {
             model::by_name(&self.model, &ModelOptions::default()).map_err(|e| match e {
                 Error::UnknownModel(name) => Error::Usage(format!(
-                    "unknown model '{name}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto to fit the last four and keep the lowest BIC)"
+                    "unknown model '{name}' (known: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto to fit the last four and kbs+lambert --fresnel dielectric --shadowing smith and keep the lowest BIC)"
                 )),
                 e => e,
             })?;
@@ -62,11 +81,14 @@ impl DatasetFit {
         }
     }
 
-    /// The configuration of one candidate model on a dataset (`uncertainties`: its weights
-    /// come from a stated `sigma_L`).
+    /// The configuration of one candidate model on a dataset: `model` a name, optionally
+    /// with factor options ([`ModelOptions::with_factors_of`]); `uncertainties`: its
+    /// weights come from a stated `sigma_L`.
     pub fn config_for(&self, model: &str, uncertainties: bool) -> FitConfig {
+        let (model, model_opts) = self.config.model_opts.with_factors_of(model);
         FitConfig {
-            model: model.to_string(),
+            model,
+            model_opts,
             weights_are_uncertainties: uncertainties,
             ..self.config.clone()
         }
@@ -322,12 +344,63 @@ fn fit_candidates<'c>(
         }
         let mut config = spec.config_for(m, uncertainties);
         config.lm.stop = Some(stop.clone());
-        match driver::fit(input, &config) {
+        let fitted = match seed_of(&results, &config) {
+            Some(seed) => fit_seeded(input, &config, seed),
+            None => driver::fit(input, &config),
+        };
+        match fitted {
             Err(Error::Stopped(_)) if !results.is_empty() => not_fitted.push(m.as_str()),
             r => results.push(r?),
         }
     }
     Ok((results, not_fitted))
+}
+
+/// For a candidate with factors on its lobe: the converged fit of the same model without
+/// them among `done`, whose optimum seeds the candidate's second start.
+fn seed_of<'r>(done: &'r [FitResult], config: &FitConfig) -> Option<&'r FitResult> {
+    if !config.model_opts.has_factors() {
+        return None;
+    }
+    done.iter()
+        .find(|r| r.factors.is_empty() && r.model == config.model && r.converged())
+}
+
+/// A candidate with factors fitted twice: from its own start search, and from the plain
+/// model's optimum `plain` (its σ, T, scales and amplitudes, the factor's parameters at
+/// their starting values; the user's `--init` and `--fix` kept). The lower cost among the
+/// converged fits is kept (both counted in its work). The factors do not nest the plain lobe
+/// (F → 1 only as n → ∞, G → 1 only as T/σ → ∞), so no bound by the plain cost holds; the
+/// second start keeps the extended fit from ending in a valley far from the plain lobe's
+/// when a better one lies beside it.
+fn fit_seeded(input: &FitInput, config: &FitConfig, plain: &FitResult) -> Result<FitResult> {
+    let own = driver::fit(input, config)?;
+    if config.lm.stop.as_ref().is_some_and(Stop::is_requested) {
+        return Ok(own);
+    }
+    let mut seeded = config.clone();
+    let given = |name: &str| {
+        config
+            .init
+            .iter()
+            .chain(&config.fix)
+            .any(|(k, _)| k == name)
+    };
+    for (p, &v) in plain.layout.params.iter().zip(&plain.values) {
+        if !given(&p.name) {
+            seeded.init.push((p.name.clone(), v));
+        }
+    }
+    let other = match driver::fit(input, &seeded) {
+        Ok(r) => r,
+        Err(Error::Stopped(_)) => return Ok(own),
+        Err(e) => return Err(e),
+    };
+    let better = |a: &FitResult, b: &FitResult| {
+        (a.converged(), -a.cost).partial_cmp(&(b.converged(), -b.cost))
+            == Some(std::cmp::Ordering::Greater)
+    };
+    Ok(if better(&other, &own) { other } else { own })
 }
 
 /// The candidate with the lowest BIC among the usable ones ([`lowest_bic_usable`]), with
@@ -433,7 +506,7 @@ fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
         .map(|r| {
             format!(
                 "auto: skipped {} (lower BIC {:.4}) because its fit is not usable: {}",
-                r.model,
+                r.full_model(),
                 r.bic,
                 r.unusable
                     .as_deref()
@@ -472,17 +545,17 @@ pub fn tied_with(results: &[FitResult], best: usize) -> Vec<(&FitResult, f64)> {
 /// prefer one".
 fn tie_note(results: &[FitResult], best: usize) -> Option<String> {
     let tied = tied_with(results, best);
-    let chosen = &results[best].model;
+    let chosen = &results[best].full_model();
     match tied.as_slice() {
         [] => None,
         [(other, d)] => Some(format!(
             "tie: {chosen} and {} differ by ΔBIC = {d:.2} < {BIC_TIE}; the data do not prefer one",
-            other.model
+            other.full_model()
         )),
         more => {
             let list: Vec<String> = more
                 .iter()
-                .map(|(r, d)| format!("{} (ΔBIC = {d:.2})", r.model))
+                .map(|(r, d)| format!("{} (ΔBIC = {d:.2})", r.full_model()))
                 .collect();
             Some(format!(
                 "tie: {chosen} and {} lie within ΔBIC < {BIC_TIE} of each other; the data do not prefer one",
@@ -511,7 +584,7 @@ fn joint_narrowing(
     let mut single = ds.subset(&idx);
     single.channel = None;
     let input = spec.input(&single, true)?;
-    let mut config = spec.config_for(&joint.model, ds.sigma_l.is_some());
+    let mut config = spec.config_for(&joint.full_model(), ds.sigma_l.is_some());
     config.lm.progress = false;
     config.lm.stop = Some(stop.clone());
     let alone = match driver::fit(&input, &config) {
