@@ -5,7 +5,7 @@
 use super::fit::{fit_config, wavelength_unit, FitArgs};
 use super::plot::{plot_fit, plot_status, svg_of_fit, undetermined_params};
 use goniofit::fit::dataset::Outcome;
-use goniofit::fit::driver::FitResult;
+use goniofit::fit::driver::{FitConfig, FitResult};
 use goniofit::io::{self, Dataset};
 use goniofit::report::{self, RunInfo};
 use std::path::{Path, PathBuf};
