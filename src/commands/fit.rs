@@ -377,7 +377,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let heartbeat = super::heartbeat::Heartbeat::start(!args.quiet);
     heartbeat.stage(format!("reading {}", io::shown(&args.file[0])));
     // Every input is read (and checked) before any fit starts.
+    let t_read = std::time::Instant::now();
     let (jobs, files) = read_jobs(&args, &opts, &stop)?;
+    let read = t_read.elapsed().as_secs_f64();
     let single = jobs.len() == 1;
     heartbeat.stage(match single {
         true => format!("fitting {} (model {})", jobs[0].0, args.model),
@@ -414,6 +416,17 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         super::fit_outputs::write_single_outputs(&args, &outcomes[0], &infos[0])?;
     } else {
         super::fit_outputs::write_batch_outputs(&args, &outcomes, &infos, &skipped)?;
+    }
+    if super::stages::wanted() {
+        let report = t0.elapsed().as_secs_f64() - wall;
+        super::stages::print(
+            &super::stages::Phases {
+                read,
+                fit: wall,
+                report,
+            },
+            &outcomes,
+        );
     }
     // A signal that came after the fits (while the outputs were written) still says the
     // run was interrupted: every output is complete, and the exit code is 3.

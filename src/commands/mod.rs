@@ -14,6 +14,7 @@ pub mod heartbeat;
 pub mod plot;
 pub mod recover;
 pub mod render;
+pub mod stages;
 pub mod synth;
 
 use crate::cli::{Cli, Command};

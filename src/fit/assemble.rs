@@ -7,7 +7,7 @@ use super::config::FitConfig;
 use super::identify::{log_covariance, DETERMINED_MAX_LOG_SE};
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind, Transform};
 use super::reduce::Solved;
-use super::result::{Derived, FitResult, ParamResult, Verdict};
+use super::result::{Derived, FitResult, ParamResult, StageSeconds, Verdict};
 use super::start::Start;
 use super::stats;
 use super::validate;
@@ -106,6 +106,7 @@ pub(super) fn assemble(
         seconds,
         init_seconds: start.init_seconds,
         start_seconds: start.start_seconds,
+        stage_seconds: StageSeconds::default(),
         modes,
         g_range: g_range(layout, input, p),
         fitted_computed,

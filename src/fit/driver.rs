@@ -19,7 +19,7 @@ use super::lm::Stop;
 pub use super::problem::FitInput;
 use super::problem::FitProblem;
 use super::problem::ParamLayout;
-pub use super::result::{Derived, FitResult, ParamResult, Verdict};
+pub use super::result::{Derived, FitResult, ParamResult, StageSeconds, Verdict};
 pub use super::start::{GRID_TOL, REFINE_TOL};
 use super::{assemble, identify, reduce, solve, start, validate};
 use crate::error::{Error, Result};
@@ -50,6 +50,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     let (problem, start) = (problem?, start?);
     check_series_cost(config, input, &problem.layout, &start.p0)?;
     let run = solve_checked(&problem, input, &start, config);
+    let solved_at = t0.elapsed().as_secs_f64();
     if !run.lm.cost.is_finite() {
         if let Some(why) = config.lm.stop.as_ref().and_then(Stop::requested) {
             return Err(stopped_before_first_evaluation(why, input.geo.len()));
@@ -72,9 +73,19 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
     }
     validate::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
-    Ok(assemble::assemble(
-        model, input, config, solved, seconds, start,
-    ))
+    let stages = StageSeconds {
+        grid: start.start_seconds,
+        refine: start.init_seconds - start.start_seconds,
+        solve: solved_at - start.init_seconds,
+        uncertainty: seconds - solved_at,
+        assemble: 0.0,
+    };
+    let mut result = assemble::assemble(model, input, config, solved, seconds, start);
+    result.stage_seconds = StageSeconds {
+        assemble: t0.elapsed().as_secs_f64() - seconds,
+        ..stages
+    };
+    Ok(result)
 }
 
 /// The error of a fit whose stop request (`why`) came before its first evaluation on the

@@ -21,6 +21,24 @@ pub struct ParamResult {
     pub unit: String,
 }
 
+/// Wall seconds of each stage of one fit, in the order they run (their sum is the fit's
+/// `seconds` plus `assemble`, to the clock's resolution). Not part of the reports: the
+/// timing a benchmark asks for (`GONIOFIT_STAGES`, benches/stages.sh).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageSeconds {
+    /// Checks, the full problem and the start grid's candidates (the grid's model side is
+    /// computed once per layout, [`super::grid_cache`]).
+    pub grid: f64,
+    /// The quick refinement of the grid's candidates on the subsample.
+    pub refine: f64,
+    /// Levenberg–Marquardt on the whole data (with rival valleys and probes).
+    pub solve: f64,
+    /// Covariance, what the data determines, and the reduced refit when it is needed.
+    pub uncertainty: f64,
+    /// Fitted values, goodness of fit, validity and adequacy of the report.
+    pub assemble: f64,
+}
+
 /// A quantity derived from the parameters (T/σ, Beckmann's α, determined combinations).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Derived {
@@ -127,6 +145,8 @@ pub struct FitResult {
     /// Of which: up to the grid's candidates (the automatic starting values, before any
     /// LM iteration).
     pub start_seconds: f64,
+    /// The wall time of each stage of the fit ([`StageSeconds`]).
+    pub stage_seconds: StageSeconds,
     pub modes: BTreeMap<String, usize>,
     /// Range of g = (2πσ/λ)²(cos θi + cos θr)² over the samples (KBS models).
     pub g_range: Option<(f64, f64)>,

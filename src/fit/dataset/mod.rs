@@ -129,6 +129,9 @@ pub struct Outcome {
     /// Whether a stop (signal or time limit) cut the intervals' walks short, so that none
     /// is reported: the run did not do all it was asked (exit 3).
     pub intervals_stopped: bool,
+    /// Wall-clock seconds of the whole dataset's fit: its input, every candidate's fit and
+    /// the intervals.
+    pub seconds: f64,
 }
 
 /// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
@@ -282,6 +285,7 @@ pub fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
 /// not yet started are skipped (named in a note). Errors: the dataset's own (no wavelength
 /// for a KBS model, values that would overflow) and the fit's.
 pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<Outcome> {
+    let t0 = std::time::Instant::now();
     let candidates = spec.candidates()?;
     let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
     let input = spec.input(&ds, needs_wavelength)?;
@@ -322,6 +326,7 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
         intervals,
         interval_seconds,
         intervals_stopped,
+        seconds: t0.elapsed().as_secs_f64(),
     })
 }
 
