@@ -17,10 +17,11 @@ cd "$(dirname "$0")/.."
 scenes=${SCENES:-150}
 seeds=${SEEDS:-2929 4141 7373}
 cargo build --release --quiet
+bin=${CARGO_TARGET_DIR:-target}/release/goniofit
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 for s in $seeds; do
-  ./target/release/goniofit recover --scenes "$scenes" --seed "$s" \
+  "$bin" recover --scenes "$scenes" --seed "$s" \
     --fresnel dielectric --shadowing smith --json > "$dir/$s.json"
 done
 python3 - "$dir" $seeds <<'PY'

@@ -177,3 +177,84 @@ fn auto_chooses_the_extended_lobe_on_data_made_with_it_and_plot_redraws_it() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// A near-mirror surface (g ≈ 1e-3) of a high index, on a hemisphere of five incidence
+/// angles: the fit finds the index (n = 2.45 within 3 s.e.), not the plain lobe's valley
+/// that an index below 1 would open (total internal reflection makes the factor a constant
+/// there, a second scale; χ²/(n − p) ≈ 55 at that valley against ≈ 1 here).
+#[test]
+fn a_near_mirror_of_high_index_finds_its_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mirror.csv");
+    let out = out.to_str().unwrap();
+    success_stdout(&[
+        "synth",
+        "--model",
+        "kbs",
+        "--fresnel",
+        "dielectric",
+        "--shadowing",
+        "smith",
+        "--params",
+        "sigma=0.009465,T=2.503,scale=0.978,n=2.451",
+        "--layout",
+        "hemisphere 5x18x24",
+        "--noise",
+        "0.01",
+        "--noise-kind",
+        "relative",
+        "--seed",
+        "12829661802753887198",
+        "--write-sigma",
+        "--out",
+        out,
+    ]);
+    let v = fit_json(&[
+        "fit",
+        "--model",
+        "kbs",
+        "--fresnel",
+        "dielectric",
+        "--shadowing",
+        "smith",
+        "--no-intervals",
+        "--json",
+        out,
+    ]);
+    let n = &v["params"]["n"];
+    let (x, se) = (n["value"].as_f64().unwrap(), n["stderr"].as_f64().unwrap());
+    assert!((x - 2.451).abs() < 3.0 * se && se < 0.01, "n = {x} ± {se}");
+    let chi2 = v["reduced_chi2"].as_f64().unwrap();
+    assert!(chi2 < 1.5, "χ²/(n − p) = {chi2}");
+}
+
+/// The dielectric and Schlick index lies above 1: a start or value at or below it is
+/// refused, naming the domain; the conductor's n may lie below 1.
+#[test]
+fn a_dielectric_index_at_or_below_one_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = synth(dir.path(), "inplane theta_i=10,20 max=30 step=5", 2);
+    for (fresnel, params) in [
+        ("dielectric", "sigma=0.5,T=4,scale=1,scale_d=0.05,n=0.8"),
+        ("schlick", "sigma=0.5,T=4,scale=1,scale_d=0.05,n=1"),
+    ] {
+        let out = common::goniofit()
+            .args(["eval", "--model", "kbs+lambert", "--fresnel", fresnel])
+            .args(["--params", params, &file])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{fresnel}: {err}");
+        assert!(err.contains("outside its domain (> 1)"), "{fresnel}: {err}");
+    }
+    success_stdout(&[
+        "eval",
+        "--model",
+        "kbs+lambert",
+        "--fresnel",
+        "conductor",
+        "--params",
+        "sigma=0.5,T=4,scale=1,scale_d=0.05,n=0.05,kappa=4",
+        &file,
+    ]);
+}

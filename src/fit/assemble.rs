@@ -5,7 +5,7 @@
 use super::adequacy::{self, Adequacy};
 use super::config::FitConfig;
 use super::identify::{log_covariance, DETERMINED_MAX_LOG_SE};
-use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind, Transform};
+use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
 use super::reduce::Solved;
 use super::result::{Derived, FitResult, ParamResult, StageSeconds, Verdict};
 use super::start::Start;
@@ -382,8 +382,8 @@ fn param_results(
                 || spec.name == "scale"
                 || (verdict == Verdict::Rough && spec.name == "T"));
         let se = log_se(k).map(|s| s * fp.transform.dp_dx(fp.transform.to_x(p[k])).abs());
-        let loose =
-            log_se(k).is_some_and(|s| fp.transform == Transform::Log && s > DETERMINED_MAX_LOG_SE);
+        // The relative standard error (that of ln p: x's for the log transform).
+        let loose = se.is_some_and(|s| fp.transform.is_log() && s / p[k] > DETERMINED_MAX_LOG_SE);
         let at_bound = validate::at_lower_bound(fp, p[k], se);
         if at_bound {
             notes.push(validate::lower_bound_note(fp));

@@ -74,7 +74,9 @@ fn grid_for(name: &str, lambda: f64) -> Vec<f64> {
             .map(|v| v * lambda)
             .collect(),
         "w" => logspace(0.003, 1.2, 30),
-        // The Fresnel factor's index: a paint's or glass's, and a metal's extinction order.
+        // The Fresnel factor's index over the range of paints, glasses and ceramics (each
+        // lobe shape keeps its best index): a single start can fall into the plain lobe's
+        // valley at n → ∞, where the factor is 1. A metal's extinction order.
         "n" => vec![1.5],
         "kappa" => vec![1.0],
         _ => vec![1.0],

@@ -24,6 +24,8 @@ pub enum Transform {
     Identity,
     /// x = ln p (p > 0).
     Log,
+    /// x = ln(p − lower) (p > lower > 0: a dielectric's index, above 1).
+    LogAbove { lower: f64 },
     /// p = u(√(x² + 1) − 1) ≥ 0, bounded below by 0, in units of u > 0 (the data's
     /// scale: see [`ParamLayout::set_amplitude_units`]).
     NonNegative { unit: f64 },
@@ -38,6 +40,7 @@ impl Transform {
     /// non-negative for the linear amplitudes, identity otherwise.
     pub fn for_spec(spec: &crate::model::ParamSpec) -> Self {
         match (spec.positive, LINEAR.contains(&spec.name)) {
+            (true, false) if spec.lower > 0.0 => Transform::LogAbove { lower: spec.lower },
             (true, false) => Transform::Log,
             (true, true) => Transform::NonNegative { unit: 1.0 },
             _ => Transform::Identity,
@@ -49,6 +52,7 @@ impl Transform {
         match self {
             Transform::Identity => p,
             Transform::Log => p.max(f64::MIN_POSITIVE).ln(),
+            Transform::LogAbove { lower } => (p - lower).max(f64::MIN_POSITIVE).ln(),
             Transform::NonNegative { unit } => {
                 let p = (p / unit).max(0.0);
                 (p * (p + 2.0)).sqrt()
@@ -61,8 +65,24 @@ impl Transform {
         match self {
             Transform::Identity => x,
             Transform::Log => x.exp(),
+            Transform::LogAbove { lower } => lower + x.exp(),
             // √(x²+1) − 1 without cancellation for small x.
             Transform::NonNegative { unit } => unit * (x * x / ((x * x + 1.0).sqrt() + 1.0)),
+        }
+    }
+
+    /// Whether x is a logarithm (of p, or of p above its lower bound).
+    pub fn is_log(self) -> bool {
+        matches!(self, Transform::Log | Transform::LogAbove { .. })
+    }
+
+    /// The exclusive lower bound of p (−∞ for the identity, 0 for the amplitudes' closed
+    /// bound, which p reaches).
+    pub fn lower(self) -> f64 {
+        match self {
+            Transform::Identity => f64::NEG_INFINITY,
+            Transform::Log | Transform::NonNegative { .. } => 0.0,
+            Transform::LogAbove { lower } => lower,
         }
     }
 
@@ -83,7 +103,7 @@ impl Transform {
     pub fn dp_dx(self, x: f64) -> f64 {
         match self {
             Transform::Identity => 1.0,
-            Transform::Log => x.exp(),
+            Transform::Log | Transform::LogAbove { .. } => x.exp(),
             Transform::NonNegative { unit } => unit * (x / (x * x + 1.0).sqrt()),
         }
     }

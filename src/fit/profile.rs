@@ -400,7 +400,9 @@ impl<'a, 'p> Profiler<'a, 'p> {
         let se = (g.transpose() * &self.x_cov * &g)[(0, 0)].max(0.0).sqrt();
         let (lo, hi) = match target {
             Target::Param(k) => match self.problem.layout.params[*k].transform {
-                Transform::Log => ((t0 - LOG_RANGE, false), (t0 + LOG_RANGE, false)),
+                Transform::Log | Transform::LogAbove { .. } => {
+                    ((t0 - LOG_RANGE, false), (t0 + LOG_RANGE, false))
+                }
                 tr @ Transform::NonNegative { .. } => {
                     let top = tr.to_x(1e3 * tr.from_x(t0) + 1e3 * se.min(1e300));
                     ((0.0, true), (top.max(t0 + 1.0), false))

@@ -9,7 +9,7 @@ use super::config::FitConfig;
 use super::init;
 use super::lm::{LmConfig, Stop};
 use super::problem::{FitInput, FitProblem, ParamLayout};
-use super::solve::run_lm;
+use super::solve::{run_lm, Run};
 use crate::error::Result;
 use crate::model::{self, EvalMode, Model, ModelOptions};
 use rayon::prelude::*;
@@ -145,6 +145,35 @@ impl<'m> Refiners<'m> {
         self.held_sigma_problem(self.smooth?, start)
     }
 
+    /// A quick LM run of `problem` (on the subsample) from `start`, first with the Fresnel
+    /// factor's free parameters (`n`, `kappa`) held at their start, then with them free
+    /// from where the lobe settled. From a grid point the lobe's σ and T are off by up to
+    /// the grid's step, and a free index then absorbs that misfit: it runs to n → ∞
+    /// (where the factor is 1 and the plain lobe's valley lies, a local minimum at
+    /// infinity) while its profile at the settled lobe falls towards the truth.
+    fn run_settled(&self, problem: &FitProblem, start: &[f64], coarse: &LmConfig) -> Run {
+        let specs = problem.model.params();
+        let mut layout = problem.layout.clone();
+        let mut held = false;
+        for (k, fp) in layout.params.iter_mut().enumerate() {
+            if fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name) {
+                fp.fixed = Some(start[k]);
+                held = true;
+            }
+        }
+        let (kind, floor) = (problem.kind(), problem.floor);
+        let lobe = held
+            .then(|| FitProblem::new(problem.model, layout, &self.sub, kind, floor).ok())
+            .flatten();
+        match lobe {
+            Some(lobe) if !stopped(coarse.stop.as_ref()) => {
+                let settled = run_lm(&lobe, start, coarse);
+                run_lm(problem, &settled.values, coarse)
+            }
+            _ => run_lm(problem, start, coarse),
+        }
+    }
+
     /// `model`'s problem on the subsample with σ held at `start`'s value.
     fn held_sigma_problem(&self, model: &'m dyn Model, start: &[f64]) -> Option<FitProblem<'m>> {
         let k = self.sigma_k?;
@@ -154,6 +183,9 @@ impl<'m> Refiners<'m> {
         FitProblem::new(model, layout, &self.sub, kind, floor).ok()
     }
 }
+
+/// The Fresnel factor's parameters, held while the lobe settles ([`Refiners::run_settled`]).
+const FACTOR_PARAMS: [&str; 2] = ["n", "kappa"];
 
 /// The quick refinement's solver settings: loose tolerances, at most 100 iterations.
 fn coarse_config(config: &FitConfig) -> LmConfig {
@@ -343,16 +375,16 @@ fn refine_candidates(
             let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
             let (cost, values) = match (refiners.rough_problem(start), rough_band) {
                 (Some(rough), true) => {
-                    let run = run_lm(&rough, start, coarse);
+                    let run = refiners.run_settled(&rough, start, coarse);
                     slide_rough_ridge(refiners, run.values, inside, coarse.stop.as_ref())
                 }
                 _ if smooth_band && refiners.smooth_problem(start).is_some() => {
                     let smooth = refiners.smooth_problem(start).expect("checked");
-                    let run = run_lm(&smooth, start, coarse);
+                    let run = refiners.run_settled(&smooth, start, coarse);
                     (exact_cost(&run.values), run.values)
                 }
                 _ => {
-                    let run = run_lm(&refiners.exact, start, coarse);
+                    let run = refiners.run_settled(&refiners.exact, start, coarse);
                     (run.lm.cost, run.values)
                 }
             };

@@ -3,7 +3,7 @@
 
 use super::config::FitConfig;
 use super::lm::Termination;
-use super::problem::{FitInput, FitParam, ParamLayout, Transform, LINEAR};
+use super::problem::{FitInput, FitParam, ParamLayout, LINEAR};
 use super::reduce::Solved;
 use super::result::Verdict;
 use super::stats;
@@ -120,7 +120,7 @@ fn assign(layout: &ParamLayout, pairs: &[(String, f64)], out: &mut [Option<f64>]
         for k in ks {
             let fp = &layout.params[k];
             if !v.is_finite()
-                || (fp.transform == Transform::Log && *v <= 0.0)
+                || (fp.transform.is_log() && *v <= fp.transform.lower())
                 || *v < 0.0 && fp.transform.is_non_negative()
             {
                 return Err(Error::Param {

@@ -24,7 +24,7 @@
 //!
 //! | parameter | unit | domain |
 //! |---|---|---|
-//! | `n` | 1 | > 0 (Schlick: ≠ 1) |
+//! | `n` | 1 | > 0 (Schlick: ≠ 1); the models take n > 1 for the dielectric and Schlick forms |
 //! | `kappa` (κ) | 1 | > 0 (F is even in κ; κ = 0 is the dielectric form) |
 //!
 //! Accuracy: F to 1e-13 relative and ∂F/∂n, ∂F/∂κ to 1e-12 (|∂F| + F), tested against a

@@ -50,31 +50,53 @@ pub(crate) const SIGMA: ParamSpec = ParamSpec {
     name: "sigma",
     unit: "λ unit",
     positive: true,
+    lower: 0.0,
     doc: "rms surface height σ",
 };
 pub(crate) const CORR_LEN: ParamSpec = ParamSpec {
     name: "T",
     unit: "λ unit",
     positive: true,
+    lower: 0.0,
     doc: "surface correlation length T",
 };
 
+/// The index of a dielectric (and Schlick's F₀ from it): n > 1, the sample denser than
+/// the air it is measured in. n < 1 would be total internal reflection, which no sample
+/// in air shows (its F is constant beyond the critical angle: towards n → 0 a second
+/// copy of `scale`); Schlick's F is the same at n and 1/n.
 pub(crate) const INDEX_N: ParamSpec = ParamSpec {
     name: "n",
     unit: "1",
     positive: true,
+    lower: 1.0,
+    doc: "refractive index n (> 1)",
+};
+/// The real part of a conductor's complex index (a metal's lies below 1: silver ≈ 0.05).
+pub(crate) const INDEX_N_CONDUCTOR: ParamSpec = ParamSpec {
+    name: "n",
+    unit: "1",
+    positive: true,
+    lower: 0.0,
     doc: "refractive index n (real part)",
 };
 pub(crate) const KAPPA: ParamSpec = ParamSpec {
     name: "kappa",
     unit: "1",
     positive: true,
+    lower: 0.0,
     doc: "extinction coefficient κ (imaginary part of the index)",
 };
 
 const PARAMS: [ParamSpec; 3] = [SIGMA, CORR_LEN, super::lambert::SCALE];
 const PARAMS_N: [ParamSpec; 4] = [SIGMA, CORR_LEN, super::lambert::SCALE, INDEX_N];
-const PARAMS_NK: [ParamSpec; 5] = [SIGMA, CORR_LEN, super::lambert::SCALE, INDEX_N, KAPPA];
+const PARAMS_NK: [ParamSpec; 5] = [
+    SIGMA,
+    CORR_LEN,
+    super::lambert::SCALE,
+    INDEX_N_CONDUCTOR,
+    KAPPA,
+];
 
 /// Per-sample KBS value and its derivatives.
 #[derive(Debug, Clone, Copy)]

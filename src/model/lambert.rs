@@ -20,6 +20,7 @@ pub(crate) const SCALE: ParamSpec = ParamSpec {
     name: "scale",
     unit: "1",
     positive: true,
+    lower: 0.0,
     doc: "overall scale s",
 };
 

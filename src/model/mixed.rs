@@ -14,7 +14,7 @@
 //!
 //! Accuracy: that of [`super::kbs::Kbs`]; the Lambertian part is exact to rounding.
 
-use super::kbs::{Kbs, CORR_LEN, INDEX_N, KAPPA, SIGMA};
+use super::kbs::{Kbs, CORR_LEN, INDEX_N, INDEX_N_CONDUCTOR, KAPPA, SIGMA};
 use super::{Mode, Model, ModelOptions, ParamSpec};
 use crate::error::Result;
 use crate::geometry::Geometry;
@@ -29,6 +29,7 @@ const SCALE_D: ParamSpec = ParamSpec {
     name: "scale_d",
     unit: "1",
     positive: true,
+    lower: 0.0,
     doc: "Lambertian (body) scale s_d",
 };
 const PARAMS: [ParamSpec; 4] = [SIGMA, CORR_LEN, super::lambert::SCALE, SCALE_D];
@@ -38,7 +39,7 @@ const PARAMS_NK: [ParamSpec; 6] = [
     CORR_LEN,
     super::lambert::SCALE,
     SCALE_D,
-    INDEX_N,
+    INDEX_N_CONDUCTOR,
     KAPPA,
 ];
 

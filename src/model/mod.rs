@@ -25,6 +25,9 @@ pub struct ParamSpec {
     pub unit: &'static str,
     /// Whether the parameter must be strictly positive (fitted in log space).
     pub positive: bool,
+    /// The exclusive lower bound of a positive parameter's domain: 0, or 1 for the index of
+    /// a dielectric (fitted as ln(p − lower)).
+    pub lower: f64,
     /// One-line meaning.
     pub doc: &'static str,
 }
@@ -287,12 +290,16 @@ pub fn parse_params(model: &dyn Model, text: &str) -> Result<Vec<f64>> {
 
 /// Check a parameter value against its domain.
 pub fn check_param_value(spec: &ParamSpec, v: f64) -> Result<()> {
-    if !v.is_finite() || (spec.positive && v <= 0.0) {
+    if !v.is_finite() || (spec.positive && v <= spec.lower) {
         return Err(Error::Param {
             name: spec.name.into(),
             message: format!(
                 "value {v} is outside its domain ({})",
-                if spec.positive { "> 0" } else { "finite" }
+                if spec.positive {
+                    format!("> {}", spec.lower)
+                } else {
+                    "finite".into()
+                }
             ),
         });
     }

@@ -25,12 +25,14 @@ const PARAMS: [ParamSpec; 3] = [
         name: "B",
         unit: "1",
         positive: true,
+        lower: 0.0,
         doc: "specular lobe strength",
     },
     ParamSpec {
         name: "w",
         unit: "rad",
         positive: true,
+        lower: 0.0,
         doc: "specular lobe angular width",
     },
 ];
