@@ -2,13 +2,15 @@
 # Time and peak memory of one big fit: a KBS hemisphere scan of ROWS rows
 # (σ = 0.25 λ, T = 2.5 λ, 1 % noise, `goniofit synth`, seed 1) fitted with
 # `goniofit fit --model kbs --wavelength 1 --json`, measured with `/usr/bin/time -v`
-# (wall time, peak resident set size, bytes per row = peak RSS / rows).
+# (wall time, peak resident set size, bytes per row = peak RSS / rows), and the time outside
+# the fit: wall minus the report's `seconds` (reading, intervals, the report's figures,
+# outputs). FIT_ARGS adds options to the fit (e.g. FIT_ARGS=--no-intervals).
 #
 # With BASE=path/to/goniofit the baseline binary runs too, alternated run by run with this
 # tree's binary; medians and ratios are printed. Data files go to $BIG_DIR (default
 # /tmp/goniofit-big), never into the repository; a 10M-row file is ~450 MB.
 #
-# Usage: [BASE=/tmp/goniofit-base] [NEW=...] bash benches/big_fit.sh [repeats] [rows: 1000000 | 10000000]
+# Usage: [BASE=/tmp/goniofit-base] [NEW=...] [FIT_ARGS=...] bash benches/big_fit.sh [repeats] [rows: 1000000 | 10000000]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repeats=${1:-3}
@@ -32,13 +34,14 @@ if [ ! -s "$data" ]; then
 fi
 bins=("new=$NEW")
 [ -n "${BASE:-}" ] && bins=("base=$BASE" "${bins[@]}")
-python3 - "$data" "$rows" "$repeats" "${bins[@]}" <<'PY'
+python3 - "$data" "$rows" "$repeats" "${FIT_ARGS:-}" "${bins[@]}" <<'PY'
 import json, re, statistics, subprocess, sys
 data, rows, repeats = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-bins = [b.split("=", 1) for b in sys.argv[4:]]
+extra = sys.argv[4].split()
+bins = [b.split("=", 1) for b in sys.argv[5:]]
 def run(binary):
     p = subprocess.run(["/usr/bin/time", "-v", binary, "fit", "--model", "kbs", "--wavelength", "1",
-                        "--json", data], capture_output=True, text=True)
+                        "--json", *extra, data], capture_output=True, text=True)
     d = json.loads(p.stdout)
     rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr).group(1)) * 1024
     m = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (?:(\d+):)?(\d+):([\d.]+)", p.stderr)
@@ -57,7 +60,8 @@ for name, _ in bins:
     med[name] = m
     r = rs[-1]
     runs = ", ".join("%.2f s/%.0f" % (x["wall"], x["rss"] / rows) for x in rs)
-    print(f"  {name:4}  wall {m['wall']:6.2f} s (fit {m['fit_s']:.2f} s)  peak RSS {m['rss'] / 2**20:7.1f} MiB"
+    print(f"  {name:4}  wall {m['wall']:6.2f} s (fit {m['fit_s']:.2f} s, outside it "
+          f"{statistics.median(r['wall'] - r['fit_s'] for r in rs):.2f} s)  peak RSS {m['rss'] / 2**20:7.1f} MiB"
           f" = {m['rss'] / rows:6.1f} bytes/row  (runs: {runs})"
           f"  sigma {r['sigma']:.6f} T {r['T']:.5f} converged {r['converged']} cost {r['cost']:.9e}")
 if "base" in med:

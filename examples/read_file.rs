@@ -1,5 +1,6 @@
-//! Read a measurement file as `fit` does and print how many samples it holds: the reading
-//! alone, for timing readers (benches/merl_read.sh).
+//! Read a measurement file as `fit` does and print how many samples it holds and how long
+//! the reading took (wall seconds, MB/s of the file's size): the reading alone, for timing
+//! readers (benches/merl_read.sh, benches/csv_read.sh).
 //! Usage: `read_file FILE [CHANNEL]`.
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -10,7 +11,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         require_value: true,
         ..Default::default()
     };
+    let t0 = std::time::Instant::now();
     let ds = goniofit::io::read_dataset_columns(&path, &opts)?;
-    println!("{} samples", ds.len());
+    let seconds = t0.elapsed().as_secs_f64();
+    let mb = std::fs::metadata(&path)?.len() as f64 / 1e6;
+    println!(
+        "{} samples, read in {seconds:.4} s ({:.1} MB/s)",
+        ds.len(),
+        mb / seconds
+    );
     Ok(())
 }

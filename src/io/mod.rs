@@ -255,17 +255,33 @@ fn read_file(
         let rows_hint = estimate_rows(head, len);
         let stated = quantity::from_comments(path, head)?;
         let stopped = std::cell::Cell::new(None);
-        let counted = std::io::BufReader::new(Counting {
-            inner: reader,
-            done: 0,
-            reported: 0,
-            progress,
-            stopped: &stopped,
-        });
-        // A file the streamed reader refuses is read whole again, so that every error
-        // message is the whole-file reader's (which splits every record before reading
-        // any value, so a malformed record anywhere is the error reported).
-        let parsed = csv::parse_reader(path, counted, opts, keep_rows, rows_hint);
+        let counted = |inner| {
+            std::io::BufReader::with_capacity(
+                1 << 16,
+                Counting {
+                    inner,
+                    done: 0,
+                    reported: 0,
+                    progress,
+                    stopped: &stopped,
+                },
+            )
+        };
+        // A plain table is read by the plain reader; one it does not take is read again
+        // from the start by the general one. A file the streamed reader refuses is read
+        // whole again, so that every error message is the whole-file reader's (which
+        // splits every record before reading any value, so a malformed record anywhere is
+        // the error reported).
+        let plain = csv::parse_plain(path, counted(reader), opts, keep_rows, rows_hint);
+        let parsed = match plain {
+            Some(ds) => Ok(ds),
+            None if stopped.get().is_some() => Err(Error::file(path, String::new())),
+            None => {
+                let file = std::fs::File::open(path).map_err(io_err)?;
+                let reader = std::io::BufReader::with_capacity(1 << 16, file);
+                csv::parse_reader(path, counted(reader), opts, keep_rows, rows_hint)
+            }
+        };
         if let Some((why, done)) = stopped.get() {
             return Err(Error::Stopped(format!(
                 "{why} while reading {} ({:.1} of {:.1} MB): nothing fitted",
@@ -644,7 +660,12 @@ pub fn format_value(v: f64) -> String {
 
 /// Parse a decimal field as a finite number; the message shows the value.
 pub(crate) fn parse_finite(field: &str) -> std::result::Result<f64, String> {
-    let t = field.trim();
+    let graphic = |b: Option<&u8>| b.is_some_and(u8::is_ascii_graphic);
+    let bytes = field.as_bytes();
+    let t = match graphic(bytes.first()) && graphic(bytes.last()) {
+        true => field,
+        false => field.trim(),
+    };
     if t.is_empty() {
         return Err("empty field (a number is needed)".into());
     }

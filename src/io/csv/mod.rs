@@ -41,8 +41,10 @@
 //! φr = 0), value = `f_r11`, wavelength = `lambda` (µm in those files). An explicit
 //! `--columns` mapping of any angle role turns this detection off.
 
+mod plain;
 mod records;
 
+pub(crate) use plain::parse_plain;
 pub use records::{split_records, split_records_limited, Record, MAX_FIELDS};
 pub(crate) use records::{Fault, Limit, Records};
 
@@ -213,22 +215,16 @@ fn parse_records(
     table.check(path, &first_row, opts)?;
     let mut ds = table.empty_dataset(path, keep_rows, rows_hint);
     for record in records {
-        table.push_record(path, opts, record?, &mut ds, keep_rows)?;
+        let (line, fields) = record?;
+        table.push_record(path, opts, (line, &fields), &mut ds, keep_rows)?;
     }
-    ds.shrink_to_fit();
-    if opts.require_value {
-        if let Some(v) = &ds.value {
-            if v.iter().all(|&x| x == 0.0) {
-                let i = table.cols.get(Role::Value).unwrap_or(0);
-                let m = format!(
-                    "all {} values are zero: nothing to fit (wrong column?)",
-                    v.len()
-                );
-                return Err(Error::input(path, header_line, &headers[i], m));
-            }
-        }
-    }
-    Ok(ds)
+    table.finish(path, opts, ds)
+}
+
+/// Fields joined by commas (as a message shows a record).
+fn joined<F: AsRef<str>>(fields: &[F]) -> String {
+    let parts: Vec<&str> = fields.iter().map(AsRef::as_ref).collect();
+    parts.join(",")
 }
 
 /// What the header says about the table: its columns' roles, which `--columns` mapped, and
@@ -435,13 +431,32 @@ impl<'h> Table<'h> {
         }
     }
 
+    /// The dataset read, its columns trimmed to size; with `require_value`, values that
+    /// are all zero are an error on the header line (nothing to fit).
+    fn finish(&self, path: &Path, opts: &ReadOptions, mut ds: Dataset) -> Result<Dataset> {
+        ds.shrink_to_fit();
+        if opts.require_value {
+            if let Some(v) = &ds.value {
+                if v.iter().all(|&x| x == 0.0) {
+                    let i = self.cols.get(Role::Value).unwrap_or(0);
+                    let m = format!(
+                        "all {} values are zero: nothing to fit (wrong column?)",
+                        v.len()
+                    );
+                    return Err(Error::input(path, self.header_line, &self.headers[i], m));
+                }
+            }
+        }
+        Ok(ds)
+    }
+
     /// Read one record (`line`, `fields`) into `ds`: its sample and the columns the table
     /// has, each checked (weights, σ_L and wavelengths positive).
-    fn push_record(
+    fn push_record<F: AsRef<str>>(
         &self,
         path: &Path,
         opts: &ReadOptions,
-        (line, fields): Record,
+        (line, fields): (usize, &[F]),
         ds: &mut Dataset,
         keep_rows: bool,
     ) -> Result<()> {
@@ -449,7 +464,7 @@ impl<'h> Table<'h> {
         let input_err = |column: &str, message| Error::input(path, line, column, message);
         if fields.len() != headers.len() {
             let hint = if fields.len() > headers.len() {
-                decimal_comma_hint(&fields.join(","))
+                decimal_comma_hint(&joined(fields))
             } else {
                 ""
             };
@@ -462,7 +477,7 @@ impl<'h> Table<'h> {
             return Err(input_err("(row)", m));
         }
         let num = |i: usize| -> Result<f64> {
-            parse_finite(&fields[i]).map_err(|m| input_err(&headers[i], m))
+            parse_finite(fields[i].as_ref()).map_err(|m| input_err(&headers[i], m))
         };
         let sample = self
             .sample(&num, opts)
@@ -473,7 +488,7 @@ impl<'h> Table<'h> {
                 true => Ok(v),
                 false => Err(input_err(
                     &headers[i],
-                    format!("{what} {} must be positive", fields[i]),
+                    format!("{what} {} must be positive", fields[i].as_ref()),
                 )),
             }
         };
@@ -489,7 +504,7 @@ impl<'h> Table<'h> {
             if s <= 0.0 || !w.is_finite() || w == 0.0 {
                 let m = format!(
                     "sigma_L {} must be positive (and 1/sigma_L² finite)",
-                    fields[i]
+                    fields[i].as_ref()
                 );
                 return Err(input_err(&headers[i], m));
             }
@@ -502,12 +517,13 @@ impl<'h> Table<'h> {
             v.push(positive(i, "wavelength")?);
         }
         if let (Some(i), Some(v)) = (self.cols.get(Role::Group), ds.channel.as_mut()) {
-            v.push(fields[i].clone());
+            v.push(fields[i].as_ref().to_string());
         }
         ds.samples.push(sample);
         ds.lines.push(line);
         if keep_rows {
-            ds.rows.push(fields);
+            ds.rows
+                .push(fields.iter().map(|f| f.as_ref().to_string()).collect());
         }
         Ok(())
     }
