@@ -1,14 +1,16 @@
 //! SIGINT and SIGTERM at 20 seeded random moments to each command (fit, fit --by-group,
-//! eval, convert, synth, render, figures, recover, plot). Each run must end promptly, with the exit
-//! code the README gives a stop (`fit`: 3, the code of the fit it finished, or 130 before
-//! its run started; the other commands: 130; any command: 0 when it finished first, or
-//! death by the signal itself when it came before the handler was installed), every output
-//! either absent or complete, and no hidden temporary (`.goniofit-*.tmp`) left behind.
+//! eval, convert, synth, render, figures, recover, plot). Each run must end promptly, with
+//! the exit code the README gives a stop (`fit`: 3, the code of the fit it finished, or 130
+//! before its run started or after it ended; the other commands: 130; any command: 0 when
+//! it finished first, or death by the signal itself when it came before the handler was
+//! installed), every output either absent or complete, and no hidden temporary
+//! (`.goniofit-*.tmp`) left behind.
 
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 /// Signals per command.
@@ -224,6 +226,17 @@ fn complete_fit_output(name: &Path, bytes: &[u8], reference: &[u8]) -> bool {
 
 /// Run `case` once in `dir` with `signal` ("INT"/"TERM") after `delay`: the failure, if it
 /// failed. `reference`: the outputs of a run left to finish.
+/// Read `pipe` to its end on a thread of its own; the bytes when joined.
+fn drain<R: Read + Send + 'static>(pipe: Option<R>) -> std::thread::JoinHandle<Vec<u8>> {
+    std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        if let Some(mut pipe) = pipe {
+            let _ = pipe.read_to_end(&mut bytes);
+        }
+        bytes
+    })
+}
+
 fn one_run(
     case: &Case,
     dir: &Path,
@@ -233,6 +246,11 @@ fn one_run(
 ) -> Option<String> {
     std::fs::create_dir_all(dir).unwrap();
     let what = format!("{} SIG{signal} at {:.3} s", case.name, delay.as_secs_f64());
+    let signo = if signal == "INT" {
+        libc::SIGINT
+    } else {
+        libc::SIGTERM
+    };
     let mut child = goniofit()
         .args(&case.args)
         .current_dir(dir)
@@ -240,12 +258,14 @@ fn one_run(
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    // The pipes are read while the command runs, so that a command writing more than a
+    // pipe holds never waits on this test.
+    let (stdout, stderr) = (drain(child.stdout.take()), drain(child.stderr.take()));
     std::thread::sleep(delay);
-    let sent = child.try_wait().unwrap().is_none();
-    if sent {
-        let _ = Command::new("kill")
-            .args([format!("-{signal}"), child.id().to_string()])
-            .status();
+    if child.try_wait().unwrap().is_none() {
+        // SAFETY: kill(2) on the child's pid; the child is not reaped before try_wait
+        // above or wait below, so the pid is still the child's.
+        unsafe { libc::kill(child.id() as libc::pid_t, signo) };
     }
     let t0 = Instant::now();
     while child.try_wait().unwrap().is_none() {
@@ -257,18 +277,22 @@ fn one_run(
         }
         std::thread::sleep(Duration::from_millis(5));
     }
-    let out = child.wait_with_output().unwrap();
+    let out = Output {
+        status: child.wait().unwrap(),
+        stdout: stdout.join().unwrap(),
+        stderr: stderr.join().unwrap(),
+    };
     let err = String::from_utf8_lossy(&out.stderr);
     let code = out.status.code();
-    let signo = if signal == "INT" { 2 } else { 15 };
     let killed = out.status.signal() == Some(signo);
     let ok_code = match code {
         Some(0) => true,
         Some(3) => case.fit,
-        // A fit's stop request exists from the start of its run: a signal during the
-        // process's start-up (argument parsing) ends it as any other command, with nothing
-        // written.
-        Some(130) => !case.fit || out.stdout.is_empty(),
+        // A fit's stop request exists from the start of its run to its end: a signal
+        // during the process's start-up (argument parsing) ends it as any other command,
+        // with nothing written, and so does one in the moment between the end of the run
+        // (every output written: checked complete below) and the process's exit.
+        Some(130) => !case.fit || out.stdout.is_empty() || files(dir).len() == reference.len(),
         _ => killed,
     };
     if !ok_code {
@@ -381,7 +405,11 @@ fn recover_ends_on_a_signal_with_130_and_no_summary() {
     // 600 scenes take minutes: SIGINT, SIGTERM or SIGHUP after 0.8 s ends the run within
     // the fits' next steps, with exit 130 (README), nothing on standard output (no summary
     // counting the scenes being fitted as errors) and the count of scenes fitted.
-    for signal in ["INT", "TERM", "HUP"] {
+    for (signal, signo) in [
+        ("INT", libc::SIGINT),
+        ("TERM", libc::SIGTERM),
+        ("HUP", libc::SIGHUP),
+    ] {
         let mut child = goniofit()
             .args(["recover", "--scenes", "600", "--seed", "11", "--json"])
             .stdout(Stdio::piped())
@@ -389,9 +417,8 @@ fn recover_ends_on_a_signal_with_130_and_no_summary() {
             .spawn()
             .unwrap();
         std::thread::sleep(Duration::from_millis(800));
-        let _ = Command::new("kill")
-            .args([format!("-{signal}"), child.id().to_string()])
-            .status();
+        // SAFETY: kill(2) on the child's pid, not yet reaped.
+        unsafe { libc::kill(child.id() as libc::pid_t, signo) };
         let t0 = Instant::now();
         while child.try_wait().unwrap().is_none() {
             assert!(t0.elapsed() < AFTER_SIGNAL, "SIG{signal}: still running");

@@ -306,7 +306,7 @@ def fit_frame(
     :func:`fit`.
 
     The result (indexed by the group labels, sorted as ``df.groupby(by)`` sorts them) has
-    columns ``model``, ``n``, ``converged``, ``termination``, ``verdict``, ``adequacy``
+    columns ``model``, ``samples``, ``converged``, ``termination``, ``verdict``, ``adequacy``
     (``adequate``, ``misfit``, ``noise`` or ``not_computed``), ``adequacy_reasons`` (the
     reason codes, comma-separated), ``cost``, ``reduced_chi2``, ``r2``, ``iterations`` and
     for every parameter and derived quantity ``NAME``, ``NAME_stderr`` (NaN when not

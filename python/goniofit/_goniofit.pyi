@@ -7,7 +7,19 @@ wavelength; cost = ½ Σ wᵢ rᵢ².
 """
 
 from os import PathLike
-from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, TypedDict, Union
+from typing import (
+    Any,
+    Dict,
+    List,
+    Literal,
+    Mapping,
+    Optional,
+    Sequence,
+    Tuple,
+    TypedDict,
+    Union,
+    overload,
+)
 
 import numpy as np
 import numpy.typing as npt
@@ -120,6 +132,15 @@ class FitResult:
         """The CLI's text report."""
     def to_dict(self) -> Dict[str, Any]:
         """The CLI's JSON report (``goniofit fit --json``), key for key."""
+    @overload
+    def figures(self, format: Literal["svg"] = "svg") -> Dict[str, str]: ...
+    @overload
+    def figures(self, format: Literal["png"]) -> Dict[str, bytes]: ...
+    @overload
+    def figures(self, format: Literal["matplotlib"]) -> Dict[str, Any]:
+        """The report's pictures by name (``fit_log``, ``fit_linear``, ``residuals_theta``,
+        ``residuals_phi``, ``polar``, ``contour``, ``hemisphere_1`` …): SVG documents,
+        PNG bytes, or matplotlib figures (needs matplotlib)."""
     def to_json(self) -> str: ...
     def _repr_html_(self) -> str: ...
 

@@ -29,14 +29,11 @@ Example::
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
 import goniofit
-
-#: The candidate models of ``model="auto"`` (as :func:`goniofit.fit` tries them).
-AUTO_MODELS = ("lambert", "lambert-specular", "kbs", "kbs+lambert")
 
 #: The derived quantities of a model with parameters ``sigma`` and ``T`` (KBS models).
 KBS_DERIVED = ("T/sigma", "beckmann_alpha", "amplitude")
@@ -113,23 +110,36 @@ def _quantities(fit_options: Dict[str, Any]) -> List[str]:
     order: each candidate model's parameters (and the Fresnel factor's), then the KBS
     derived quantities and, for a BRDF with a Lambertian term, its reflectance factor."""
     model = str(fit_options.get("model", "kbs")).lower()
-    candidates = AUTO_MODELS if model == "auto" else (model,)
+    fresnel = str(fit_options.get("fresnel", "none")).lower()
+    # Each candidate as (model, Fresnel factor): auto's own list names its factors.
+    if model == "auto":
+        candidates = [_model_and_fresnel(c) for c in goniofit.AUTO_CANDIDATES]
+    else:
+        candidates = [(model, fresnel)]
     models = goniofit.models()
     names: List[str] = []
     kbs = False
-    for m in candidates:
+    for m, factor in candidates:
         params = [p[0] for p in models.get(m, [])]
-        kbs |= "sigma" in params and "T" in params
+        if "sigma" in params and "T" in params:
+            kbs = True
+            if factor != "none":
+                params += ["n", "kappa"] if factor == "conductor" else ["n"]
         names += [p for p in params if p not in names]
-    fresnel = str(fit_options.get("fresnel", "none")).lower()
-    if kbs and fresnel != "none":
-        names += ["n", "kappa"] if fresnel == "conductor" else ["n"]
     derived = list(KBS_DERIVED) if kbs else []
     # A BRDF's Lambertian term is also reported as a reflectance factor (π times it).
-    lambertian = {"lambert", "lambert-specular", "kbs+lambert"} & set(candidates)
+    lambertian = {"lambert", "lambert-specular", "kbs+lambert"} & {m for m, _ in candidates}
     if lambertian and str(fit_options.get("quantity", "radiance")).lower() == "brdf":
         derived.append("reflectance_factor")
     return names + derived
+
+
+def _model_and_fresnel(candidate: str) -> Tuple[str, str]:
+    """``"kbs+lambert --fresnel dielectric --shadowing smith"`` → (``"kbs+lambert"``,
+    ``"dielectric"``); a candidate without the factor → (its name, ``"none"``)."""
+    words = candidate.split()
+    fresnel = words[words.index("--fresnel") + 1] if "--fresnel" in words[:-1] else "none"
+    return words[0], fresnel
 
 
 def _meta(ddf: Any, keys: List[str], fit_options: Dict[str, Any]) -> Any:
@@ -143,7 +153,7 @@ def _meta(ddf: Any, keys: List[str], fit_options: Dict[str, Any]) -> Any:
     one = {k: head[k].iloc[:0].tolist() for k in keys}
     cols: Dict[str, Any] = {
         "model": ["kbs"],
-        "n": np.zeros(1, dtype=np.uint64),
+        "samples": np.zeros(1, dtype=np.uint64),
         "converged": [True],
         "termination": ["converged"],
         "verdict": ["full"],

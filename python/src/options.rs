@@ -398,7 +398,7 @@ impl FitOptions {
                 init: self.init.clone(),
                 fix: self.fix.clone(),
                 lm,
-                weights_are_uncertainties: false,
+                weights_are_uncertainties: self.sigma_l.is_some(),
                 reduce: self.reduce,
             },
             absolute_sigma: self.absolute_sigma,

@@ -3,12 +3,16 @@
 //! `to_dict()` is the CLI's `--json` key for key; and the summary columns of many fits.
 
 use crate::convert::json_to_py;
+use crate::convert::to_py_err;
 use crate::options::FitOptions;
 use goniofit::fit::dataset::Outcome;
+use goniofit::fit::driver::FitConfig;
+use goniofit::plot;
 use goniofit::report::{self, RunInfo};
 use numpy::IntoPyArray;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
 use serde_json::Value;
 use std::sync::OnceLock;
 
@@ -25,6 +29,10 @@ pub struct FitResult {
     info: RunInfo,
     args: Vec<String>,
     json: OnceLock<Value>,
+    /// The settings the pictures need (the chosen model with its factors, residual kind,
+    /// floor), and the unit of λ they name.
+    config: FitConfig,
+    unit: Option<String>,
 }
 
 impl FitResult {
@@ -42,11 +50,23 @@ impl FitResult {
             intervals: outcome.intervals.clone(),
             interval_seconds: outcome.interval_seconds,
         };
+        let mut config = o.dataset_fit(true).config;
+        config.model = outcome.result.model.clone();
+        config.model_opts = config
+            .model_opts
+            .with_factors_of(&outcome.result.full_model())
+            .1;
+        let unit = match o.wavelength {
+            Some(_) => o.wavelength_unit.clone(),
+            None => outcome.dataset.wavelength_unit.clone(),
+        };
         FitResult {
             outcome,
             info,
             args,
             json: OnceLock::new(),
+            config,
+            unit,
         }
     }
 
@@ -54,6 +74,17 @@ impl FitResult {
     fn json(&self) -> &Value {
         self.json
             .get_or_init(|| report::outcome::to_json(&self.outcome, &self.info, &self.args))
+    }
+
+    /// The report's pictures as (name, SVG document).
+    fn svg_figures(&self) -> PyResult<Vec<(String, String)>> {
+        plot::fit::svg_of_outcome(
+            &self.config,
+            &self.outcome,
+            self.json(),
+            self.unit.as_deref(),
+        )
+        .map_err(to_py_err)
     }
 
     fn field<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
@@ -173,9 +204,62 @@ impl FitResult {
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
     }
 
-    /// The report as an HTML table for notebooks.
+    /// The report's pictures, by name (``fit_log``, ``fit_linear``, ``residuals_theta``,
+    /// ``residuals_phi``, ``polar``, ``contour``, ``hemisphere_1`` …) in the report's
+    /// order: SVG documents (``format="svg"``), PNG files' bytes (``"png"``), or
+    /// matplotlib figures (``"matplotlib"``, when matplotlib is installed). Empty when the
+    /// fit was stopped before its fitted values were evaluated.
+    #[pyo3(signature = (format = "svg"))]
+    fn figures<'py>(&self, py: Python<'py>, format: &str) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        match format {
+            "svg" => {
+                for (name, svg) in self.svg_figures()? {
+                    out.set_item(name, svg)?;
+                }
+            }
+            "png" | "matplotlib" => {
+                let pngs = py.detach(|| {
+                    plot::fit::png_of_outcome(
+                        &self.config,
+                        &self.outcome,
+                        self.json(),
+                        self.unit.as_deref(),
+                    )
+                });
+                for (name, png) in pngs.map_err(to_py_err)? {
+                    out.set_item(name, PyBytes::new(py, &png))?;
+                }
+                if format == "matplotlib" {
+                    return py
+                        .import("goniofit._figures")?
+                        .call_method1("to_matplotlib", (out,))?
+                        .cast_into::<PyDict>()
+                        .map_err(PyErr::from);
+                }
+            }
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "format={other:?}: give \"svg\", \"png\" or \"matplotlib\""
+                )))
+            }
+        }
+        Ok(out)
+    }
+
+    /// The report as HTML for notebooks: status, the model comparison of ``auto``, the
+    /// tables, and the fit on a log scale.
     fn _repr_html_(&self) -> String {
-        report::html::fragment(&self.outcome.result, &self.info)
+        let key = self
+            .svg_figures()
+            .ok()
+            .and_then(|f| f.into_iter().find(|(name, _)| name == "fit_log"));
+        report::html::fragment(
+            &self.outcome.result,
+            &self.info,
+            &report::outcome::comparison(&self.outcome),
+            key.as_ref().map(|(_, svg)| svg.as_str()),
+        )
     }
 
     fn __repr__(&self) -> String {
@@ -191,7 +275,7 @@ impl FitResult {
     }
 }
 
-/// One entry per outcome for `fit_frame`: `model`, `n`, `converged`, `termination`,
+/// One entry per outcome for `fit_frame`: `model`, `samples`, `converged`, `termination`,
 /// `verdict`, `adequacy`, `adequacy_reasons`, `cost`, `reduced_chi2`, `r2`, `iterations`,
 /// then per parameter and derived
 /// quantity `NAME`, `NAME_stderr` (NaN when undetermined or fixed) and `NAME_determined`;
@@ -203,8 +287,9 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
     }
     let text = |f: &dyn Fn(&Outcome) -> String| outcomes.iter().map(f).collect::<Vec<String>>();
     out.set_item("model", text(&|o| r(o).full_model()))?;
+    // The sample count as `samples`: `n` is the Fresnel factor's index where a fit has one.
     out.set_item(
-        "n",
+        "samples",
         outcomes
             .iter()
             .map(|o| r(o).n as u64)

@@ -62,6 +62,13 @@ def test_a_fit_of_a_synthetic_dielectric_file_recovers_n(cli, tmp_path):
     import json
     assert code == 0
     assert json.loads(out)["params"]["n"]["value"] == pytest.approx(n["value"], rel=1e-6)
+    # fit_frame's columns keep the index `n` apart from the sample count `samples`.
+    import pandas as pd
+    df = pd.DataFrame({k: d[k] for k in ("theta_i", "theta_r", "phi_r", "L", "sigma_L")})
+    row = goniofit.fit_frame(df.assign(g=0), by="g", model="kbs", wavelength=1.0,
+                             fresnel="dielectric", shadowing="smith", intervals=False).iloc[0]
+    assert row["samples"] == len(df) == r.n
+    assert row["n"] == pytest.approx(n["value"], rel=1e-12)
 
 
 def test_an_unknown_factor_is_a_value_error():

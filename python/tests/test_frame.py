@@ -21,7 +21,7 @@ def test_fit_frame_matches_cli_by_group(cli_json, tmp_path):
         assert c["input"].endswith(f"[{k}]")
         assert row["cost"] == c["cost"]
         assert row["converged"] == c["converged"] and row["verdict"] == c["verdict"]
-        assert row["termination"] == c["termination"] and row["n"] == c["n"] == 72
+        assert row["termination"] == c["termination"] and row["samples"] == c["n"] == 72
         assert row["adequacy"] == c["adequacy"]["verdict"]
         assert row["adequacy_reasons"] == ",".join(x["code"] for x in c["adequacy"]["reasons"])
         for name, p in {**c["params"], **c["derived"]}.items():
@@ -42,6 +42,6 @@ def test_fit_frame_columns_and_group_labels():
     one = goniofit.fit(sub["theta_i"], sub["theta_r"], sub["phi_r"], sub["brdf"], wavelength=1.0)
     assert table.loc["b", "cost"] == one.cost
     assert table.loc["b", "sigma"] == one.params["sigma"]["value"]
-    assert {"model", "n", "converged", "termination", "verdict", "adequacy", "adequacy_reasons",
+    assert {"model", "samples", "converged", "termination", "verdict", "adequacy", "adequacy_reasons",
             "cost", "reduced_chi2", "r2",
             "iterations", "sigma", "sigma_stderr", "sigma_determined", "T/sigma"} <= set(table.columns)

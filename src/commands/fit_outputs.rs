@@ -3,10 +3,10 @@
 //! page with every fit, one folder per fit).
 
 use super::fit::{fit_config, wavelength_unit, FitArgs};
-use super::plot::{plot_fit, plot_status, svg_of_fit, undetermined_params};
 use goniofit::fit::dataset::Outcome;
 use goniofit::fit::driver::{FitConfig, FitResult};
 use goniofit::io::{self, Dataset};
+use goniofit::plot::fit::{plot_fit, plot_status, svg_of_outcome, undetermined_params};
 use goniofit::report::{self, RunInfo};
 use std::path::{Path, PathBuf};
 
@@ -207,18 +207,10 @@ fn svg_pictures(
     o: &Outcome,
     info: &RunInfo,
 ) -> anyhow::Result<Vec<(String, String)>> {
-    if !o.result.fitted_computed {
-        return Ok(Vec::new());
-    }
     let config = outcome_config(args, o)?;
     let json = report::json::to_json(&o.result, info);
-    svg_of_fit(
-        &config,
-        &o.input,
-        (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
-        (&plot_status(&json), &undetermined_params(&json)),
-        wavelength_unit(args, &o.dataset).as_deref(),
-    )
+    let unit = wavelength_unit(args, &o.dataset);
+    Ok(svg_of_outcome(&config, o, &json, unit.as_deref())?)
 }
 
 /// The fit configuration of an outcome's chosen model, with its factors (an `auto`
@@ -239,14 +231,14 @@ fn draw_pictures(
 ) -> anyhow::Result<Vec<PathBuf>> {
     let config = outcome_config(args, o)?;
     let json = report::json::to_json(&o.result, info);
-    plot_fit(
+    Ok(plot_fit(
         dir,
         &config,
         &o.input,
         (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
         (&plot_status(&json), &undetermined_params(&json)),
         wavelength_unit(args, &o.dataset).as_deref(),
-    )
+    )?)
 }
 
 /// Write the input rows with L_fit, residual, std_residual and mode (atomically).

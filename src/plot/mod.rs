@@ -133,6 +133,8 @@ pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
 /// Render `pic` to a PNG file's bytes in memory.
 pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     use image::ImageEncoder;
+    // The size of a picture with a legend depends on the font's text widths.
+    ensure_font()?;
     let (w, h) = pic.size();
     let rgb = rgb_buffer(pic)?;
     let mut out = Vec::new();

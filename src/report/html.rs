@@ -182,10 +182,17 @@ pub fn body(
 }
 
 /// The report as an HTML fragment for a notebook's rich display (the Python package's
-/// `FitResult._repr_html_`): the page's status line, statistics, parameter and derived
-/// tables with their intervals, verdict and notes, and the setting folded away; no
-/// document head, pictures or command line. The style is scoped to the fragment.
-pub fn fragment(r: &FitResult, info: &RunInfo) -> String {
+/// `FitResult._repr_html_`): the page's status line, the model comparison of `auto`
+/// (`comparison`, nothing for one model), statistics, parameter and derived tables with
+/// their intervals, verdict and notes, the key picture (`picture`: an SVG document, e.g.
+/// the fit on a log scale) and the setting folded away; no page styles leak out (its
+/// rules are scoped to the fragment).
+pub fn fragment(
+    r: &FitResult,
+    info: &RunInfo,
+    comparison: &[super::outcome::Candidate],
+    picture: Option<&str>,
+) -> String {
     let scoped = STYLE
         .split('}')
         .filter(|rule| !rule.is_empty() && !rule.starts_with("body"))
@@ -199,7 +206,11 @@ pub fn fragment(r: &FitResult, info: &RunInfo) -> String {
         escape(&info.input)
     );
     status(&mut s, r);
+    comparison_table(&mut s, comparison);
     results(&mut s, r, info);
+    if let Some(svg) = picture {
+        let _ = writeln!(s, "<figure>{}</figure>", inline_svg(svg));
+    }
     s.push_str("<details><summary>Setting</summary>\n");
     setting_table(&mut s, info);
     s.push_str("</details></div>\n");

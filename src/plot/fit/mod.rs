@@ -11,9 +11,14 @@
 //! curve: they are not along one line).
 
 mod charts;
+mod of_fit;
 mod polar;
 
 pub use charts::{fit_chart, group_styles, linear_top, residual_chart, GroupStyles};
+pub use of_fit::{
+    plot_fit, plot_status, png_of_outcome, svg_of_fit, svg_of_outcome, undetermined_params,
+    with_plot_input, FitToDraw,
+};
 pub use polar::{polar_plot, PolarPlot, POLAR_RIM};
 
 use super::contour::{linspace, Grid};
@@ -411,6 +416,14 @@ pub fn svg_pictures(input: &FitPlotInput) -> Result<Vec<(String, String)>> {
     fit_pictures(input)?
         .into_iter()
         .map(|(name, p)| Ok((name, super::svg_string(&p)?)))
+        .collect()
+}
+
+/// The pictures of [`fit_pictures`] rendered in memory as PNG files' bytes: (name, PNG).
+pub fn png_pictures(input: &FitPlotInput) -> Result<Vec<(String, Vec<u8>)>> {
+    fit_pictures(input)?
+        .into_iter()
+        .map(|(name, p)| Ok((name, super::png_bytes(&p)?)))
         .collect()
 }
 
