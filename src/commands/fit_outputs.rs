@@ -135,7 +135,8 @@ pub fn fit_folder(k: usize, n: usize, label: &str) -> String {
 
 /// The small-multiples overview of a batch: T/σ and each free model parameter against the
 /// wavelength (when every fit has one wavelength and they differ) or against the fit's
-/// row in the summary table; returns what x is and the charts as (title, SVG).
+/// row in the summary table, for the fits that converged; returns what x is and the charts
+/// as (title, SVG).
 fn overview(
     outcomes: &[Outcome],
     infos: &[RunInfo],
@@ -177,8 +178,13 @@ fn overview(
             points: vec![(x, v, det)],
         }),
     };
+    // A fit that did not converge has no usable values (a degenerate one's can be far off
+    // any scale): it is left out, as the page's caption says.
     for ((o, info), &x) in outcomes.iter().zip(infos).zip(&xs) {
         let r = &o.result;
+        if !r.converged() {
+            continue;
+        }
         if let Some(d) = r.derived.iter().find(|d| d.name == "T/sigma") {
             add("T/σ", String::new(), x, d.value, d.determined);
         }

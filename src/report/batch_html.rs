@@ -98,48 +98,54 @@ fn td(t: &str, v: Option<f64>, class: &str) -> String {
     format!("<td{class}{data}>{}</td>", escape(t))
 }
 
-/// The summary table: one row per fit, its first cell linking to the fit's section.
+/// The summary table: one row per fit, its first cell linking to the fit's section; the
+/// σ, T and T/σ columns when some fit has them (a KBS model).
 fn summary_table(s: &mut String, rows: &[Row]) {
     let unit = rows
         .first()
         .map_or(String::new(), |r| r.length_unit.clone());
+    let kbs = rows
+        .iter()
+        .any(|r| r.sigma.is_some() || r.t.is_some() || r.ratio.is_some());
     s.push_str("<h2>Summary</h2>\n<p>Click a column's header to sort by it. Values in parentheses are not determined by the data.</p>\n<table id=\"summary\" class=\"sortable\">\n<thead><tr>");
-    for h in [
-        "#".to_string(),
-        "fit".into(),
-        "n".into(),
-        "converged".into(),
-        "termination".into(),
-        "adequacy".into(),
-        "cost".into(),
-        "R²".into(),
-        format!("σ ({unit})"),
-        format!("T ({unit})"),
-        "T/σ".into(),
-        "verdict".into(),
-    ] {
-        let _ = write!(s, "<th>{}</th>", escape(&h));
+    let mut headers: Vec<String> = ["#", "fit", "n", "converged", "termination", "adequacy"]
+        .into_iter()
+        .chain(["cost", "R²"])
+        .map(String::from)
+        .collect();
+    if kbs {
+        headers.extend([format!("σ ({unit})"), format!("T ({unit})"), "T/σ".into()]);
+    }
+    headers.push("verdict".into());
+    for h in &headers {
+        let _ = write!(s, "<th>{}</th>", escape(h));
     }
     s.push_str("</tr></thead>\n<tbody>\n");
     for (k, r) in rows.iter().enumerate() {
         let yes = |b: bool| if b { "yes" } else { "no" };
-        let _ = writeln!(
-            s,
-            "<tr>{}<td><a href=\"#fit-{}\">{}</a></td>{}{}{}{}{}{}{}{}{}{}</tr>",
+        let mut cells = vec![
             td(&(k + 1).to_string(), Some((k + 1) as f64), "num"),
-            k + 1,
-            escape(&r.group),
+            format!(
+                "<td><a href=\"#fit-{}\">{}</a></td>",
+                k + 1,
+                escape(&r.group)
+            ),
             td(&r.n.to_string(), Some(r.n as f64), "num"),
             td(yes(r.converged), None, yes(r.converged)),
             td(&r.termination, None, ""),
             td(&adequacy_cell(r), None, yes(!r.adequacy.flagged())),
             td(&format!("{:.5e}", r.cost), Some(r.cost), "num"),
             td(&super::text::fixed(r.r2, 6), Some(r.r2), "num"),
-            td(&cell(r.sigma), r.sigma.map(|v| v.0), "num"),
-            td(&cell(r.t), r.t.map(|v| v.0), "num"),
-            td(&cell(r.ratio), r.ratio.map(|v| v.0), "num"),
-            td(verdict_word(r.verdict), None, ""),
-        );
+        ];
+        if kbs {
+            cells.extend([
+                td(&cell(r.sigma), r.sigma.map(|v| v.0), "num"),
+                td(&cell(r.t), r.t.map(|v| v.0), "num"),
+                td(&cell(r.ratio), r.ratio.map(|v| v.0), "num"),
+            ]);
+        }
+        cells.push(td(verdict_word(r.verdict), None, ""));
+        let _ = writeln!(s, "<tr>{}</tr>", cells.concat());
     }
     s.push_str("</tbody></table>\n");
 }
@@ -151,7 +157,7 @@ fn overview(s: &mut String, b: &Batch) {
     }
     let _ = writeln!(
         s,
-        "<h2>Overview</h2>\n<p>Each quantity against {}; open circles: not determined by the data.</p>\n<div class=\"grid\" id=\"overview\">",
+        "<h2>Overview</h2>\n<p>Each quantity against {}; open circles: not determined by the data; fits that did not converge are not drawn.</p>\n<div class=\"grid\" id=\"overview\">",
         escape(&b.overview_x)
     );
     // The chart's own title names the quantity: no caption.
