@@ -351,7 +351,7 @@ fn fit_candidates<'c>(
         config.lm.stop = Some(stop.clone());
         let fitted = match seed_of(&results, &config) {
             Some(seed) => fit_seeded(input, &config, seed),
-            None => driver::fit(input, &config),
+            None => fit_with_factors(input, &config),
         };
         match fitted {
             Err(Error::Stopped(_)) if !results.is_empty() => not_fitted.push(m.as_str()),
@@ -369,6 +369,29 @@ fn seed_of<'r>(done: &'r [FitResult], config: &FitConfig) -> Option<&'r FitResul
     }
     done.iter()
         .find(|r| r.factors.is_empty() && r.model == config.model && r.converged())
+}
+
+/// A fit of `config`'s model; for a KBS lobe with factors and no plain fit of it at hand,
+/// the plain model (the factors and their parameters' `--init`/`--fix` left out) is fitted
+/// first and seeds the second start of [`fit_seeded`]. Without a converged plain fit (or
+/// once a stop is requested) the model's own fit alone.
+fn fit_with_factors(input: &FitInput, config: &FitConfig) -> Result<FitResult> {
+    if !(config.model_opts.has_factors() && config.model.starts_with("kbs")) {
+        return driver::fit(input, config);
+    }
+    let mut plain = config.clone();
+    plain.model_opts.fresnel = crate::model::fresnel::Fresnel::None;
+    plain.model_opts.shadowing = crate::model::shadowing::Shadowing::None;
+    let factor_param = |(k, _): &(String, f64)| k == "n" || k == "kappa";
+    plain.init.retain(|p| !factor_param(p));
+    plain.fix.retain(|p| !factor_param(p));
+    plain.lm.progress = false;
+    match driver::fit(input, &plain) {
+        Ok(seed) if seed.converged() && !config.lm.stop.as_ref().is_some_and(Stop::is_requested) => {
+            fit_seeded(input, config, &seed)
+        }
+        _ => driver::fit(input, config),
+    }
 }
 
 /// A candidate with factors fitted twice: from its own start search, and from the plain
