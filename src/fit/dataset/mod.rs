@@ -387,7 +387,9 @@ fn fit_with_factors(input: &FitInput, config: &FitConfig) -> Result<FitResult> {
     plain.fix.retain(|p| !factor_param(p));
     plain.lm.progress = false;
     match driver::fit(input, &plain) {
-        Ok(seed) if seed.converged() && !config.lm.stop.as_ref().is_some_and(Stop::is_requested) => {
+        Ok(seed)
+            if seed.converged() && !config.lm.stop.as_ref().is_some_and(Stop::is_requested) =>
+        {
             fit_seeded(input, config, &seed)
         }
         _ => driver::fit(input, config),
