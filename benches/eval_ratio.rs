@@ -8,10 +8,18 @@
 //! `cargo bench --bench eval_ratio` prints, per geometry and regime, the median time per
 //! sample of each mode and the median and quartiles of the per-pair ratio, for values and
 //! with the Jacobian. The target is auto/rough ≤ 4 in every regime.
+//!
+//! `cargo bench --bench eval_ratio -- factors` times the lobe with its Fresnel and
+//! shadowing factors against the plain lobe the same way (`auto` mode, hemisphere set, in
+//! pairs: plain, then with the factors; n = 1.5, κ = 2): the target is extended/plain ≤ 1.5
+//! in every regime, for values and with the Jacobian.
 
 mod common;
 
 use common::{geometry, sigma_for, N};
+use goniofit::geometry::Geometry;
+use goniofit::model::fresnel::Fresnel;
+use goniofit::model::shadowing::Shadowing;
 use goniofit::model::{kbs::Kbs, EvalMode, Model, ModelOptions};
 use std::time::Instant;
 
@@ -23,9 +31,75 @@ fn quartiles(mut v: Vec<f64>) -> [f64; 3] {
     [q(0.25), q(0.5), q(0.75)]
 }
 
+/// Median time per sample (ns) of `a` and `b` at their parameters on `geo`, each pair timed
+/// back to back, and the quartiles of the per-pair ratio b/a.
+fn pairs(geo: &Geometry, a: (&Kbs, &[f64]), b: (&Kbs, &[f64]), jac: bool) -> (f64, f64, [f64; 3]) {
+    let mut out = vec![0.0; N];
+    let mut j = vec![0.0; 5 * N];
+    let mut time = |(m, p): (&Kbs, &[f64])| {
+        let t = Instant::now();
+        let cols = &mut j[..p.len() * N];
+        m.radiance(geo, p, &mut out, jac.then_some(cols));
+        t.elapsed().as_secs_f64() * 1e9 / N as f64
+    };
+    for _ in 0..5 {
+        time(a);
+        time(b);
+    }
+    let (mut ta, mut tb, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..PAIRS {
+        let x = time(a);
+        let y = time(b);
+        ta.push(x);
+        tb.push(y);
+        ratio.push(y / x);
+    }
+    (quartiles(ta)[1], quartiles(tb)[1], quartiles(ratio))
+}
+
+/// The factors' cost: plain against dielectric + Smith and conductor + correlated Smith.
+fn factors() {
+    let model = |fresnel, shadowing| {
+        Kbs::new(ModelOptions {
+            fresnel,
+            shadowing,
+            ..Default::default()
+        })
+        .unwrap()
+    };
+    let plain = model(Fresnel::None, Shadowing::None);
+    let geo = geometry(false, 7);
+    println!("factors                     g     jac   plain ns  ext ns   ratio: q1  median  q3");
+    for (name, fresnel, shadowing) in [
+        ("dielectric+smith", Fresnel::Dielectric, Shadowing::Smith),
+        (
+            "conductor+smith-correlated",
+            Fresnel::Conductor,
+            Shadowing::SmithCorrelated,
+        ),
+    ] {
+        let ext = model(fresnel, shadowing);
+        for g in [0.01, 1.0, 100.0, 1e4] {
+            let sigma = sigma_for(g);
+            let p = [sigma, 5.0 * sigma, 1.0, 1.5, 2.0];
+            let pe = &p[..3 + fresnel.param_count()];
+            for jac in [false, true] {
+                let (a, b, [q1, med, q3]) = pairs(&geo, (&plain, &p[..3]), (&ext, pe), jac);
+                println!(
+                    "{name:<27} {g:<6} {:<5} {a:>8.1} {b:>7.1}   {q1:>9.2} {med:>7.2} {q3:>5.2}",
+                    if jac { "yes" } else { "no" },
+                );
+            }
+        }
+    }
+}
+
 fn main() {
     if std::env::args().any(|a| a == "--list") {
         return; // `cargo bench -- --list` asks the harness for its benchmarks
+    }
+    if std::env::args().any(|a| a == "factors") {
+        return factors();
     }
     let model = |mode| {
         Kbs::new(ModelOptions {
