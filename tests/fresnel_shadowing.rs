@@ -3,7 +3,9 @@
 //! Snell/r_s/r_p and erf forms, derivatives by high-precision numerical differentiation),
 //! closed forms, and central differences.
 //!
-//! Smith's G is also compared with NIST SCATMECH's shadowed facet model
+//! The lobe with its factors is checked as the product of the plain lobe and the factors,
+//! values and every Jacobian column, at θ up to 89.9°. Smith's G is also compared with
+//! NIST SCATMECH's shadowed facet model
 //! (`tests/ref/scatmech_shadowing.py` and its output).
 //!
 //! Claims checked (module docs of `src/model/fresnel.rs` and `src/model/shadowing.rs`):
@@ -264,4 +266,107 @@ fn smith_derivatives_match_central_differences_over_the_domain() {
             }
         }
     }
+}
+
+/// The lobe with its factors at extreme angles (θi, θr up to 89.9°, in and out of the
+/// plane), n from 1.01 to 4, κ up to 10: its value is the plain lobe times F(θ_loc) and G
+/// (each held to the references above), and every Jacobian column is the product rule's
+/// from the plain lobe's columns and the factors' derivatives, to 1e-12 relative of the
+/// column's terms. Series mode (the plain lobe's own accuracy is tests/kbs_reference.rs').
+#[test]
+fn the_lobe_with_factors_is_the_product_at_extreme_angles() {
+    use goniofit::geometry::{Geometry, Quantity, Sample};
+    use goniofit::model::fresnel::cos_local;
+    use goniofit::model::{by_name, EvalMode, ModelOptions};
+    let lobe = |fresnel, shadowing| {
+        let opts = ModelOptions {
+            mode: EvalMode::Series,
+            fresnel,
+            shadowing,
+            ..ModelOptions::default()
+        };
+        by_name("kbs", &opts).unwrap()
+    };
+    let plain = lobe(Fresnel::None, Shadowing::None);
+    let close = |got: f64, want: f64, scale: f64| (got - want).abs() <= 1e-12 * scale.abs();
+    let mut checked = 0;
+    for (ti, tr, pr) in [
+        (89.9, 89.9, 0.0),
+        (89.9, 60.0, 0.0),
+        (0.0, 89.9, 90.0),
+        (85.0, 89.5, 180.0),
+        (89.5, 30.0, 45.0),
+        (70.0, 70.0, 0.0),
+    ] {
+        let geo = Geometry::new(
+            &[Sample::from_degrees(ti, tr, pr)],
+            &[1.0],
+            Quantity::Radiance,
+        )
+        .unwrap();
+        let cot = |t: f64| 1.0 / t.to_radians().tan();
+        for (sigma, t_over_sigma) in [(0.05, 2.0), (0.3, 20.0), (2.0, 5.0)] {
+            let p0 = [sigma, sigma * t_over_sigma, 1.0];
+            let (mut l0, mut j0) = ([0.0], [0.0; 3]);
+            plain.radiance(&geo, &p0, &mut l0, Some(&mut j0));
+            assert!(
+                l0[0] > 0.0,
+                "θi {ti}, θr {tr}, σ {sigma}: L = 0 would check nothing"
+            );
+            for (fresnel, fp) in [
+                (Fresnel::Dielectric, [1.01, 0.0]),
+                (Fresnel::Dielectric, [4.0, 0.0]),
+                (Fresnel::Conductor, [0.2, 10.0]),
+                (Fresnel::Conductor, [1.5, 3.0]),
+            ] {
+                let m = lobe(fresnel, Shadowing::Smith);
+                let p: Vec<f64> = p0
+                    .iter()
+                    .chain(&fp[..fresnel.param_count()])
+                    .copied()
+                    .collect();
+                let (mut l, mut j) = ([0.0], vec![0.0; p.len()]);
+                m.radiance(&geo, &p, &mut l, Some(&mut j));
+                let f = fresnel.eval(cos_local(geo.h[0]), &fp);
+                let g = Shadowing::Smith.eval(cot(ti), cot(tr), t_over_sigma);
+                let what = format!("θi {ti}, θr {tr}, φr {pr}, σ {sigma}, {fresnel:?} {fp:?}");
+                assert!(
+                    close(l[0], l0[0] * f.f * g.g, l[0]),
+                    "{what}: L {} vs {}",
+                    l[0],
+                    l0[0]
+                );
+                // ∂ln G/∂ln T = −∂ln G/∂ln σ.
+                let dg_t = l[0] * g.d_ln_t / p[1];
+                let dg_s = -l[0] * g.d_ln_t / p[0];
+                let fg = f.f * g.g;
+                let scale = |a: f64, b: f64| a.abs() + b.abs() + f64::MIN_POSITIVE;
+                assert!(
+                    close(j[0], j0[0] * fg + dg_s, scale(j0[0] * fg, dg_s)),
+                    "{what}: ∂σ"
+                );
+                assert!(
+                    close(j[1], j0[1] * fg + dg_t, scale(j0[1] * fg, dg_t)),
+                    "{what}: ∂T"
+                );
+                assert!(close(j[2], j0[2] * fg, j[2]), "{what}: ∂s");
+                let d_n = l0[0] * g.g * f.d_n;
+                assert!(
+                    close(j[3], d_n, scale(d_n, 0.0)),
+                    "{what}: ∂n {} vs {d_n}",
+                    j[3]
+                );
+                if fresnel == Fresnel::Conductor {
+                    let d_k = l0[0] * g.g * f.d_kappa;
+                    assert!(
+                        close(j[4], d_k, scale(d_k, 0.0)),
+                        "{what}: ∂κ {} vs {d_k}",
+                        j[4]
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 72);
 }
