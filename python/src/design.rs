@@ -5,7 +5,6 @@
 use crate::convert::{json_to_py, to_py_err};
 use crate::{options, run};
 use goniofit::design::{self, candidates::Grid, simulate, NoiseModel, Request, Scene};
-use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Sample;
 use goniofit::model;
 use goniofit::report::design::{json, Run};
@@ -47,17 +46,6 @@ fn angles(what: &str, a: &AngleArrays<'_>) -> PyResult<Vec<AnglesDeg>> {
         .collect()
 }
 
-fn residual(name: &str) -> PyResult<ResidualKind> {
-    match name.to_ascii_lowercase().as_str() {
-        "absolute" => Ok(ResidualKind::Absolute),
-        "relative" => Ok(ResidualKind::Relative),
-        "log" => Ok(ResidualKind::Log),
-        _ => Err(PyValueError::new_err(format!(
-            "residual '{name}': expected 'absolute', 'relative' or 'log'"
-        ))),
-    }
-}
-
 /// The engine of ``goniofit.design``: returns the JSON report as a dict with the
 /// candidates added as arrays (``theta_i``, ``theta_r``, ``phi_r``, ``value``, ``gain``,
 /// ``reachable``, ``chosen``).
@@ -91,7 +79,7 @@ pub fn _design<'py>(
         params: options::param_vector(m.as_ref(), params)?,
         wavelength,
         quantity: options::quantity(quantity)?,
-        noise: NoiseModel::new(self::residual(residual)?, noise).map_err(to_py_err)?,
+        noise: NoiseModel::new(options::residual(residual)?, noise).map_err(to_py_err)?,
         unit,
     };
     let existing: Vec<Sample> = match &existing {

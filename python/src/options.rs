@@ -187,7 +187,7 @@ fn loss(name: &str) -> PyResult<LossKind> {
 }
 
 /// `absolute`, `relative` or `log`.
-fn residual(name: &str) -> PyResult<ResidualKind> {
+pub(crate) fn residual(name: &str) -> PyResult<ResidualKind> {
     match name.to_ascii_lowercase().as_str() {
         "absolute" => Ok(ResidualKind::Absolute),
         "relative" => Ok(ResidualKind::Relative),

@@ -68,6 +68,22 @@ pub enum Verdict {
 }
 
 impl Verdict {
+    /// The verdict in the report's words ("rough regime: only T/sigma and the amplitude
+    /// are determined").
+    pub fn describe(self) -> &'static str {
+        match self {
+            Verdict::Full => "every free parameter is determined",
+            Verdict::Rough => "rough regime: only T/sigma and the amplitude are determined",
+            Verdict::Smooth => {
+                "smooth regime: only T and the amplitude s*sigma^2 are determined"
+            }
+            Verdict::Partial => "some parameter combinations are not determined",
+            Verdict::NotComputed => {
+                "not computed: the fit was stopped before the Jacobian at its best point was evaluated"
+            }
+        }
+    }
+
     /// Lower-case name, as in JSON (`full`, `rough`, `smooth`, `partial`, `not_computed`).
     pub fn name(self) -> &'static str {
         match self {

@@ -8,7 +8,7 @@
 //! over φr.
 
 use super::legend::{draw_color_key, ColorKey, COLORBAR_H};
-use super::{font, DrawError, Picture};
+use super::{font, wrap, DrawError, Picture};
 use crate::design::{target_label, Design, Scene};
 use crate::error::Result;
 use plotters::coord::types::RangedCoordf64;
@@ -136,26 +136,6 @@ fn se_words(r: Option<f64>) -> String {
         Some(_) => "> ±100 %".into(),
         None => "not determined".into(),
     }
-}
-
-/// `text` in lines of at most `width` characters, broken at spaces (a longer word keeps
-/// its own line).
-pub fn wrap(text: &str, width: usize) -> Vec<String> {
-    let mut lines: Vec<String> = Vec::new();
-    let mut line = String::new();
-    for word in text.split(' ') {
-        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > width {
-            lines.push(std::mem::take(&mut line));
-        }
-        if !line.is_empty() {
-            line.push(' ');
-        }
-        line.push_str(word);
-    }
-    if !line.is_empty() {
-        lines.push(line);
-    }
-    lines
 }
 
 const OUT_OF_REACH: RGBColor = RGBColor(215, 215, 215);

@@ -282,6 +282,26 @@ pub fn model_title(model: &dyn crate::model::Model, params: &[f64]) -> String {
     format!("{}: {}", model.name(), ps.join(", "))
 }
 
+/// `text` in lines of at most `width` characters, broken at white space (a longer word
+/// keeps its own line).
+pub fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > width {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

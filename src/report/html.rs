@@ -3,7 +3,7 @@
 //! derived quantities and identifiability; the pictures inline as SVG (their bitmaps are
 //! already embedded as base64 PNG); the command that reproduces the fit; the text report.
 
-use super::text::{interval_text, verdict_text};
+use super::text::interval_text;
 use super::RunInfo;
 use crate::fit::driver::{FitResult, Verdict};
 use crate::fit::profile::LEVELS;
@@ -337,7 +337,7 @@ fn results(s: &mut String, r: &FitResult, info: &RunInfo) {
     let _ = writeln!(
         s,
         "<p id=\"verdict\">{}</p>\n<ul>",
-        escape(verdict_text(r.verdict))
+        escape(r.verdict.describe())
     );
     for n in &r.notes {
         let _ = writeln!(s, "<li>{}</li>", escape(n));

@@ -3,6 +3,7 @@
 use super::setting::{Setting, Units};
 use super::RunInfo;
 use crate::fit::driver::{FitResult, Verdict};
+use crate::plot::wrap;
 use std::fmt::Write;
 
 /// Correlation matrices with more rows than this are summarised by their largest pairs.
@@ -77,19 +78,6 @@ pub fn fixed(v: f64, digits: usize) -> String {
         s[1..].to_string()
     } else {
         s
-    }
-}
-
-/// One line of text for what the verdict means.
-pub fn verdict_text(v: Verdict) -> &'static str {
-    match v {
-        Verdict::Full => "every free parameter is determined",
-        Verdict::Rough => "rough regime: only T/sigma and the amplitude are determined",
-        Verdict::Smooth => "smooth regime: only T and the amplitude s*sigma^2 are determined",
-        Verdict::Partial => "some parameter combinations are not determined",
-        Verdict::NotComputed => {
-            "not computed: the fit was stopped before the Jacobian at its best point was evaluated"
-        }
     }
 }
 
@@ -447,7 +435,7 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     variable_lines(&mut s, r, &info.setting.units);
     interval_lines(&mut s, r, info);
     let _ = writeln!(s, "[[Identifiability]]");
-    let _ = writeln!(s, "    verdict         = {}", verdict_text(r.verdict));
+    let _ = writeln!(s, "    verdict         = {}", r.verdict.describe());
     let sv: Vec<String> = r.singular_values.iter().map(|v| sci(*v)).collect();
     let sv = if sv.len() > FULL_MATRIX_MAX {
         format!(
@@ -488,26 +476,6 @@ fn adequacy_lines(s: &mut String, r: &FitResult) {
             let _ = writeln!(s, "                      {lead}{line}");
         }
     }
-}
-
-/// `text` broken at spaces into lines of at most `width` characters (a longer word stands
-/// on its own line).
-pub fn wrap(text: &str, width: usize) -> Vec<String> {
-    let mut lines = Vec::new();
-    let mut line = String::new();
-    for word in text.split_whitespace() {
-        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > width {
-            lines.push(std::mem::take(&mut line));
-        }
-        if !line.is_empty() {
-            line.push(' ');
-        }
-        line.push_str(word);
-    }
-    if !line.is_empty() {
-        lines.push(line);
-    }
-    lines
 }
 
 fn validity_lines(s: &mut String, r: &FitResult) {

@@ -44,7 +44,7 @@ pub fn plot_status(json: &serde_json::Value) -> String {
     // as the glyph the pictures can show).
     let verdict = json["verdict"].as_str().and_then(Verdict::from_name);
     if let Some(v) = verdict.filter(|v| *v != Verdict::Full) {
-        parts.push(crate::report::text::verdict_text(v).replace("sigma", "σ"));
+        parts.push(v.describe().replace("sigma", "σ"));
     }
     if !undetermined.is_empty() {
         parts.push(format!("not determined: {}", undetermined.join(", ")));
