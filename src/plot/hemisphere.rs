@@ -475,10 +475,10 @@ fn draw_disc_grid<DB: Canvas>(
     let grey = RGBColor(90, 90, 90);
     let style = |h, v| font(12.0).color(&grey).pos(Pos::new(h, v));
     let at = |x: f64, y: f64| (x.round() as i32, y.round() as i32);
-    // θr labels outside each ring, along the lower-left diagonal; φr labels outside the
-    // disc.
-    let d = (-0.75 * PI).sin_cos();
-    for deg in [30.0, 60.0, 90.0] {
+    // θr labels outside each ring, 30° and 60° along the lower-left diagonal, 90° (the
+    // outline, too close to 60° there) further down; φr labels outside the disc.
+    for (deg, angle) in [(30.0, -0.75 * PI), (60.0, -0.75 * PI), (90.0, -0.62 * PI)] {
+        let d = f64::sin_cos(angle);
         let r = DISC_R * f64::to_radians(deg).sin() + 3.0;
         let (x, y) = (c.0 + r * d.1, c.1 - r * d.0);
         area.draw_text(
