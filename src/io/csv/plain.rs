@@ -4,15 +4,15 @@
 //! dataset keeps it).
 //!
 //! Any text this reader does not handle as [`super::Records`] would (a quote anywhere in a
-//! record, a lone `\r`, bytes that are not UTF-8, a header of more than [`MAX_FIELDS`]
-//! fields) and any error in the table makes it give up: the general reader then reads the
+//! record, a lone `\r`, bytes that are not UTF-8, a line of more than [`MAX_FIELDS`]
+//! fields or [`MAX_LINE_BYTES`] bytes) and any error in the table makes it give up: the general reader then reads the
 //! file again from its start, so that every dataset and every message is the general
 //! reader's. What it skips as [`super::Records`] does: blank lines, lines of empty fields,
 //! and comments (a line whose first character other than a blank is `#`).
 
 use super::{joined, Table, MAX_FIELDS};
 use crate::io::{Dataset, ReadOptions};
-use std::io::BufRead;
+use std::io::{BufRead, Read};
 use std::path::Path;
 
 /// The dataset of a plain table (see the module docs) read from `reader` (a UTF-8
@@ -28,9 +28,6 @@ pub(crate) fn parse_plain(
     let mut lines = Lines::new(reader);
     let (header_line, headers) = {
         let (line, fields) = lines.next().ok()??;
-        if fields.len() > MAX_FIELDS {
-            return None;
-        }
         (line, fields.to_strings())
     };
     let table = Table::of(path, header_line, &headers, opts).ok()?;
@@ -74,6 +71,11 @@ fn trim(s: &str) -> &str {
         s.trim()
     }
 }
+
+/// The longest line the plain reader holds (a row of [`MAX_FIELDS`] numbers of up to 100
+/// characters): a longer one is left to the general reader, which never holds a record
+/// beyond its field cap.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
 
 /// Text [`parse_plain`] does not read (the general reader does).
 struct NotPlain;
@@ -129,12 +131,15 @@ impl<R: BufRead> Lines<R> {
     fn next(&mut self) -> Result<Option<(usize, Fields<'_>)>, NotPlain> {
         loop {
             self.buf.clear();
-            let n = self
-                .input
+            let n = (&mut self.input)
+                .take(MAX_LINE_BYTES as u64)
                 .read_until(b'\n', &mut self.buf)
                 .map_err(|_| NotPlain)?;
             if n == 0 {
                 return Ok(None);
+            }
+            if n == MAX_LINE_BYTES && self.buf.last() != Some(&b'\n') {
+                return Err(NotPlain);
             }
             let line = self.line;
             self.line += 1;
@@ -189,6 +194,9 @@ fn split(text: &str, ranges: &mut Vec<(usize, usize)>) -> Result<bool, NotPlain>
         quote |= b == b'"';
         cr |= b == b'\r';
         if b == b',' {
+            if ranges.len() == MAX_FIELDS {
+                return Err(NotPlain);
+            }
             ranges.push(trimmed_range(text, start, i));
             start = i + 1;
         }
@@ -243,6 +251,16 @@ mod tests {
                 "{text:?}"
             );
         }
+        let wide = format!(
+            "theta_i,theta_r,phi_r,L{}\n10,20,0,1\n",
+            ",x".repeat(MAX_FIELDS)
+        );
+        assert!(parse_plain(path, wide.as_bytes(), &opts, false, 0).is_none());
+        let long = format!(
+            "theta_i,theta_r,phi_r,L\n10,20,0,1{}\n",
+            " ".repeat(MAX_LINE_BYTES)
+        );
+        assert!(parse_plain(path, long.as_bytes(), &opts, false, 0).is_none());
         let not_utf8 = b"theta_i,theta_r,phi_r,L\n10,20,0,\xff\n";
         assert!(parse_plain(path, &not_utf8[..], &opts, false, 0).is_none());
     }
