@@ -9,7 +9,8 @@
 # verdict counts, benches/texels.py check). With BASE=path/to/goniofit the baseline binary
 # runs too, alternated run by run with this tree's binary so that both see the same machine
 # state; medians and the ratio are printed. THREADS="1 2" (default) repeats everything per
-# thread count (RAYON_NUM_THREADS), for the 1 → 2 thread scaling.
+# thread count (`--threads`, the fit's own pool; RAYON_NUM_THREADS alone does not set it),
+# for the 1 → 2 thread scaling.
 #
 # The batch is generated once into $TEXELS_DIR (default /tmp/goniofit-texels), never into
 # the repository.
@@ -43,7 +44,8 @@ def run(binary, nthreads):
     with tempfile.NamedTemporaryFile("w+", suffix=".json") as out, \
          tempfile.NamedTemporaryFile("w+") as tm:
         subprocess.run(["/usr/bin/time", "-f", "%e %U %S %M", "-o", tm.name, binary, "fit",
-                        "--by-group", "--model", "kbs", "--wavelength", "1", "--json", data],
+                        "--by-group", "--model", "kbs", "--wavelength", "1", "--json",
+                        "--threads", nthreads, data],
                        stdout=out, stderr=subprocess.DEVNULL, env=env)
         wall, user, sys_, rss = open(tm.name).read().split()[-4:]
         d = json.load(open(out.name))
