@@ -1,0 +1,126 @@
+//! The trust matrix for the lobe with its factors: goniofit's fit of `kbs+lambert
+//! --fresnel dielectric --shadowing smith` (log and relative residuals, the Cornell
+//! channels, three CUReT surfaces and the synthetic hemisphere of the matrix) against the
+//! best optimum an independent multi-start found (tests/ref/factors_reference.py, its
+//! table tests/ref/factors_reference.csv: numpy model with the textbook Fresnel and Smith
+//! forms, scipy least_squares from 84 starts over σ, T and n and from the plain model's
+//! best point). Each case is at the best known optimum, or `degenerate` where that optimum
+//! lies at an edge of the domain (n → 1 among them); the cases where goniofit's fit is
+//! neither (6 of 30) are listed in [`KNOWN_MISSES`], and the test fails when that list is
+//! not exactly what the fits give (a new miss, or a miss that is no longer one).
+
+mod common;
+
+use common::goniofit;
+use std::collections::{BTreeSet, HashMap};
+
+/// Relative cost within which a fit is at the best known optimum.
+const TOL: f64 = 1e-4;
+
+/// (dataset, residual) where goniofit's fit is neither at the best known optimum nor
+/// honestly degenerate: converged inside the domain where the best known point is at the
+/// edge n → 1 (curet/1), or converged 0.2–6 % above the best known cost (relative
+/// residuals; garnet_red 550 nm: a smooth-regime optimum at n ≈ 10.7 that the fit leaves
+/// for the plain lobe's valley at n → ∞ even when started there).
+const KNOWN_MISSES: [(&str, &str); 6] = [
+    ("curet/1", "log"),
+    ("curet/1", "relative"),
+    ("curet/4", "relative"),
+    ("cornell/cayman/450nm", "relative"),
+    ("cornell/cayman/550nm", "relative"),
+    ("cornell/garnet_red/550nm", "relative"),
+];
+
+fn table() -> Vec<HashMap<String, String>> {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ref/factors_reference.csv");
+    let text = std::fs::read_to_string(path).unwrap();
+    let body: String = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let mut rdr = csv::Reader::from_reader(body.as_bytes());
+    let headers = rdr.headers().unwrap().clone();
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            headers
+                .iter()
+                .zip(r.iter())
+                .map(|(h, v)| (h.to_string(), v.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+/// Why goniofit's fit of this case is not at the reference's best optimum (or honestly
+/// degenerate), or None when it is.
+fn failure(row: &HashMap<String, String>) -> Option<String> {
+    let out = goniofit()
+        .args(["fit", "--model", "kbs+lambert", "--fresnel", "dielectric"])
+        .args(["--shadowing", "smith", "--residual", &row["residual"]])
+        .args(row["args"].split_whitespace())
+        .args(["--json", "--no-intervals", "--threads", "1"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let case = format!("{} {}", row["dataset"], row["residual"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let reference: f64 = row["cost_best"].parse().unwrap();
+    let cost = v["cost"].as_f64().unwrap_or(f64::INFINITY);
+    let at_edge = !matches!(row["edge_best"].as_str(), "none" | "sigma-cap");
+    let term = v["termination"].as_str().unwrap_or("");
+    match (term, v["converged"].as_bool()) {
+        ("degenerate", _) if at_edge || cost <= reference * (1.0 + TOL) => None,
+        (_, Some(true)) if cost <= reference * (1.0 + TOL) => None,
+        _ => Some(format!(
+            "{case}: {term} at {cost:e}, best known {reference:e}"
+        )),
+    }
+}
+
+#[test]
+fn the_reference_model_is_goniofits() {
+    // The reference's cost at goniofit's fitted point is goniofit's own cost: the two
+    // compute the same model, residuals and weights (where goniofit's n is 1 to double
+    // precision, the textbook form is 0/0 and the row says 1e302: not compared).
+    let mut compared = 0;
+    for row in table() {
+        let (here, there): (f64, f64) = (
+            row["cost_here_at_goniofit"].parse().unwrap(),
+            row["cost_goniofit"].parse().unwrap(),
+        );
+        if here > 1e300 {
+            continue;
+        }
+        compared += 1;
+        assert!(
+            (here / there - 1.0).abs() < 1e-9,
+            "{} {}: {here} vs {there}",
+            row["dataset"],
+            row["residual"]
+        );
+    }
+    assert!(compared >= 20, "{compared} rows compared");
+}
+
+#[test]
+fn fits_with_factors_reach_the_best_known_optimum_but_the_known_misses() {
+    let rows = table();
+    assert!(rows.len() >= 20, "{} cases", rows.len());
+    let failures: Vec<String> = rows.iter().filter_map(failure).collect();
+    let missed: BTreeSet<(String, String)> = failures
+        .iter()
+        .map(|f| {
+            let case = f.split(':').next().unwrap();
+            let (d, r) = case.rsplit_once(' ').unwrap();
+            (d.to_string(), r.to_string())
+        })
+        .collect();
+    let known: BTreeSet<(String, String)> = KNOWN_MISSES
+        .iter()
+        .map(|(d, r)| (d.to_string(), r.to_string()))
+        .collect();
+    assert_eq!(missed, known, "{failures:#?}");
+}
