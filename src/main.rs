@@ -11,8 +11,7 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     // Ctrl-C, SIGTERM, SIGHUP: a running fit stops and reports (exit 3); anything else ends
     // with exit 130 and leaves no unfinished output file behind.
-    goniofit::fit::lm::stop::on_exit(goniofit::io::output::remove_temporaries);
-    goniofit::fit::lm::stop::install_handler();
+    commands::signals::install();
     let cli = match cli::Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {

@@ -399,7 +399,7 @@ fn with_stoppable_kbs(
     let problem =
         FitProblem::new(model.as_ref(), layout, &input, ResidualKind::Absolute, 1e-9).unwrap();
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let stop = goniofit::fit::lm::Stop::without_handler(None, Some(flag.clone()));
+    let stop = goniofit::fit::lm::Stop::new(None, Some(flag.clone()));
     check(&input, &problem, &x, &flag, &stop);
 }
 

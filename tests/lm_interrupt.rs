@@ -1,6 +1,7 @@
-//! Ctrl-C during a fit: a real SIGINT to this process ends the run with
-//! `Termination::Interrupted` (and a report), not a dead process. Its own test binary,
-//! because the signal reaches every fit running in the process.
+//! Ctrl-C during a fit: a real SIGINT to this process, handled as a host handles it (its
+//! handler calls `stop::interrupt`), ends the run with `Termination::Interrupted` (and a
+//! report), not a dead process. Its own test binary, because the signal reaches every fit
+//! running in the process.
 
 #[cfg(unix)]
 #[test]
@@ -29,6 +30,11 @@ fn sigint_interrupts_a_running_fit() {
         }
     }
 
+    // The host's handler: the library installs none.
+    ctrlc::set_handler(|| {
+        goniofit::fit::lm::stop::interrupt();
+    })
+    .expect("install the handler");
     let p = Slow(AtomicU64::new(0));
     let config = LmConfig {
         ftol: 0.0,

@@ -10,7 +10,8 @@
 //! user's input or usage, `OSError` for files, `RuntimeError` for internal failures); a
 //! panic is caught ([`std::panic::catch_unwind`]) and becomes a `RuntimeError`; fits run
 //! with the GIL released, on rayon threads, while the calling thread polls Python's signal
-//! handlers so that Ctrl-C stops them (the library's own signal handler is not installed).
+//! handlers so that Ctrl-C stops them (through the fit's stop flag; the interpreter keeps
+//! its own signal handling).
 
 mod convert;
 mod design;

@@ -370,7 +370,7 @@ impl FitOptions {
     }
 
     /// The library's settings of a dataset's fit, with a fresh interrupt flag that the
-    /// binding sets on Ctrl-C, and the library's own signal handler left out. `single`: one
+    /// binding sets on Ctrl-C (the interpreter keeps its signals). `single`: one
     /// dataset (profile intervals unless `intervals=False`).
     pub fn dataset_fit(&self, single: bool) -> DatasetFit {
         let lm = LmConfig {
@@ -379,7 +379,6 @@ impl FitOptions {
             timeout: settings::timeout(PY, self.timeout).ok().flatten(),
             progress: false,
             interrupt: Some(Arc::new(AtomicBool::new(false))),
-            install_signal_handler: false,
             ..FitConfig::default().lm
         };
         DatasetFit {

@@ -14,6 +14,7 @@ pub mod heartbeat;
 pub mod plot;
 pub mod recover;
 pub mod render;
+pub mod signals;
 pub mod stages;
 pub mod synth;
 

@@ -101,17 +101,12 @@ pub struct LmConfig {
     pub timeout: Option<Duration>,
     /// Show a progress line on the terminal (stderr, via indicatif). Default false.
     pub progress: bool,
-    /// Stop when this flag becomes true (in addition to Ctrl-C). Default none.
+    /// Stop when this flag becomes true (in addition to the host's signals). Default none.
     pub interrupt: Option<Arc<AtomicBool>>,
     /// The stop request of the whole piece of work this run belongs to (a fit's start
     /// search, solves and refits share one, so that a signal or the fit's deadline ends them
     /// all). Default none: the run makes its own from `timeout` and the signals.
     pub stop: Option<Stop>,
-    /// Install goniofit's process-wide Ctrl-C/SIGTERM/SIGHUP handler (see [`Stop`]) when
-    /// this configuration makes a stop request. Default true. False for a host that owns its
-    /// signals, such as the Python interpreter: its own handler stays in place and the host
-    /// sets `interrupt`.
-    pub install_signal_handler: bool,
     /// Gauss–Newton polishing after convergence, see [`LevenbergMarquardt::with_polish`].
     /// Default false: with measurement noise, parameters converged to `ftol = 1e-10` are
     /// already far more precise than their standard errors; turn it on when the last digits
@@ -134,7 +129,6 @@ impl Default for LmConfig {
             progress: false,
             interrupt: None,
             stop: None,
-            install_signal_handler: true,
             polish: false,
             predicted_stop: false,
         }
@@ -143,14 +137,9 @@ impl Default for LmConfig {
 
 impl LmConfig {
     /// A stop request from this configuration: `timeout` from now, the `interrupt` flag,
-    /// and the process's signals (installing goniofit's handler only with
-    /// `install_signal_handler`; without it the signals are left to the host).
+    /// and the host's signals (see [`super::stop::interrupt`]).
     pub fn new_stop(&self) -> Stop {
-        if self.install_signal_handler {
-            Stop::new(self.timeout, self.interrupt.clone())
-        } else {
-            Stop::without_handler(self.timeout, self.interrupt.clone())
-        }
+        Stop::new(self.timeout, self.interrupt.clone())
     }
 }
 

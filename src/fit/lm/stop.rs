@@ -1,54 +1,36 @@
-//! Stop requests: Ctrl-C, SIGTERM, SIGHUP, a caller's flag and a deadline, shared by every
-//! stage of a fit through one [`Stop`].
+//! Stop requests: a signal, a caller's flag and a deadline, shared by every stage of a fit
+//! through one [`Stop`].
 //!
-//! argmin's Executor installs its own handler bound to the flag of the *first* run in the
-//! process (later runs cannot be interrupted, and Ctrl-C is swallowed between runs). Instead
-//! [`super::minimize`] turns the Executor's handler off, and one process-wide handler
-//! (installed on first use) bumps a global generation counter while any [`Stop`] is alive
-//! (every running solver and every evaluation that checks the token sees the change). When
-//! none is alive — nothing is being computed — it runs the cleanup registered with
-//! [`on_exit`] (the command line removes its unfinished output temporaries there) and exits
-//! the process with status 130, as an unhandled SIGINT would.
+//! The library installs no signal handler: the host owns its signals. A host that wants
+//! Ctrl-C, SIGTERM or SIGHUP to stop running work calls [`interrupt`] from its handler: while
+//! any [`Stop`] is alive it bumps a global generation counter that every running solver and
+//! every evaluation that checks the token sees, and returns true; when none is alive
+//! (nothing is being computed) it returns false and the host ends as it sees fit (the
+//! command line removes its unfinished outputs and exits with 130). argmin's Executor
+//! handler is turned off by [`super::minimize`]. A host that owns its signals otherwise
+//! (the Python interpreter) sets a [`Stop`]'s flag instead.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
-use std::sync::{Arc, Once, OnceLock};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::Termination;
 
 static INTERRUPTS: AtomicU64 = AtomicU64::new(0);
 static ACTIVE_RUNS: AtomicUsize = AtomicUsize::new(0);
-static HANDLER: Once = Once::new();
-static CLEANUP: OnceLock<fn()> = OnceLock::new();
 
-/// Install the process-wide handler (once; later calls do nothing). A [`Stop`] installs it
-/// on first use; a program that wants Ctrl-C handled the same way everywhere (also while
-/// nothing is being fitted) calls this at its start.
-pub fn install_handler() {
-    HANDLER.call_once(|| {
-        // If another handler is already installed (e.g. by a direct argmin Executor run),
-        // Ctrl-C keeps working through that one; nothing else to do.
-        let _ = ctrlc::set_handler(|| {
-            if ACTIVE_RUNS.load(Ordering::SeqCst) == 0 {
-                if let Some(cleanup) = CLEANUP.get() {
-                    cleanup();
-                }
-                std::process::exit(130);
-            }
-            INTERRUPTS.fetch_add(1, Ordering::SeqCst);
-        });
-    });
+/// A signal arrived: every [`Stop`] alive now is requested, and true is returned; false
+/// when no [`Stop`] is alive (nothing to stop: the caller decides what the signal does).
+/// Safe to call from any thread at any time (two atomic operations).
+pub fn interrupt() -> bool {
+    if ACTIVE_RUNS.load(Ordering::SeqCst) == 0 {
+        return false;
+    }
+    INTERRUPTS.fetch_add(1, Ordering::SeqCst);
+    true
 }
 
-/// Register `cleanup`, run by the handler just before it ends the process (a signal while no
-/// [`Stop`] is alive). Only the first registration counts. It runs on the handler's thread
-/// while other threads may still be working, so it must be safe to call at any time.
-pub fn on_exit(cleanup: fn()) {
-    let _ = CLEANUP.set(cleanup);
-}
-
-/// Marks work in progress for as long as it lives (the handler then interrupts instead of
-/// exiting).
+/// Marks work in progress for as long as it lives ([`interrupt`] then stops it).
 #[derive(Debug)]
 struct Active;
 
@@ -66,9 +48,9 @@ impl Drop for Active {
 }
 
 /// One stop request for a whole piece of work (a fit with its start search, solves and
-/// refits, or a whole command): clones share it. It is requested once Ctrl-C, SIGTERM or
-/// SIGHUP arrived after it was made, the caller's flag became true, or the deadline passed.
-/// While any `Stop` is alive, those signals interrupt instead of ending the process.
+/// refits, or a whole command): clones share it. It is requested once an [`interrupt`]
+/// came after it was made (the host's signal handler), the caller's flag became true, or
+/// the deadline passed.
 /// Checking costs two atomic loads and, with a deadline, one clock read (≈ 20 ns).
 #[derive(Debug, Clone)]
 pub struct Stop(Arc<StopInner>);
@@ -82,17 +64,9 @@ struct StopInner {
 }
 
 impl Stop {
-    /// A stop request that fires `timeout` from now (never without one), on a signal from
-    /// now on, or when `flag` becomes true.
+    /// A stop request that fires `timeout` from now (never without one), on an
+    /// [`interrupt`] from now on, or when `flag` becomes true.
     pub fn new(timeout: Option<Duration>, flag: Option<Arc<AtomicBool>>) -> Stop {
-        install_handler();
-        Stop::without_handler(timeout, flag)
-    }
-
-    /// As [`Stop::new`], but without installing goniofit's signal handler, for a host that
-    /// owns the signals (the Python interpreter): only `flag` and the deadline (and the
-    /// signals, if the handler was installed by an earlier [`Stop::new`]) stop the work.
-    pub fn without_handler(timeout: Option<Duration>, flag: Option<Arc<AtomicBool>>) -> Stop {
         let active = Active::start();
         Stop(Arc::new(StopInner {
             // A limit beyond what the clock can represent is no limit.
@@ -149,7 +123,7 @@ mod tests {
     #[test]
     fn a_part_stops_with_its_whole_and_at_its_own_deadline() {
         let flag = Arc::new(AtomicBool::new(false));
-        let whole = Stop::without_handler(None, Some(flag.clone()));
+        let whole = Stop::new(None, Some(flag.clone()));
         let part = whole.part(Some(Duration::from_millis(30)));
         let unlimited = whole.part(None);
         // A limit past the clock's range is no limit (no overflow).
