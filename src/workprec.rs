@@ -276,7 +276,8 @@ pub fn solver_settings() -> Vec<(String, u8, LmConfig)> {
     ]
 }
 
-/// Run the whole table; `on_step(label)` is called after each row.
+/// Run the whole table; `on_step(label)` is called after each row. The evaluation rows
+/// come first (in [`modes`] order), then the solver rows (in [`solver_settings`] order).
 pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkPrecision> {
     let reference = reference_model()?;
     let geo = geometry(EVAL_LAYOUT)?;
@@ -288,69 +289,86 @@ pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkP
     let repeats = config.repeats.max(1);
     let mut rows = Vec::new();
     let mut auto_error = f64::NAN;
-
     for spec in modes() {
-        let m = model::by_name("kbs", &spec.options())?;
-        let seconds = time_median(repeats, || {
-            for (_, p) in regimes() {
-                std::hint::black_box(eval(m.as_ref(), &geo, &p));
-            }
-        });
-        let model_error = regimes()
-            .iter()
-            .zip(&refs)
-            .map(|((_, p), r)| max_rel_error(&eval(m.as_ref(), &geo, p), r))
-            .fold(0.0f64, f64::max);
+        let row = eval_row(&spec, &geo, &refs, &input, repeats)?;
         if spec.mode == EvalMode::Auto {
-            auto_error = model_error;
+            auto_error = row.model_error;
         }
-        let fit_config = FitConfig {
-            model_opts: spec.options(),
-            ..FitConfig::default()
-        };
-        let fit = driver::fit(&input, &fit_config)?;
-        let values: Vec<f64> = ["sigma", "T", "scale"]
-            .iter()
-            .map(|n| fit.value(n).unwrap_or(f64::NAN))
-            .collect();
-        rows.push(Row {
-            kind: "eval".into(),
-            mode: spec.label(),
-            seconds,
-            model_error,
-            param_error: param_error(&values),
-            fit_seconds: fit.seconds,
-            termination: format!("{:?}", fit.termination),
-        });
+        rows.push(row);
         on_step(&spec.label());
     }
+    rows.extend(solver_rows(&input, repeats, auto_error, on_step)?);
+    Ok(WorkPrecision {
+        rows,
+        reference: format!("series at tol {REFERENCE_TOL:e}"),
+        eval_layout: EVAL_LAYOUT.into(),
+        fit_layout: FIT_LAYOUT.into(),
+        repeats,
+    })
+}
 
-    // Solver rows: auto mode, shared starting values.
+/// One evaluation row: the model in `spec`'s mode timed on the three regimes (median of
+/// `repeats`), its largest relative error against `refs` (the reference series on `geo`,
+/// one per regime, in [`regimes`] order), and a fit of `input` in that mode.
+fn eval_row(
+    spec: &ModeSpec,
+    geo: &Geometry,
+    refs: &[Vec<f64>],
+    input: &FitInput,
+    repeats: usize,
+) -> Result<Row> {
+    let m = model::by_name("kbs", &spec.options())?;
+    let seconds = time_median(repeats, || {
+        for (_, p) in regimes() {
+            std::hint::black_box(eval(m.as_ref(), geo, &p));
+        }
+    });
+    let model_error = regimes()
+        .iter()
+        .zip(refs)
+        .map(|((_, p), r)| max_rel_error(&eval(m.as_ref(), geo, p), r))
+        .fold(0.0f64, f64::max);
+    let fit_config = FitConfig {
+        model_opts: spec.options(),
+        ..FitConfig::default()
+    };
+    let fit = driver::fit(input, &fit_config)?;
+    let values: Vec<f64> = ["sigma", "T", "scale"]
+        .iter()
+        .map(|n| fit.value(n).unwrap_or(f64::NAN))
+        .collect();
+    Ok(Row {
+        kind: "eval".into(),
+        mode: spec.label(),
+        seconds,
+        model_error,
+        param_error: param_error(&values),
+        fit_seconds: fit.seconds,
+        termination: format!("{:?}", fit.termination),
+    })
+}
+
+/// The solver rows: the fit of `input` with the model in `auto` mode, once per
+/// [`solver_settings`] entry, all from the same starting values (found once, not timed);
+/// `model_error` of each row is `auto_error`. `on_step(label)` is called after each row.
+fn solver_rows(
+    input: &FitInput,
+    repeats: usize,
+    auto_error: f64,
+    on_step: &dyn Fn(&str),
+) -> Result<Vec<Row>> {
     let m = model::by_name("kbs", &ModelOptions::default())?;
     let layout = ParamLayout::new(m.as_ref(), &input.channel_names);
     let max_y = input.y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let problem = FitProblem::new(
         m.as_ref(),
         layout.clone(),
-        &input,
+        input,
         ResidualKind::Absolute,
         1e-6 * max_y,
     )?;
-    let grid_model = model::by_name(
-        "kbs",
-        &ModelOptions {
-            tol: 1e-4,
-            ..ModelOptions::default()
-        },
-    )?;
-    let candidates = init::initial_values(
-        &problem,
-        grid_model.as_ref(),
-        &input,
-        &vec![None; layout.len()],
-        None,
-    );
-    let x0 = layout.to_x(&candidates[0].1);
+    let x0 = shared_start(&problem, &layout, input)?;
+    let mut rows = Vec::new();
     for (label, jac, lm_config) in solver_settings() {
         let fd = FiniteDifference {
             inner: &problem,
@@ -378,13 +396,32 @@ pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkP
         });
         on_step(&label);
     }
-    Ok(WorkPrecision {
-        rows,
-        reference: format!("series at tol {REFERENCE_TOL:e}"),
-        eval_layout: EVAL_LAYOUT.into(),
-        fit_layout: FIT_LAYOUT.into(),
-        repeats,
-    })
+    Ok(rows)
+}
+
+/// The solver rows' common starting point: the best candidate of the initial-value search
+/// (grid model at series tolerance 1e-4, no parameter given), in `layout`'s solver
+/// coordinates.
+fn shared_start(
+    problem: &FitProblem,
+    layout: &ParamLayout,
+    input: &FitInput,
+) -> Result<DVector<f64>> {
+    let grid_model = model::by_name(
+        "kbs",
+        &ModelOptions {
+            tol: 1e-4,
+            ..ModelOptions::default()
+        },
+    )?;
+    let candidates = init::initial_values(
+        problem,
+        grid_model.as_ref(),
+        input,
+        &vec![None; layout.len()],
+        None,
+    );
+    Ok(layout.to_x(&candidates[0].1))
 }
 
 fn sci(v: f64) -> String {
