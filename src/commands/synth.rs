@@ -10,7 +10,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::geometry::Quantity;
 use goniofit::io::{self, FileSet};
-use goniofit::model::{by_name, parse_params};
+use goniofit::model::{by_name, parse_params, Model};
 use goniofit::settings::{self, Front};
 use goniofit::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
 use std::path::{Path, PathBuf};
@@ -179,6 +179,8 @@ fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
     Ok(layout)
 }
 
+/// `goniofit synth`: evaluate the model on the layout, add the seeded noise, write the CSV
+/// (to `--out` or standard output) and the truth JSON; exit code 0.
 pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
     let patch = a.patch.as_deref().map(parse_patch).transpose()?;
     let opts = a.factors.apply(settings::model_options(
@@ -195,27 +197,8 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         angles = synth::subsample(&angles, n)?;
     }
     let quantity: Quantity = a.quantity.into();
-    let noise = Noise {
-        kind: match a.noise_kind {
-            NoiseKindArg::Relative => NoiseKind::Relative,
-            NoiseKindArg::Absolute => NoiseKind::Absolute,
-            NoiseKindArg::Poisson => NoiseKind::Poisson,
-        },
-        level: a.noise,
-        seed: a.seed,
-    };
-    if let Ok(geo) = goniofit::geometry::Geometry::new(
-        &angles
-            .iter()
-            .map(synth::AnglesDeg::sample)
-            .collect::<Vec<_>>(),
-        &[a.wavelength.0],
-        quantity,
-    ) {
-        for w in goniofit::model::domain::accuracy_warnings(model.as_ref(), &params, &geo) {
-            eprintln!("goniofit: warning: {w}");
-        }
-    }
+    let noise = a.noise();
+    warn_accuracy(model.as_ref(), &params, &angles, a.wavelength.0, quantity);
     let data = synth::generate(
         model.as_ref(),
         &params,
@@ -224,17 +207,9 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
         quantity,
         &noise,
     )?;
-    let csv_opts = CsvOptions {
-        sigma: a.write_sigma,
-        wavelength: a.write_wavelength
-            || (!a.no_wavelength && a.model.to_ascii_lowercase().starts_with("kbs")),
-        signed_theta_r: a.signed_theta_r,
-    };
     let mut csv_bytes = Vec::new();
-    data.write_csv(&mut csv_bytes, &csv_opts)
+    data.write_csv(&mut csv_bytes, &a.csv_options())
         .context("formatting the CSV")?;
-
-    let truth_file = a.truth_file();
     let truth = Truth {
         model: model.name().to_string(),
         params: Truth::params_by_name(model.as_ref(), &params),
@@ -261,18 +236,44 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
             .map_or_else(|| "-".into(), |f| f.to_string_lossy().into_owned()),
         goniofit_version: env!("CARGO_PKG_VERSION").to_string(),
     };
+    write_outputs(&a, &csv_bytes, &truth, data.len())?;
+    Ok(0)
+}
 
+/// Prints the model's accuracy warnings for these parameters on these angles (one
+/// `goniofit: warning:` line each, to standard error); nothing when the angles do not form
+/// a valid geometry (generation then reports the problem).
+fn warn_accuracy(
+    model: &dyn Model,
+    params: &[f64],
+    angles: &[synth::AnglesDeg],
+    wavelength: f64,
+    quantity: Quantity,
+) {
+    let samples: Vec<_> = angles.iter().map(synth::AnglesDeg::sample).collect();
+    if let Ok(geo) = goniofit::geometry::Geometry::new(&samples, &[wavelength], quantity) {
+        for w in goniofit::model::domain::accuracy_warnings(model, params, &geo) {
+            eprintln!("goniofit: warning: {w}");
+        }
+    }
+}
+
+/// Writes the CSV to `--out` (standard output without it) and the truth JSON (pretty,
+/// newline-terminated) where [`SynthArgs::truth_file`] says, both atomically; with `--out`,
+/// one line on standard error naming the files and the number of samples `n`.
+fn write_outputs(a: &SynthArgs, csv_bytes: &[u8], truth: &Truth, n: usize) -> anyhow::Result<()> {
+    let truth_file = a.truth_file();
     let out_path = a.out.clone().unwrap_or_else(|| PathBuf::from("-"));
-    io::write_bytes(&out_path, &csv_bytes)?;
+    io::write_bytes(&out_path, csv_bytes)?;
     if let Some(tp) = &truth_file {
-        let mut json = serde_json::to_vec_pretty(&truth).context("formatting the truth JSON")?;
+        let mut json = serde_json::to_vec_pretty(truth).context("formatting the truth JSON")?;
         json.push(b'\n');
         io::write_bytes(tp, &json)?;
     }
     if let Some(path) = &a.out {
         eprintln!(
             "goniofit synth: wrote {} samples to {}{}",
-            data.len(),
+            n,
             goniofit::io::shown(path),
             truth_file
                 .as_ref()
@@ -280,10 +281,35 @@ pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
                 .unwrap_or_default()
         );
     }
-    Ok(0)
+    Ok(())
 }
 
 impl SynthArgs {
+    /// The noise of `--noise`, `--noise-kind` and `--seed`.
+    fn noise(&self) -> Noise {
+        Noise {
+            kind: match self.noise_kind {
+                NoiseKindArg::Relative => NoiseKind::Relative,
+                NoiseKindArg::Absolute => NoiseKind::Absolute,
+                NoiseKindArg::Poisson => NoiseKind::Poisson,
+            },
+            level: self.noise,
+            seed: self.seed,
+        }
+    }
+
+    /// The CSV's optional columns: `sigma_L` with `--write-sigma`; `wavelength` with
+    /// `--write-wavelength` or for a KBS model unless `--no-wavelength`; signed θr with
+    /// `--signed-theta-r`.
+    fn csv_options(&self) -> CsvOptions {
+        CsvOptions {
+            sigma: self.write_sigma,
+            wavelength: self.write_wavelength
+                || (!self.no_wavelength && self.model.to_ascii_lowercase().starts_with("kbs")),
+            signed_theta_r: self.signed_theta_r,
+        }
+    }
+
     /// The truth JSON's path: `--truth`, else beside `--out` (none without either).
     fn truth_file(&self) -> Option<PathBuf> {
         self.truth
