@@ -62,17 +62,11 @@ pub(super) fn assemble(
     let mut params = param_results(layout, specs, p, &unc, verdict, &mut notes);
     fresnel_reach(&mut params, &input.geo, &mut notes);
     let derived = derived_quantities(layout, specs, p, &unc, verdict);
-    let mut modes = BTreeMap::new();
-    for m in &sample_modes {
-        *modes.entry(m.name().to_string()).or_insert(0) += 1;
-    }
+    let modes = mode_counts(&sample_modes);
     notes.extend(validate::termination_note(run.lm.termination));
-    let mut result = FitResult {
+    let result = FitResult {
         model: model.name().to_string(),
-        factors: model
-            .options()
-            .map(|o| o.factors_label())
-            .unwrap_or_default(),
+        factors: factors_label(model),
         params,
         derived,
         corr_names: free
@@ -118,8 +112,36 @@ pub(super) fn assemble(
         values: p.clone(),
         start: start.grid_start,
     };
+    checked(result, &problem, input, config)
+}
+
+/// How many samples each evaluation mode served, keyed by the mode's name.
+fn mode_counts(sample_modes: &[crate::model::Mode]) -> BTreeMap<String, usize> {
+    let mut modes = BTreeMap::new();
+    for m in sample_modes {
+        *modes.entry(m.name().to_string()).or_insert(0) += 1;
+    }
+    modes
+}
+
+/// The model's factor flags as the report prints them (empty for a model without options).
+fn factors_label(model: &dyn Model) -> String {
+    model
+        .options()
+        .map(|o| o.factors_label())
+        .unwrap_or_default()
+}
+
+/// `result` with its validity checks and adequacy tests filled in, and a note when a
+/// reported number is not finite (the result is then not a usable optimum).
+fn checked(
+    mut result: FitResult,
+    problem: &FitProblem,
+    input: &FitInput,
+    config: &FitConfig,
+) -> FitResult {
     result.validity = validity_of(&result, input);
-    result.adequacy = adequacy_of(&result, &problem, input, config);
+    result.adequacy = adequacy_of(&result, problem, input, config);
     if !result.is_finite() {
         result.notes.push(
             "not a usable optimum: the cost, a parameter, a standard error or a correlation is not a finite number (the values overflow double precision; rescale L or the weights)".into(),
