@@ -121,8 +121,29 @@ pub fn linear_top(curve_max: f64, data: &[f64]) -> f64 {
 /// logarithmic version; the linear one chooses its top with [`linear_top`].
 pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
     let gs = checked_groups(input)?;
-    let geo = input.geo;
     let multi = gs.iter().any(|g| g.wavelength != gs[0].wavelength);
+    let mut plot = fit_chart_frame(input, log_y);
+    let styles = group_styles(&gs);
+    let (mut any_near, mut any_plane) = (false, false);
+    let (mut data, mut curves) = (Vec::new(), Vec::new());
+    for (c, g) in gs.iter().enumerate() {
+        let (in_plane, fitted, measured) = group_series(input, g, &styles, c, multi)?;
+        any_plane |= in_plane;
+        any_near |= !in_plane;
+        data.extend(measured.points.iter().map(|p| p.1));
+        curves.extend(fitted.points.iter().map(|p| p.1));
+        plot.series.push(fitted);
+        plot.series.push(measured);
+    }
+    fit_chart_legend(&mut plot, &styles, any_plane, any_near, input);
+    plot.color_key = styles.key;
+    plot.y_range = fit_y_range(&data, &curves, log_y);
+    Ok(plot)
+}
+
+/// The empty fit chart: its title (with "(log scale)" for `log_y`), axis labels, subtitle,
+/// x range −90°…90° and y scale; no series, legend or y range yet.
+fn fit_chart_frame(input: &FitPlotInput, log_y: bool) -> XyPlot {
     let mut plot = XyPlot::new(
         format!(
             "{} — measured vs fitted{}",
@@ -130,57 +151,73 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
             if log_y { " (log scale)" } else { "" }
         ),
         "signed θr (degrees; θr < 0: φr = 180°, the source side)",
-        quantity_desc(geo.quantity),
+        quantity_desc(input.geo.quantity),
     );
     plot.subtitle = input.subtitle.clone();
     plot.x_range = (-90.0, 90.0);
     plot.log_y = log_y;
-    let styles = group_styles(&gs);
-    let (mut any_near, mut any_plane) = (false, false);
-    let (mut data, mut curves) = (Vec::new(), Vec::new());
-    for (c, g) in gs.iter().enumerate() {
-        let color = styles.colors[c];
-        let (idx, in_plane) = plane_samples(geo, g);
-        any_near |= !in_plane;
-        // (signed θr in degrees, value) along the plane, in order of angle.
-        let along = |values: &[f64]| {
-            let mut pts: Vec<(f64, f64)> = idx
-                .iter()
-                .map(|&k| (signed_theta_r_deg(geo.theta_r[k], geo.phi_r[k]), values[k]))
-                .collect();
-            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            pts
-        };
-        let meas = along(input.measured);
-        let fit_pts = along(input.fitted);
-        data.extend(meas.iter().map(|p| p.1));
-        // A smooth model curve along the plane when the samples are in it and the model
-        // reproduces the fitted values there; otherwise the fitted values joined.
-        // In the plane: a smooth model curve along it when the model reproduces the
-        // fitted values there, else the fitted values joined. No sample in the plane: the
-        // fitted values at the nearest samples as open rings around the measured points
-        // (a line through off-plane samples at different φr would mean nothing).
-        let (kind, line) = if in_plane {
-            let curve = dense_plane_curve(input, g, &idx)?;
-            any_plane = true;
-            (Kind::LINES[styles.style[c]](2), curve.unwrap_or(fit_pts))
-        } else {
-            (Kind::OpenPoints(7), fit_pts)
-        };
-        curves.extend(line.iter().map(|p| p.1));
-        plot.series.push(Series {
-            label: styles.label(g, multi, input),
-            color,
-            kind,
-            points: line,
-        });
-        plot.series.push(Series {
-            label: None,
-            color,
-            kind: Kind::POINTS[styles.style[c]](4),
-            points: meas,
-        });
-    }
+    plot
+}
+
+/// The two series of group `g` (the `c`-th, styled by `styles`): (whether its samples lie
+/// in the plane of incidence, the fitted series, the measured points), each over signed θr
+/// in order of angle. In the plane the fitted series is a smooth model curve along it when
+/// the model reproduces the fitted values there, else the fitted values joined. With no
+/// sample in the plane it is the fitted values at the nearest samples as open rings around
+/// the measured points (a line through off-plane samples at different φr would mean
+/// nothing).
+fn group_series(
+    input: &FitPlotInput,
+    g: &Group,
+    styles: &GroupStyles,
+    c: usize,
+    multi: bool,
+) -> Result<(bool, Series, Series)> {
+    let geo = input.geo;
+    let color = styles.colors[c];
+    let (idx, in_plane) = plane_samples(geo, g);
+    // (signed θr in degrees, value) along the plane, in order of angle.
+    let along = |values: &[f64]| {
+        let mut pts: Vec<(f64, f64)> = idx
+            .iter()
+            .map(|&k| (signed_theta_r_deg(geo.theta_r[k], geo.phi_r[k]), values[k]))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        pts
+    };
+    let meas = along(input.measured);
+    let fit_pts = along(input.fitted);
+    let (kind, line) = if in_plane {
+        let curve = dense_plane_curve(input, g, &idx)?;
+        (Kind::LINES[styles.style[c]](2), curve.unwrap_or(fit_pts))
+    } else {
+        (Kind::OpenPoints(7), fit_pts)
+    };
+    let fitted = Series {
+        label: styles.label(g, multi, input),
+        color,
+        kind,
+        points: line,
+    };
+    let measured = Series {
+        label: None,
+        color,
+        kind: Kind::POINTS[styles.style[c]](4),
+        points: meas,
+    };
+    Ok((in_plane, fitted, measured))
+}
+
+/// The fit chart's extra legend entries: measured points; fitted lines when a group lies in
+/// the plane (`any_plane`); rings when one does not (`any_near`); then the wavelength
+/// styles of the fitted and of the measured series.
+fn fit_chart_legend(
+    plot: &mut XyPlot,
+    styles: &GroupStyles,
+    any_plane: bool,
+    any_near: bool,
+    input: &FitPlotInput,
+) {
     plot.legend_extra.push(Entry {
         glyph: Kind::Points(4).glyph(BLACK),
         label: "measured (points)".into(),
@@ -201,9 +238,6 @@ pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
         .extend(styles.wavelength_entries(true, " fitted", input));
     plot.legend_extra
         .extend(styles.wavelength_entries(false, " measured", input));
-    plot.color_key = styles.key;
-    plot.y_range = fit_y_range(&data, &curves, log_y);
-    Ok(plot)
 }
 
 /// The y range of a fit chart: on a log axis every positive measured and fitted value
