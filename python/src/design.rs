@@ -82,52 +82,16 @@ pub fn _design<'py>(
         noise: NoiseModel::new(options::residual(residual)?, noise).map_err(to_py_err)?,
         unit,
     };
-    let existing: Vec<Sample> = match &existing {
-        Some(a) => angles("existing", a)?
-            .iter()
-            .map(AnglesDeg::sample)
-            .collect(),
-        None => Vec::new(),
-    };
-    let candidates = match &candidates {
-        Some(a) => angles("candidates", a)?,
-        None => options::checked(
-            Grid {
-                theta_max_deg: theta_max,
-                step_deg: step,
-                in_plane,
-            }
-            .angles(),
-        )?,
-    };
     let request = Request {
-        existing,
-        candidates,
+        existing: existing_samples(existing.as_ref())?,
+        candidates: candidate_angles(candidates.as_ref(), theta_max, step, in_plane)?,
         n,
         target: target.to_string(),
         dynamic_range,
         wavelengths,
     };
     let (d, sim, sim_before) = run::interruptible(py, None, None, || {
-        let d = design::design(&scene, &request)?;
-        if simulate == 0 {
-            return Ok((d, None, None));
-        }
-        let defs = design::quantities(scene.model, &scene.params);
-        let run =
-            |samples: &[Sample]| simulate::simulate(&scene, samples, &defs, simulate, seed, None);
-        let before = if request.existing.len() > scene.params.len() {
-            Some(run(&request.existing)?)
-        } else {
-            None
-        };
-        let mut samples = request.existing.clone();
-        samples.extend(
-            d.chosen
-                .iter()
-                .map(|c| Sample::from_degrees(c[0], c[1], c[2])),
-        );
-        Ok((d, Some(run(&samples)?), before))
+        design_and_simulate(&scene, &request, simulate, seed)
     })?;
     let report = json(&Run {
         design: &d,
@@ -141,6 +105,81 @@ pub fn _design<'py>(
         simulation_before: sim_before.as_ref(),
     });
     let out = json_to_py(py, &report)?.cast_into::<PyDict>()?;
+    out.set_item("candidate_table", candidate_table(py, &d)?)?;
+    Ok(out)
+}
+
+/// The measured geometries from the `existing` arrays (none without them); a length
+/// mismatch or an invalid angle is a `ValueError` naming `existing` and the index.
+fn existing_samples(existing: Option<&AngleArrays<'_>>) -> PyResult<Vec<Sample>> {
+    Ok(match existing {
+        Some(a) => angles("existing", a)?
+            .iter()
+            .map(AnglesDeg::sample)
+            .collect(),
+        None => Vec::new(),
+    })
+}
+
+/// The candidate geometries: the `candidates` arrays when given (checked as
+/// [`existing_samples`] checks its own), else the reachable grid up to `theta_max` degrees
+/// in steps of `step` degrees (in the plane of incidence only with `in_plane`).
+fn candidate_angles(
+    candidates: Option<&AngleArrays<'_>>,
+    theta_max: f64,
+    step: f64,
+    in_plane: bool,
+) -> PyResult<Vec<AnglesDeg>> {
+    match candidates {
+        Some(a) => angles("candidates", a),
+        None => options::checked(
+            Grid {
+                theta_max_deg: theta_max,
+                step_deg: step,
+                in_plane,
+            }
+            .angles(),
+        ),
+    }
+}
+
+/// The design, and with `simulate` ≥ 1 draws its simulation: (design, fits of simulated
+/// measurements at the measured and chosen geometries, the same at the measured ones alone
+/// when they outnumber the parameters). Both simulations use `seed`.
+fn design_and_simulate(
+    scene: &Scene,
+    request: &Request,
+    simulate: usize,
+    seed: u64,
+) -> goniofit::Result<(
+    design::Design,
+    Option<simulate::Simulation>,
+    Option<simulate::Simulation>,
+)> {
+    let d = design::design(scene, request)?;
+    if simulate == 0 {
+        return Ok((d, None, None));
+    }
+    let defs = design::quantities(scene.model, &scene.params);
+    let run = |samples: &[Sample]| simulate::simulate(scene, samples, &defs, simulate, seed, None);
+    let before = if request.existing.len() > scene.params.len() {
+        Some(run(&request.existing)?)
+    } else {
+        None
+    };
+    let mut samples = request.existing.clone();
+    samples.extend(
+        d.chosen
+            .iter()
+            .map(|c| Sample::from_degrees(c[0], c[1], c[2])),
+    );
+    Ok((d, Some(run(&samples)?), before))
+}
+
+/// The candidates as a dict of equal-length arrays: `theta_i`, `theta_r`, `phi_r` (degrees),
+/// `value`, `gain` (floats), `reachable`, `chosen` (booleans), in the design's candidate
+/// order.
+fn candidate_table<'py>(py: Python<'py>, d: &design::Design) -> PyResult<Bound<'py, PyDict>> {
     let col = |f: &dyn Fn(&design::Candidate) -> f64| -> Vec<f64> {
         d.candidates.iter().map(f).collect()
     };
@@ -155,6 +194,5 @@ pub fn _design<'py>(
     };
     cand.set_item("reachable", flag(&|c| c.reachable).into_pyarray(py))?;
     cand.set_item("chosen", flag(&|c| c.chosen).into_pyarray(py))?;
-    out.set_item("candidate_table", cand)?;
-    Ok(out)
+    Ok(cand)
 }
