@@ -282,9 +282,23 @@ impl FitResult {
 /// a name absent from some fits (another model under `auto`) is NaN / False there.
 pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
-    fn r(o: &Outcome) -> &goniofit::fit::driver::FitResult {
-        &o.result
+    fit_columns(py, &out, outcomes)?;
+    for name in &quantity_names(outcomes) {
+        quantity_columns(py, &out, outcomes, name)?;
     }
+    Ok(out)
+}
+
+/// The result of an outcome.
+fn r(o: &Outcome) -> &goniofit::fit::driver::FitResult {
+    &o.result
+}
+
+/// Sets the per-fit columns of [`summary_columns`] on `out`, in this order: `model`,
+/// `samples`, `converged`, `termination`, `verdict` (as the JSON report spells them),
+/// `adequacy`, `adequacy_reasons`, `cost`, `reduced_chi2`, `r2`, `iterations`; one entry
+/// per outcome each.
+fn fit_columns(py: Python<'_>, out: &Bound<'_, PyDict>, outcomes: &[Outcome]) -> PyResult<()> {
     let text = |f: &dyn Fn(&Outcome) -> String| outcomes.iter().map(f).collect::<Vec<String>>();
     out.set_item("model", text(&|o| r(o).full_model()))?;
     // The sample count as `samples`: `n` is the Fresnel factor's index where a fit has one.
@@ -339,7 +353,12 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
             .collect::<Vec<_>>()
             .into_pyarray(py),
     )?;
-    // Parameters, then derived quantities, by name in first-appearance order.
+    Ok(())
+}
+
+/// The names of every parameter, then derived quantity, of the outcomes, each once, in
+/// order of first appearance.
+fn quantity_names(outcomes: &[Outcome]) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();
     for o in outcomes {
         let all = r(o)
@@ -353,32 +372,42 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
             }
         }
     }
-    for name in &names {
-        let mut value = Vec::with_capacity(outcomes.len());
-        let mut stderr = Vec::with_capacity(outcomes.len());
-        let mut determined = Vec::with_capacity(outcomes.len());
-        for o in outcomes {
-            let p = r(o)
-                .params
+    names
+}
+
+/// Sets `name`, `name_stderr` and `name_determined` on `out`: per outcome, the value,
+/// standard error (NaN when not given) and whether it is determined, of the parameter
+/// called `name` or else the derived quantity; NaN / NaN / False where the fit has neither.
+fn quantity_columns(
+    py: Python<'_>,
+    out: &Bound<'_, PyDict>,
+    outcomes: &[Outcome],
+    name: &str,
+) -> PyResult<()> {
+    let mut value = Vec::with_capacity(outcomes.len());
+    let mut stderr = Vec::with_capacity(outcomes.len());
+    let mut determined = Vec::with_capacity(outcomes.len());
+    for o in outcomes {
+        let p = r(o)
+            .params
+            .iter()
+            .find(|p| p.name == name)
+            .map(|p| (p.value, p.stderr, p.determined));
+        let d = || {
+            r(o).derived
                 .iter()
-                .find(|p| &p.name == name)
-                .map(|p| (p.value, p.stderr, p.determined));
-            let d = || {
-                r(o).derived
-                    .iter()
-                    .find(|d| &d.name == name)
-                    .map(|d| (d.value, d.stderr, d.determined))
-            };
-            let (v, se, det) = p.or_else(d).unwrap_or((f64::NAN, None, false));
-            value.push(v);
-            stderr.push(se.unwrap_or(f64::NAN));
-            determined.push(det);
-        }
-        out.set_item(name, value.into_pyarray(py))?;
-        out.set_item(format!("{name}_stderr"), stderr.into_pyarray(py))?;
-        out.set_item(format!("{name}_determined"), determined)?;
+                .find(|d| d.name == name)
+                .map(|d| (d.value, d.stderr, d.determined))
+        };
+        let (v, se, det) = p.or_else(d).unwrap_or((f64::NAN, None, false));
+        value.push(v);
+        stderr.push(se.unwrap_or(f64::NAN));
+        determined.push(det);
     }
-    Ok(out)
+    out.set_item(name, value.into_pyarray(py))?;
+    out.set_item(format!("{name}_stderr"), stderr.into_pyarray(py))?;
+    out.set_item(format!("{name}_determined"), determined)?;
+    Ok(())
 }
 
 /// Run info for a report whose run fields are not read.
