@@ -578,60 +578,7 @@ pub fn summarize(
         if rs.is_empty() {
             continue;
         }
-        let mut verdicts = BTreeMap::new();
-        let mut terminations = BTreeMap::new();
-        for r in &rs {
-            let v = r.verdict.map_or("error", Verdict::name).to_string();
-            *verdicts.entry(v).or_insert(0) += 1;
-            *terminations.entry(termination_name(r)).or_insert(0) += 1;
-        }
-        let mut names: Vec<String> = Vec::new();
-        for r in &rs {
-            for c in &r.checks {
-                if !names.contains(&c.name) {
-                    names.push(c.name.clone());
-                }
-            }
-        }
-        let order = ["sigma", "T", "scale", "T/sigma", "amplitude", "n", "kappa"];
-        names.sort_by_key(|n| order.iter().position(|o| o == n).unwrap_or(order.len()));
-        let quantities = names
-            .iter()
-            .map(|name| {
-                let cs: Vec<&Check> = rs
-                    .iter()
-                    .flat_map(|r| r.checks.iter())
-                    .filter(|c| &c.name == name)
-                    .collect();
-                let errs: Vec<f64> = cs.iter().map(|c| c.rel_error).collect();
-                let (coverage, n_with_stderr) = coverage_of(cs.iter().copied());
-                QuantitySummary {
-                    name: name.clone(),
-                    n: cs.len(),
-                    median_rel_error: median(&errs),
-                    max_rel_error: errs.iter().fold(0.0f64, |m, v| m.max(*v)),
-                    coverage,
-                    n_with_stderr,
-                }
-            })
-            .collect();
-        let (coverage, n_with_stderr) = coverage_of(rs.iter().flat_map(|r| r.checks.iter()));
-        let secs: Vec<f64> = rs
-            .iter()
-            .filter(|r| r.error.is_none())
-            .map(|r| r.seconds)
-            .collect();
-        regimes.push(RegimeSummary {
-            regime,
-            scenes: rs.len(),
-            verdicts,
-            terminations,
-            quantities,
-            coverage,
-            n_with_stderr,
-            median_seconds: median(&secs),
-            errors: rs.iter().filter(|r| r.error.is_some()).count(),
-        });
+        regimes.push(regime_summary(regime, &rs));
     }
     let (coverage, n_with_stderr) = coverage_of(results.iter().flat_map(|r| r.checks.iter()));
     let mut terminations = BTreeMap::new();
@@ -670,6 +617,71 @@ pub fn summarize(
         outliers,
         results,
     }
+}
+
+/// The summary of one regime's scenes `rs`: verdicts and terminations counted, each
+/// quantity's errors and coverage, the regime's coverage and median fit time.
+fn regime_summary(regime: Regime, rs: &[&SceneResult]) -> RegimeSummary {
+    let mut verdicts = BTreeMap::new();
+    let mut terminations = BTreeMap::new();
+    for r in rs {
+        let v = r.verdict.map_or("error", Verdict::name).to_string();
+        *verdicts.entry(v).or_insert(0) += 1;
+        *terminations.entry(termination_name(r)).or_insert(0) += 1;
+    }
+    let quantities = quantity_summaries(rs);
+    let (coverage, n_with_stderr) = coverage_of(rs.iter().flat_map(|r| r.checks.iter()));
+    let secs: Vec<f64> = rs
+        .iter()
+        .filter(|r| r.error.is_none())
+        .map(|r| r.seconds)
+        .collect();
+    RegimeSummary {
+        regime,
+        scenes: rs.len(),
+        verdicts,
+        terminations,
+        quantities,
+        coverage,
+        n_with_stderr,
+        median_seconds: median(&secs),
+        errors: rs.iter().filter(|r| r.error.is_some()).count(),
+    }
+}
+
+/// Per quantity checked in `rs` (in the order σ, T, scale, T/σ, amplitude, n, κ, then
+/// others): its count, median and largest relative error, and coverage.
+fn quantity_summaries(rs: &[&SceneResult]) -> Vec<QuantitySummary> {
+    let mut names: Vec<String> = Vec::new();
+    for r in rs {
+        for c in &r.checks {
+            if !names.contains(&c.name) {
+                names.push(c.name.clone());
+            }
+        }
+    }
+    let order = ["sigma", "T", "scale", "T/sigma", "amplitude", "n", "kappa"];
+    names.sort_by_key(|n| order.iter().position(|o| o == n).unwrap_or(order.len()));
+    names
+        .iter()
+        .map(|name| {
+            let cs: Vec<&Check> = rs
+                .iter()
+                .flat_map(|r| r.checks.iter())
+                .filter(|c| &c.name == name)
+                .collect();
+            let errs: Vec<f64> = cs.iter().map(|c| c.rel_error).collect();
+            let (coverage, n_with_stderr) = coverage_of(cs.iter().copied());
+            QuantitySummary {
+                name: name.clone(),
+                n: cs.len(),
+                median_rel_error: median(&errs),
+                max_rel_error: errs.iter().fold(0.0f64, |m, v| m.max(*v)),
+                coverage,
+                n_with_stderr,
+            }
+        })
+        .collect()
 }
 
 /// Run a recovery: draw the scenes, fit them in parallel (rayon), summarise. `on_done` is

@@ -56,61 +56,17 @@ impl RecoverReport {
             "regime", "scenes", "verdicts", "quantity", "n", "median|err|", "max|err|", "coverage"
         );
         for r in &self.regimes {
-            let verdicts = r
-                .verdicts
-                .iter()
-                .map(|(k, v)| format!("{k} {v}"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let mut first = true;
-            for q in &r.quantities {
-                let (reg, sc, ver) = if first {
-                    (
-                        r.regime.name().to_string(),
-                        r.scenes.to_string(),
-                        verdicts.clone(),
-                    )
-                } else {
-                    (String::new(), String::new(), String::new())
-                };
-                first = false;
-                let _ = writeln!(
-                    s,
-                    "{:<13} {:>6}  {:<18} {:<10} {:>3}  {:>12} {:>12}  {:>8}",
-                    reg,
-                    sc,
-                    ver,
-                    q.name,
-                    q.n,
-                    fmt_num(Some(q.median_rel_error)),
-                    fmt_num(Some(q.max_rel_error)),
-                    fmt_num(q.coverage)
-                );
-            }
-            if first {
-                let _ = writeln!(
-                    s,
-                    "{:<13} {:>6}  {:<18} (nothing scored)",
-                    r.regime.name(),
-                    r.scenes,
-                    verdicts
-                );
-            }
-            let _ = writeln!(
-                s,
-                "{:<13} {:>6}  coverage {} ({} truths), median fit {} s, stops: {}",
-                "",
-                "",
-                fmt_num(r.coverage),
-                r.n_with_stderr,
-                fmt_num(Some(r.median_seconds)),
-                r.terminations
-                    .iter()
-                    .map(|(k, v)| format!("{k} {v}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
+            regime_rows(&mut s, r);
         }
+        self.total_lines(&mut s);
+        self.outlier_lines(&mut s);
+        s
+    }
+
+    /// The run's totals under the regimes: coverage, terminations, convergence and times,
+    /// adequacy flags, and the index line of [`Self::index_line`].
+    fn total_lines(&self, s: &mut String) {
+        use std::fmt::Write as _;
         let _ = writeln!(
             s,
             "\ncoverage (truth within ±2 se): {} of {} scored truths (nominal {:.3})",
@@ -158,6 +114,12 @@ impl RecoverReport {
         if let Some(line) = self.index_line() {
             let _ = writeln!(s, "{line}");
         }
+    }
+
+    /// The truths outside ±COVERAGE_K s.e. with the confidently wrong count, their table,
+    /// and the scenes that ended in an error.
+    fn outlier_lines(&self, s: &mut String) {
+        use std::fmt::Write as _;
         let _ = writeln!(
             s,
             "truths outside ±{COVERAGE_K} se: {} scenes, {} of them converged and confidently wrong (> {} se and > {:.0} %)",
@@ -176,6 +138,66 @@ impl RecoverReport {
                 r.error.as_deref().unwrap_or("")
             );
         }
-        s
     }
+}
+
+/// One regime's rows of the table: a row per scored quantity (the first naming the regime,
+/// its scene count and verdicts), or "(nothing scored)", then its coverage, median fit time
+/// and terminations.
+fn regime_rows(s: &mut String, r: &super::RegimeSummary) {
+    use std::fmt::Write as _;
+    let verdicts = r
+        .verdicts
+        .iter()
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let mut first = true;
+    for q in &r.quantities {
+        let (reg, sc, ver) = if first {
+            (
+                r.regime.name().to_string(),
+                r.scenes.to_string(),
+                verdicts.clone(),
+            )
+        } else {
+            (String::new(), String::new(), String::new())
+        };
+        first = false;
+        let _ = writeln!(
+            s,
+            "{:<13} {:>6}  {:<18} {:<10} {:>3}  {:>12} {:>12}  {:>8}",
+            reg,
+            sc,
+            ver,
+            q.name,
+            q.n,
+            fmt_num(Some(q.median_rel_error)),
+            fmt_num(Some(q.max_rel_error)),
+            fmt_num(q.coverage)
+        );
+    }
+    if first {
+        let _ = writeln!(
+            s,
+            "{:<13} {:>6}  {:<18} (nothing scored)",
+            r.regime.name(),
+            r.scenes,
+            verdicts
+        );
+    }
+    let _ = writeln!(
+        s,
+        "{:<13} {:>6}  coverage {} ({} truths), median fit {} s, stops: {}",
+        "",
+        "",
+        fmt_num(r.coverage),
+        r.n_with_stderr,
+        fmt_num(Some(r.median_seconds)),
+        r.terminations
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
 }
