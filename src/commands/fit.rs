@@ -428,21 +428,23 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             &outcomes,
         );
     }
-    // A signal that came after the fits (while the outputs were written) still says the
-    // run was interrupted: every output is complete, and the exit code is 3.
+    Ok(exit_code(&outcomes, &skipped, &stop))
+}
+
+/// 0 when every fit converged with its uncertainties and intervals computed, nothing was
+/// skipped and no signal came; else 3. A signal that came after the fits (while the
+/// outputs were written) still says the run was interrupted: every output is complete, and
+/// the exit code is 3.
+fn exit_code(outcomes: &[Outcome], skipped: &[String], stop: &Stop) -> u8 {
     let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
-    Ok(
-        if outcomes
-            .iter()
-            .all(|o| o.result.converged() && !o.intervals_stopped && o.result.fitted_computed)
-            && !interrupted
-            && skipped.is_empty()
-        {
-            0
-        } else {
-            3
-        },
-    )
+    let all_usable = outcomes
+        .iter()
+        .all(|o| o.result.converged() && !o.intervals_stopped && o.result.fitted_computed);
+    if all_usable && !interrupted && skipped.is_empty() {
+        0
+    } else {
+        3
+    }
 }
 
 /// Read every input file into the datasets to fit (one per file, or one per group with
