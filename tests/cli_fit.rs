@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{data, fit_json, goniofit, success_stdout};
+use common::{data, fit_json, goniofit, success_stdout, without_progress};
 use predicates::prelude::*;
 use std::path::Path;
 
@@ -491,17 +491,4 @@ fn piped_stderr_has_no_progress_and_quiet_silences_the_summary() {
         "{err:?}"
     );
     assert_eq!(run(true), "", "--quiet");
-}
-
-/// Standard error without the progress lines a run longer than 2 s writes when standard
-/// error is not a terminal ("goniofit: 7 s: fitting …").
-fn without_progress(err: &str) -> String {
-    err.lines()
-        .filter(|l| {
-            let rest = l.strip_prefix("goniofit: ").unwrap_or("");
-            let secs = rest.split(" s: ").next().unwrap_or("");
-            !(rest.contains(" s: ") && !secs.is_empty() && secs.bytes().all(|b| b.is_ascii_digit()))
-        })
-        .map(|l| format!("{l}\n"))
-        .collect()
 }

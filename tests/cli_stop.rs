@@ -3,6 +3,9 @@
 //! `converged: false`, termination `timeout`/`interrupted`, exit 3. The two tests take
 //! turns (a lock), so that each measures its own fit.
 
+mod common;
+
+use common::without_progress;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -748,17 +751,4 @@ fn a_stop_while_reading_ends_the_fit_with_nothing_fitted() {
         .expect("start goniofit");
     let (out, after) = interrupt_after(child, Duration::from_millis(300));
     check(&out, "interrupted", after);
-}
-
-/// Standard error without the progress lines a run longer than 2 s writes when standard
-/// error is not a terminal ("goniofit: 7 s: fitting …").
-fn without_progress(err: &str) -> String {
-    err.lines()
-        .filter(|l| {
-            let rest = l.strip_prefix("goniofit: ").unwrap_or("");
-            let secs = rest.split(" s: ").next().unwrap_or("");
-            !(rest.contains(" s: ") && !secs.is_empty() && secs.bytes().all(|b| b.is_ascii_digit()))
-        })
-        .map(|l| format!("{l}\n"))
-        .collect()
 }

@@ -32,26 +32,7 @@ const KNOWN_MISSES: [(&str, &str); 6] = [
 ];
 
 fn table() -> Vec<HashMap<String, String>> {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ref/factors_reference.csv");
-    let text = std::fs::read_to_string(path).unwrap();
-    let body: String = text
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| format!("{l}\n"))
-        .collect();
-    let mut rdr = csv::Reader::from_reader(body.as_bytes());
-    let headers = rdr.headers().unwrap().clone();
-    rdr.records()
-        .map(|r| {
-            let r = r.unwrap();
-            headers
-                .iter()
-                .zip(r.iter())
-                .map(|(h, v)| (h.to_string(), v.to_string()))
-                .collect()
-        })
-        .collect()
+    common::reference_rows("factors_reference.csv")
 }
 
 /// Why goniofit's fit of this case is not at the reference's best optimum (or honestly

@@ -267,18 +267,10 @@ fn a_fit_with_factors_is_no_worse_than_from_the_plain_optimum() {
     let file = common::data("cornell/acryl_blue.astm");
     let file = file.to_str().unwrap();
     let base = [
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--quantity",
-        "brdf",
-        "--residual",
-        "log",
-        "--channel",
-        "420nm",
-        "--no-intervals",
-        "--json",
-    ];
+        &common::PAINT_BRDF_LOG[..],
+        &["--channel", "420nm", "--no-intervals", "--json"],
+    ]
+    .concat();
     let factors = ["--fresnel", "dielectric", "--shadowing", "smith"];
     let plain = fit_json(&[&base[..], &[file]].concat());
     let init: Vec<String> = ["sigma", "T", "scale", "scale_d"]

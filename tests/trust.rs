@@ -47,24 +47,9 @@ const SLICE: [(&str, &str, &str); 21] = [
 
 /// The reference table's rows by (dataset, model, residual).
 fn reference() -> HashMap<(String, String, String), HashMap<String, String>> {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ref/trust_reference.csv");
-    let text = std::fs::read_to_string(path).unwrap();
-    let body: String = text
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| format!("{l}\n"))
-        .collect();
-    let mut rdr = csv::Reader::from_reader(body.as_bytes());
-    let headers = rdr.headers().unwrap().clone();
-    rdr.records()
-        .map(|r| {
-            let r = r.unwrap();
-            let row: HashMap<String, String> = headers
-                .iter()
-                .zip(r.iter())
-                .map(|(h, v)| (h.to_string(), v.to_string()))
-                .collect();
+    common::reference_rows("trust_reference.csv")
+        .into_iter()
+        .map(|row| {
             let key = (
                 row["dataset"].clone(),
                 row["model"].clone(),

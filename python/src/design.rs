@@ -160,20 +160,9 @@ fn design_and_simulate(
     if simulate == 0 {
         return Ok((d, None, None));
     }
-    let defs = design::quantities(scene.model, &scene.params);
-    let run = |samples: &[Sample]| simulate::simulate(scene, samples, &defs, simulate, seed, None);
-    let before = if request.existing.len() > scene.params.len() {
-        Some(run(&request.existing)?)
-    } else {
-        None
-    };
-    let mut samples = request.existing.clone();
-    samples.extend(
-        d.chosen
-            .iter()
-            .map(|c| Sample::from_degrees(c[0], c[1], c[2])),
-    );
-    Ok((d, Some(run(&samples)?), before))
+    let (before, after) =
+        simulate::before_and_after(scene, &request.existing, &d.chosen, simulate, seed, None)?;
+    Ok((d, Some(after), before))
 }
 
 /// The candidates as a dict of equal-length arrays: `theta_i`, `theta_r`, `phi_r` (degrees),

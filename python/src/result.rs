@@ -250,15 +250,19 @@ impl FitResult {
     /// The report as HTML for notebooks: status, the model comparison of ``auto``, the
     /// tables, and the fit on a log scale.
     fn _repr_html_(&self) -> String {
-        let key = self
-            .svg_figures()
-            .ok()
-            .and_then(|f| f.into_iter().find(|(name, _)| name == "fit_log"));
+        let key = plot::fit::key_svg_of_outcome(
+            &self.config,
+            &self.outcome,
+            self.json(),
+            self.unit.as_deref(),
+        )
+        .ok()
+        .flatten();
         report::html::fragment(
             &self.outcome.result,
             &self.info,
             &report::outcome::comparison(&self.outcome),
-            key.as_ref().map(|(_, svg)| svg.as_str()),
+            key.as_deref(),
         )
     }
 

@@ -168,7 +168,17 @@ pub fn run(a: DesignArgs) -> anyhow::Result<u8> {
     };
     let d = design::design(&scene, &request)?;
     let (before, after) = match a.simulate {
-        Some(draws) => simulated(&scene, &setup, &d, draws, a.seed)?,
+        Some(draws) => {
+            let (before, after) = simulate::before_and_after(
+                &scene,
+                &setup.existing,
+                &d.chosen,
+                draws,
+                a.seed,
+                setup.fit.as_ref(),
+            )?;
+            (before, Some(after))
+        }
         None => (None, None),
     };
     let run = Run {
@@ -336,37 +346,4 @@ fn from_model(a: &DesignArgs) -> anyhow::Result<Setup> {
         existing,
         fit: None,
     })
-}
-
-/// The simulations at the measured geometries alone (None without any) and with the
-/// proposed ones added.
-fn simulated(
-    scene: &Scene,
-    setup: &Setup,
-    d: &design::Design,
-    draws: usize,
-    seed: u64,
-) -> anyhow::Result<(Option<simulate::Simulation>, Option<simulate::Simulation>)> {
-    let defs = design::quantities(scene.model, &scene.params);
-    let fit = setup.fit.as_ref();
-    let before = if setup.existing.len() > scene.params.len() {
-        Some(simulate::simulate(
-            scene,
-            &setup.existing,
-            &defs,
-            draws,
-            seed,
-            fit,
-        )?)
-    } else {
-        None
-    };
-    let mut samples = setup.existing.clone();
-    samples.extend(
-        d.chosen
-            .iter()
-            .map(|c| Sample::from_degrees(c[0], c[1], c[2])),
-    );
-    let after = simulate::simulate(scene, &samples, &defs, draws, seed, fit)?;
-    Ok((before, Some(after)))
 }

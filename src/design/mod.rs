@@ -85,6 +85,23 @@ pub struct Estimate {
     pub derived: bool,
 }
 
+impl Estimate {
+    /// The estimate of quantity `d` whose relative standard error is `relative` (None,
+    /// or not finite: not determined).
+    pub fn of_relative(d: &QuantityDef, relative: Option<f64>) -> Estimate {
+        let relative = relative.filter(|r| r.is_finite());
+        Estimate {
+            name: d.name.clone(),
+            value: d.value,
+            unit: d.unit.clone(),
+            stderr: relative.map(|r| r * d.value.abs()),
+            relative,
+            determined: relative.is_some_and(|r| r <= DETERMINED_RELATIVE_SE),
+            derived: d.derived,
+        }
+    }
+}
+
 /// A candidate geometry, what the model predicts there and what it would add.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Candidate {
@@ -290,17 +307,8 @@ fn estimates(defs: &[QuantityDef], f: &DMatrix<f64>) -> Vec<Estimate> {
                 se
             } else {
                 se.map(|s| s / d.value.abs())
-            }
-            .filter(|r| r.is_finite());
-            Estimate {
-                name: d.name.clone(),
-                value: d.value,
-                unit: d.unit.clone(),
-                stderr: relative.map(|r| r * d.value.abs()),
-                relative,
-                determined: relative.is_some_and(|r| r <= DETERMINED_RELATIVE_SE),
-                derived: d.derived,
-            }
+            };
+            Estimate::of_relative(d, relative)
         })
         .collect()
 }

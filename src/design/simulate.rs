@@ -4,7 +4,7 @@
 //! error. Where a quantity's profile is far from quadratic (σ along the rough ridge) the
 //! two differ, and the simulation is the one to believe.
 
-use super::{Estimate, QuantityDef, Scene, DETERMINED_RELATIVE_SE};
+use super::{Estimate, QuantityDef, Scene};
 use crate::error::{Error, Result};
 use crate::fit::driver::{self, FitConfig, FitInput};
 use crate::fit::problem::{Channels, ResidualKind};
@@ -118,6 +118,33 @@ pub fn simulate(
     })
 }
 
+/// The simulations of a design (see [`simulate`], `draws` fits each, both with `seed`):
+/// at the measured geometries alone (None unless they outnumber the parameters), and at
+/// the measured and the `chosen` geometries (θi, θr, φr in degrees) together.
+pub fn before_and_after(
+    scene: &Scene,
+    existing: &[Sample],
+    chosen: &[[f64; 3]],
+    draws: usize,
+    seed: u64,
+    config: Option<&FitConfig>,
+) -> Result<(Option<Simulation>, Simulation)> {
+    let defs = super::quantities(scene.model, &scene.params);
+    let before = if existing.len() > scene.params.len() {
+        Some(simulate(scene, existing, &defs, draws, seed, config)?)
+    } else {
+        None
+    };
+    let mut samples = existing.to_vec();
+    samples.extend(
+        chosen
+            .iter()
+            .map(|c| Sample::from_degrees(c[0], c[1], c[2])),
+    );
+    let after = simulate(scene, &samples, &defs, draws, seed, config)?;
+    Ok((before, after))
+}
+
 /// The standard deviation of a quantity's design variable cᵀx̂ over the fits, as an
 /// [`Estimate`] at the true value.
 fn scatter(d: &QuantityDef, fits: &[&(Vec<f64>, bool)]) -> Estimate {
@@ -138,14 +165,5 @@ fn scatter(d: &QuantityDef, fits: &[&(Vec<f64>, bool)]) -> Estimate {
         f64::NAN
     };
     let relative = if d.log { sd } else { sd / d.value.abs() };
-    let relative = relative.is_finite().then_some(relative);
-    Estimate {
-        name: d.name.clone(),
-        value: d.value,
-        unit: d.unit.clone(),
-        stderr: relative.map(|r| r * d.value.abs()),
-        relative,
-        determined: relative.is_some_and(|r| r <= DETERMINED_RELATIVE_SE),
-        derived: d.derived,
-    }
+    Estimate::of_relative(d, Some(relative))
 }

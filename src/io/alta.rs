@@ -36,7 +36,7 @@
 
 use super::{Dataset, ReadOptions};
 use crate::error::{Error, Result};
-use crate::geometry::{wrap_phi, Quantity, Sample};
+use crate::geometry::{wrap_phi, Sample};
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -341,7 +341,7 @@ fn build(
     let selected = select(path, h.outputs, opts.channel.as_deref())?;
     let names = channel_names(h.outputs);
     let with_sigma = selected.iter().all(|&c| h.vs[c] > 0);
-    let mut ds = empty(path, selected.len() > 1, with_sigma, h.outputs == 3);
+    let mut ds = super::empty_brdf(path, selected.len() > 1, with_sigma, h.outputs == 3);
     for &c in &selected {
         let vs_at = h.inputs + h.outputs + h.vs[..c].iter().sum::<usize>();
         for (line, v) in rows {
@@ -424,24 +424,5 @@ fn sample(view: [f64; 3], light: [f64; 3]) -> Sample {
         theta_i: polar(light),
         theta_r: polar(view),
         phi_r: wrap_phi(view[1].atan2(view[0]) - light[1].atan2(light[0]) - PI),
-    }
-}
-
-/// An empty dataset for the chosen columns.
-fn empty(path: &Path, labelled: bool, sigma: bool, rgb: bool) -> Dataset {
-    Dataset {
-        path: path.to_path_buf(),
-        headers: Vec::new(),
-        rows: Vec::new(),
-        lines: Vec::new(),
-        samples: Vec::new(),
-        value: Some(Vec::new()),
-        weight: sigma.then(Vec::new),
-        sigma_l: sigma.then(Vec::new),
-        wavelength: rgb.then(Vec::new),
-        wavelength_unit: rgb.then(|| "nm".to_string()),
-        wavelength_origin: rgb.then_some(super::rgl::NOMINAL_ORIGIN),
-        channel: labelled.then(Vec::new),
-        quantity: Some(Quantity::Brdf),
     }
 }

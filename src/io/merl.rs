@@ -23,7 +23,7 @@
 
 use super::{Dataset, ReadOptions};
 use crate::error::{Error, Result};
-use crate::geometry::{wrap_phi, Quantity, Sample};
+use crate::geometry::{wrap_phi, Sample};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::io::Read;
 use std::path::Path;
@@ -154,7 +154,9 @@ pub fn read(
     }
     let selected = super::rgl::select_channels(path, opts.channel.as_deref())?;
     let stride = stride.max(1);
-    let mut ds = empty_dataset(path, selected.len() > 1);
+    // No rows (the columns say everything); channel labels only when more than one
+    // channel is read, so that one channel costs 48 bytes a cell.
+    let mut ds = super::empty_brdf(path, selected.len() > 1, false, true);
     let mut table = vec![0f64; CELLS];
     let mut buf = vec![0u8; 1 << 16];
     for c in 0..3 {
@@ -222,26 +224,6 @@ fn read_table(reader: &mut impl Read, buf: &mut [u8], table: &mut [f64]) -> std:
         }
     }
     Ok(())
-}
-
-/// An empty dataset without rows (the columns say everything); channel labels only when
-/// more than one channel is read (`labelled`), so that one channel costs 48 bytes a cell.
-fn empty_dataset(path: &Path, labelled: bool) -> Dataset {
-    Dataset {
-        path: path.to_path_buf(),
-        headers: Vec::new(),
-        rows: Vec::new(),
-        lines: Vec::new(),
-        samples: Vec::new(),
-        value: Some(Vec::new()),
-        weight: None,
-        sigma_l: None,
-        wavelength: Some(Vec::new()),
-        wavelength_unit: Some("nm".into()),
-        wavelength_origin: Some(super::rgl::NOMINAL_ORIGIN),
-        channel: labelled.then(Vec::new),
-        quantity: Some(Quantity::Brdf),
-    }
 }
 
 /// Read a MERL file by path (see [`read`]).

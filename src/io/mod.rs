@@ -751,6 +751,28 @@ pub fn wavelength_nm_of_channel(name: &str) -> Option<f64> {
     Some(v * unit.map_or(1.0, nm_per))
 }
 
+/// An empty BRDF table of a binary or ALTA file, without rows (its columns say
+/// everything): a value column, `sigma_L` and weights when `sigma`, per-sample channel
+/// labels when `labelled`, and per-sample wavelengths in nm when the channels are the
+/// nominal sRGB ones (`rgb`).
+pub(crate) fn empty_brdf(path: &Path, labelled: bool, sigma: bool, rgb: bool) -> Dataset {
+    Dataset {
+        path: path.to_path_buf(),
+        headers: Vec::new(),
+        rows: Vec::new(),
+        lines: Vec::new(),
+        samples: Vec::new(),
+        value: Some(Vec::new()),
+        weight: sigma.then(Vec::new),
+        sigma_l: sigma.then(Vec::new),
+        wavelength: rgb.then(Vec::new),
+        wavelength_unit: rgb.then(|| "nm".to_string()),
+        wavelength_origin: rgb.then_some(rgl::NOMINAL_ORIGIN),
+        channel: labelled.then(Vec::new),
+        quantity: Some(Quantity::Brdf),
+    }
+}
+
 #[cfg(test)]
 mod group_tests {
     use super::*;

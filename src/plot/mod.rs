@@ -133,10 +133,7 @@ pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
 /// Render `pic` to a PNG file's bytes in memory.
 pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     use image::ImageEncoder;
-    // The size of a picture with a legend depends on the font's text widths.
-    ensure_font()?;
-    let (w, h) = pic.size();
-    let rgb = rgb_buffer(pic)?;
+    let ((w, h), rgb) = rendered(pic)?;
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out)
         .write_image(&rgb, w, h, image::ColorType::Rgb8)
@@ -175,6 +172,12 @@ pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
 
 /// Render `pic` to an RGB buffer in memory (row-major, 3 bytes per pixel, top row first).
 pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
+    Ok(rendered(pic)?.1)
+}
+
+/// `pic` rendered to an RGB buffer, with the size it was rendered at (measured once, with
+/// the font loaded: a picture with a legend sizes itself by its text widths).
+fn rendered<P: Picture>(pic: &P) -> Result<((u32, u32), Vec<u8>)> {
     ensure_font()?;
     let (w, h) = pic.size();
     let mut buf = vec![0u8; w as usize * h as usize * 3];
@@ -185,7 +188,7 @@ pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
         pic.draw(&root).map_err(plot_error(here))?;
         root.present().map_err(plot_error(here))?;
     }
-    Ok(buf)
+    Ok(((w, h), buf))
 }
 
 /// How many colours [`series_color`] has before it repeats.

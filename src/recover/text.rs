@@ -2,6 +2,16 @@
 //! the errors and the ±2 s.e. coverage, the run's totals, and every outlier.
 
 use super::{outliers, RecoverReport, SceneResult, COVERAGE_K, NARROW_LAYOUT};
+use std::collections::BTreeMap;
+
+/// "k1 n1, k2 n2, …" of a tally.
+fn counts(tally: &BTreeMap<String, usize>) -> String {
+    tally
+        .iter()
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// Format a number for the table: 3 significant digits, or `-`.
 fn fmt_num(v: Option<f64>) -> String {
@@ -74,15 +84,7 @@ impl RecoverReport {
             self.n_with_stderr,
             self.nominal_coverage
         );
-        let _ = writeln!(
-            s,
-            "terminations: {}",
-            self.terminations
-                .iter()
-                .map(|(k, v)| format!("{k} {v}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        let _ = writeln!(s, "terminations: {}", counts(&self.terminations));
         let _ = writeln!(
             s,
             "converged {}/{}, errors {}, median fit time {} s, total {} s",
@@ -103,11 +105,7 @@ impl RecoverReport {
             } else {
                 format!(
                     "; reasons: {}",
-                    self.adequacy_reasons
-                        .iter()
-                        .map(|(k, v)| format!("{k} {v}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    counts(&self.adequacy_reasons)
                 )
             }
         );
@@ -146,12 +144,7 @@ impl RecoverReport {
 /// and terminations.
 fn regime_rows(s: &mut String, r: &super::RegimeSummary) {
     use std::fmt::Write as _;
-    let verdicts = r
-        .verdicts
-        .iter()
-        .map(|(k, v)| format!("{k} {v}"))
-        .collect::<Vec<_>>()
-        .join(", ");
+    let verdicts = counts(&r.verdicts);
     let mut first = true;
     for q in &r.quantities {
         let (reg, sc, ver) = if first {
@@ -194,10 +187,6 @@ fn regime_rows(s: &mut String, r: &super::RegimeSummary) {
         fmt_num(r.coverage),
         r.n_with_stderr,
         fmt_num(Some(r.median_seconds)),
-        r.terminations
-            .iter()
-            .map(|(k, v)| format!("{k} {v}"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        counts(&r.terminations)
     );
 }

@@ -65,3 +65,42 @@ pub fn run_json<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, serde_js
         .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
     (out.status.code(), v)
 }
+
+/// The rows of a committed reference table `tests/ref/NAME` (CSV after `#` comment lines),
+/// each as column name → text.
+pub fn reference_rows(name: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/ref")
+        .join(name);
+    let text = std::fs::read_to_string(path).unwrap();
+    let body: String = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let mut rdr = csv::Reader::from_reader(body.as_bytes());
+    let headers = rdr.headers().unwrap().clone();
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            headers
+                .iter()
+                .zip(r.iter())
+                .map(|(h, v)| (h.to_string(), v.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+/// Standard error without the progress lines a run longer than 2 s writes when standard
+/// error is not a terminal ("goniofit: 7 s: fitting …").
+pub fn without_progress(err: &str) -> String {
+    err.lines()
+        .filter(|l| {
+            let rest = l.strip_prefix("goniofit: ").unwrap_or("");
+            let secs = rest.split(" s: ").next().unwrap_or("");
+            !(rest.contains(" s: ") && !secs.is_empty() && secs.bytes().all(|b| b.is_ascii_digit()))
+        })
+        .map(|l| format!("{l}\n"))
+        .collect()
+}

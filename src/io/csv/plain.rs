@@ -112,13 +112,7 @@ struct Lines<R> {
 
 impl<R: BufRead> Lines<R> {
     fn new(mut input: R) -> Self {
-        // A read error here shows again on the next read.
-        if input
-            .fill_buf()
-            .is_ok_and(|b| b.starts_with(b"\xEF\xBB\xBF"))
-        {
-            input.consume(3);
-        }
+        super::records::skip_bom(&mut input);
         Lines {
             input,
             buf: Vec::with_capacity(256),

@@ -109,17 +109,22 @@ pub(crate) struct Records<R> {
     scratch: Box<[u8; 4096]>,
 }
 
+/// Skip a UTF-8 byte-order mark at the start of `input` when its first read holds it whole
+/// (any buffer of 3 bytes or more). A read error here shows again on the next read.
+pub(crate) fn skip_bom<R: BufRead>(input: &mut R) {
+    if input
+        .fill_buf()
+        .is_ok_and(|b| b.starts_with(b"\xEF\xBB\xBF"))
+    {
+        input.consume(3);
+    }
+}
+
 impl<R: BufRead> Records<R> {
     /// The records of `input`; a UTF-8 byte-order mark is skipped when the first read
     /// holds it whole (any buffer of 3 bytes or more).
     pub(crate) fn new(mut input: R, limit: Limit) -> Self {
-        // A read error here shows again on the next read.
-        if input
-            .fill_buf()
-            .is_ok_and(|b| b.starts_with(b"\xEF\xBB\xBF"))
-        {
-            input.consume(3);
-        }
+        skip_bom(&mut input);
         Records {
             input,
             core: csv_core::ReaderBuilder::new().comment(Some(b'#')).build(),

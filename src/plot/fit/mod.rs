@@ -16,8 +16,8 @@ mod polar;
 
 pub use charts::{fit_chart, group_styles, linear_top, residual_chart, GroupStyles};
 pub use of_fit::{
-    plot_fit, plot_status, png_of_outcome, svg_of_fit, svg_of_outcome, undetermined_params,
-    with_plot_input, FitToDraw,
+    key_svg_of_outcome, plot_fit, plot_status, png_of_outcome, svg_of_fit, svg_of_outcome,
+    undetermined_params, with_plot_input, FitToDraw,
 };
 pub use polar::{polar_plot, PolarPlot, POLAR_RIM};
 

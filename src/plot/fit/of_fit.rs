@@ -237,6 +237,23 @@ pub fn svg_of_outcome(
     of_outcome(config, o, json, unit, crate::plot::fit::svg_pictures)
 }
 
+/// The key picture of `o` alone (see [`svg_of_outcome`]): measured and fitted values on a
+/// log scale (`fit_log`), as an SVG document; None when the fitted values were not
+/// evaluated.
+pub fn key_svg_of_outcome(
+    config: &FitConfig,
+    o: &crate::fit::dataset::Outcome,
+    json: &serde_json::Value,
+    unit: Option<&str>,
+) -> Result<Option<String>> {
+    let svg = of_outcome(config, o, json, unit, |input| {
+        super::check(input)?;
+        let chart = super::fit_chart(input, true)?;
+        Ok(vec![(String::new(), crate::plot::svg_string(&chart)?)])
+    })?;
+    Ok(svg.into_iter().next().map(|(_, svg)| svg))
+}
+
 /// As [`svg_of_outcome`], each picture as the bytes of a PNG file.
 pub fn png_of_outcome(
     config: &FitConfig,
