@@ -530,6 +530,62 @@ impl Geometry {
     }
 }
 
+/// Fewest samples on the flank of a Gaussian lobe (between e^{-8} and e^{-1/8} of its
+/// peak) for its width w to count as resolved by the angular sampling.
+pub const MIN_FLANK_SAMPLES: usize = 3;
+
+/// The angular sampling's resolution: which Gaussian lobe widths the samples measure, and
+/// the median roughness g the samples see.
+impl Geometry {
+    /// The offset √q = √((θr − θi)² + φr²/4) (rad) of sample i from the mirror direction, in
+    /// the metric of the Gaussian lobe's exponent (eq. 34: the lobe is exp(−½ q/w²)).
+    fn lobe_offset(&self, i: usize) -> f64 {
+        ((self.theta_r[i] - self.theta_i[i]).powi(2) + 0.25 * self.phi_r[i].powi(2)).sqrt()
+    }
+
+    /// How many samples lie on the flank of a Gaussian lobe of width `w` (rad): between e^{-8}
+    /// and e^{-1/8} of its peak, i.e. at an offset √q between w/2 and 4w.
+    pub fn flank_samples(&self, w: f64) -> usize {
+        (0..self.len())
+            .filter(|&i| (0.5 * w..=4.0 * w).contains(&self.lobe_offset(i)))
+            .count()
+    }
+
+    /// The narrowest Gaussian lobe width (rad) the angular sampling resolves: the smallest w
+    /// with at least [`MIN_FLANK_SAMPLES`] samples on its flank ([`Self::flank_samples`]).
+    /// Exact: for the offsets d sorted ascending, three of them fit in [w/2, 4w] first for
+    /// some three consecutive ones, at w = d_{j+2}/4 when d_{j+2} ≤ 8 d_j. None when no w
+    /// resolves (fewer than three samples off the mirror direction). O(n log n).
+    pub fn resolved_width(&self) -> Option<f64> {
+        let mut d: Vec<f64> = (0..self.len())
+            .map(|i| self.lobe_offset(i))
+            .filter(|&d| d > 0.0 && d.is_finite())
+            .collect();
+        d.sort_by(f64::total_cmp);
+        let k = MIN_FLANK_SAMPLES - 1;
+        d.windows(MIN_FLANK_SAMPLES)
+            .filter(|t| t[k] <= 8.0 * t[0])
+            .map(|t| 0.25 * t[k])
+            .reduce(f64::min)
+    }
+
+    /// The lower bound on a Gaussian lobe's width w in a fit: half of
+    /// [`Self::resolved_width`]. A solver step to a narrower lobe is rejected (as a step
+    /// outside the models' domain), so a lobe the sampling does not resolve ends at this
+    /// bound, where fewer than [`MIN_FLANK_SAMPLES`] samples lie on its flank and the fit's
+    /// acceptance says so, instead of running w to 1e-100. None (no bound) when no width is
+    /// resolved at all.
+    pub fn width_floor(&self) -> Option<f64> {
+        self.resolved_width().map(|w| 0.5 * w)
+    }
+
+    /// Median of g ([`Self::g`]) over the samples at σ = `sigma` (NaN without samples).
+    pub fn median_g(&self, sigma: f64) -> f64 {
+        let g: Vec<f64> = (0..self.len()).map(|i| self.g(i, sigma)).collect();
+        crate::fit::stats::median(&g)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -619,5 +675,33 @@ mod tests {
         assert!(matches!(w, PerSample::Each(_)) && w[1].is_sign_negative());
         let w: PerSample = vec![4.0; 3].into();
         assert_eq!(w.sqrt(), PerSample::One { value: 2.0, len: 3 });
+    }
+
+    /// In-plane samples at θi = 0.2 rad and θr = θi + each offset (rad).
+    fn in_plane(offsets: &[f64]) -> Geometry {
+        let theta_i = 0.2;
+        let s: Vec<Sample> = offsets
+            .iter()
+            .map(|d| Sample {
+                theta_i,
+                theta_r: theta_i + d,
+                phi_r: 0.0,
+            })
+            .collect();
+        Geometry::new(&s, &[1.0], Quantity::Radiance).unwrap()
+    }
+
+    #[test]
+    fn resolved_width_is_the_narrowest_lobe_with_three_flank_samples() {
+        // Offsets 0, 0.1, 0.2, 0.3, 1.2 rad: the first three off the mirror fit in
+        // [w/2, 4w] from w = 0.3/4 on.
+        let geo = in_plane(&[0.0, 0.1, 0.2, 0.3, 1.2]);
+        let w = geo.resolved_width().unwrap();
+        assert!((w - 0.075).abs() < 1e-15, "{w}");
+        assert_eq!(geo.flank_samples(w), 3);
+        assert_eq!(geo.flank_samples(w * (1.0 - 1e-12)), 2);
+        assert_eq!(geo.width_floor(), Some(0.5 * w));
+        // Offsets 0.01, 0.1, 1 rad: no three within a factor 8 of each other, so none.
+        assert_eq!(in_plane(&[0.01, 0.1, 1.0]).resolved_width(), None);
     }
 }

@@ -1,5 +1,5 @@
 //! The Gaussian lobe's width has a lower bound tied to the angular sampling
-//! (`validate::width_floor`): a lobe the data resolves ends at its optimum, one narrower
+//! (`Geometry::width_floor`): a lobe the data resolves ends at its optimum, one narrower
 //! than the sampling ends `degenerate` at the bound with the reason, never at w ~ 1e-100.
 
 mod common;

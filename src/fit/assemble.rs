@@ -2,15 +2,15 @@
 //! standard errors and whether each is determined, derived quantities, evaluation modes.
 //! The conventions (cost, χ², covariance, AIC/BIC) are in [`super::driver`]'s module doc.
 
+use super::accept::{lower_bound_note, termination_note};
 use super::adequacy::{self, Adequacy};
 use super::config::FitConfig;
+use super::edges::at_lower_bound;
 use super::identify::{log_covariance, DETERMINED_MAX_LOG_SE};
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
-use super::reduce::Solved;
-use super::result::{Derived, FitResult, ParamResult, StageSeconds, Verdict};
+use super::result::{Derived, FitResult, ParamResult, Solved, StageSeconds, Verdict};
 use super::start::Start;
 use super::stats;
-use super::validate;
 use super::validity;
 use crate::model::{Model, ParamSpec};
 use nalgebra::DMatrix;
@@ -63,7 +63,7 @@ pub(super) fn assemble(
     fresnel_reach(&mut params, &input.geo, &mut notes);
     let derived = derived_quantities(layout, specs, p, &unc, verdict);
     let modes = mode_counts(&sample_modes);
-    notes.extend(validate::termination_note(run.lm.termination));
+    notes.extend(termination_note(run.lm.termination));
     let result = FitResult {
         model: model.name().to_string(),
         factors: factors_label(model),
@@ -406,9 +406,9 @@ fn param_results(
         let se = log_se(k).map(|s| s * fp.transform.dp_dx(fp.transform.to_x(p[k])).abs());
         // The relative standard error (that of ln p: x's for the log transform).
         let loose = se.is_some_and(|s| fp.transform.is_log() && s / p[k] > DETERMINED_MAX_LOG_SE);
-        let at_bound = validate::at_lower_bound(fp, p[k], se);
+        let at_bound = at_lower_bound(fp, p[k], se);
         if at_bound {
-            notes.push(validate::lower_bound_note(fp));
+            notes.push(lower_bound_note(fp));
         }
         let determined = fp.fixed.is_none()
             && !reduced_away

@@ -1,7 +1,7 @@
 //! What a fit is asked to do: the model, residual kind, starting values, fixed parameters
 //! and solver settings ([`FitConfig`]), and the residual floor that follows from them.
 
-use super::lm::LmConfig;
+use super::lm::{LmConfig, Stop};
 use super::loss::Loss;
 use super::problem::ResidualKind;
 use crate::model::ModelOptions;
@@ -44,6 +44,14 @@ impl Default for FitConfig {
             weights_are_uncertainties: false,
             reduce: true,
         }
+    }
+}
+
+impl FitConfig {
+    /// Whether the fit's stop request (`lm.stop`) has fired: later stages then keep the
+    /// best point so far instead of refitting.
+    pub fn stop_requested(&self) -> bool {
+        self.lm.stop.as_ref().is_some_and(Stop::is_requested)
     }
 }
 

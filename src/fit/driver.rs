@@ -12,16 +12,18 @@
 
 pub use super::assemble::standardized_residuals;
 pub use super::config::{residual_floor, FitConfig};
+use super::edges::at_kbs_edge;
 pub use super::identify::{
     ALIGN, DETERMINED_MAX_LOG_SE, LOOSE_LOG_SE, RANK_THRESHOLD, ROUGH_G, SMOOTH_G,
 };
 use super::lm::Stop;
+use super::prepare::{prepare, rough_by_construction};
 pub use super::problem::FitInput;
 use super::problem::FitProblem;
 use super::problem::ParamLayout;
 pub use super::result::{Derived, FitResult, ParamResult, StageSeconds, Verdict};
 pub use super::start::{GRID_TOL, REFINE_TOL};
-use super::{assemble, identify, reduce, solve, start, validate};
+use super::{accept, assemble, identify, reduce, solve, start};
 use crate::error::{Error, Result};
 use crate::model::{self, EvalMode, Model};
 use std::time::Instant;
@@ -32,12 +34,12 @@ pub fn fit(input: &FitInput, config: &FitConfig) -> Result<FitResult> {
     fit_model(model.as_ref(), input, config)
 }
 
-/// Run a fit with a built model: start search → solve → identify → reduce → validate →
-/// assemble (the input is validated first).
+/// Run a fit with a built model: prepare (the layout; unfittable data refused) → start
+/// search → solve → identify → reduce → accept → assemble.
 pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Result<FitResult> {
     let t0 = Instant::now();
     let config = &with_stop(config);
-    let (layout, given) = validate::prepare(model, input, config)?;
+    let (layout, given) = prepare(model, input, config)?;
     let floor = residual_floor(config, &input.y);
     // The full problem is built while the starting values are searched for on subsamples.
     let (problem, start) = rayon::join(
@@ -57,21 +59,21 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         }
     }
     // A stop before the Jacobian at the best point was evaluated leaves no uncertainty.
-    let uncomputed = !run.lm.jacobian.iter().all(|v| v.is_finite()) && stop_requested(config);
+    let uncomputed = !run.lm.jacobian.iter().all(|v| v.is_finite()) && config.stop_requested();
     let mut identified = identify::identify(input, &problem, &run, config.reduce);
     // The uncertainty is computed: the n × p Jacobian is not needed any more.
     let mut run = run;
     run.lm.jacobian = nalgebra::DMatrix::zeros(0, 0);
     if uncomputed {
         identified.verdict = Verdict::NotComputed;
-    } else if validate::rough_by_construction(model, config) {
+    } else if rough_by_construction(model, config) {
         identified.verdict = Verdict::Rough;
     }
     let mut solved = reduce::reduce(model, input, config, problem, run, identified)?;
     if uncomputed {
         solved.notes.push(UNCERTAINTIES_NOT_COMPUTED.to_string());
     }
-    validate::accept(&mut solved, input);
+    accept::accept(&mut solved, input);
     let seconds = t0.elapsed().as_secs_f64();
     let stages = StageSeconds {
         grid: start.start_seconds,
@@ -108,7 +110,7 @@ pub const UNCERTAINTIES_NOT_COMPUTED: &str = "the fit was stopped before the Jac
 
 /// Solve from the start, and from each of the start search's rival valleys
 /// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain
-/// ([`validate::at_kbs_edge`]), solve again from each other usable refined candidate, and
+/// ([`at_kbs_edge`]), solve again from each other usable refined candidate, and
 /// keep the lowest-cost run inside the domain unless the edge run is lower by more than
 /// [`start::EDGE_MARGIN`] (then the edge run: the fit ends `degenerate` and says why).
 /// A fit that may reduce starts and stays below the rough ridge's [`solve::RIDGE_G`]
@@ -130,15 +132,15 @@ fn solve_checked(
     };
     let first = solve(&start.p0);
     let layout = &problem.layout;
-    if !validate::at_kbs_edge(layout, input, &first.values) {
-        let inside = |p: &[f64]| !validate::at_kbs_edge(layout, input, p);
+    if !at_kbs_edge(layout, input, &first.values) {
+        let inside = |p: &[f64]| !at_kbs_edge(layout, input, p);
         let best = best_of_rivals(first, &start.rivals, &solve, &inside, config);
         return leave_small_basins(problem, best, &solve, &inside, config);
     }
     let mut runs = vec![first];
     let mut cut = false;
     for p0 in &start.alternatives {
-        if stop_requested(config) {
+        if config.stop_requested() {
             cut = true;
             break;
         }
@@ -148,7 +150,7 @@ fn solve_checked(
     let lowest = |edge: bool| {
         (0..runs.len())
             .filter(|&i| !runs[i].joined)
-            .filter(|&i| validate::at_kbs_edge(layout, input, &runs[i].values) == edge)
+            .filter(|&i| at_kbs_edge(layout, input, &runs[i].values) == edge)
             .min_by(|&a, &b| runs[a].lm.cost.total_cmp(&runs[b].lm.cost))
     };
     let edge = lowest(true).unwrap_or(0);
@@ -162,7 +164,7 @@ fn solve_checked(
         chosen.add_counts(&other.lm);
     }
     if cut {
-        mark_cut(&mut chosen, config);
+        chosen.mark_cut(&config.lm);
     }
     chosen
 }
@@ -180,7 +182,7 @@ fn best_of_rivals(
     let mut kept = first;
     let mut cut = false;
     for p0 in rivals {
-        if stop_requested(config) {
+        if config.stop_requested() {
             cut = true;
             break;
         }
@@ -195,7 +197,7 @@ fn best_of_rivals(
         kept.add_counts(&other.lm);
     }
     if cut {
-        mark_cut(&mut kept, config);
+        kept.mark_cut(&config.lm);
     }
     kept
 }
@@ -241,7 +243,7 @@ fn leave_small_basins(
     };
     let mut run = run;
     for _ in 0..PROBE_ROUNDS {
-        if stop_requested(config) {
+        if config.stop_requested() {
             break;
         }
         // The smallest step with a probe lower than the point, and its lowest probe.
@@ -281,15 +283,6 @@ fn was_stopped(run: &solve::Run) -> bool {
         run.lm.termination,
         super::lm::Termination::Timeout | super::lm::Termination::Interrupted
     )
-}
-
-/// A converged run kept while a stop request cut the other starts short ends with the
-/// stop's termination: it is the best point found, not the fit's answer.
-pub(super) fn mark_cut(run: &mut solve::Run, config: &FitConfig) {
-    let why = config.lm.stop.as_ref().and_then(Stop::requested);
-    if let Some(why) = why.filter(|_| run.lm.termination.converged()) {
-        run.lm.termination = why;
-    }
 }
 
 /// Largest g a forced `--mode series` fit accepts at its start: the series sums O(√g) terms
@@ -334,10 +327,4 @@ fn with_stop(config: &FitConfig) -> FitConfig {
         config.lm.stop = Some(config.lm.new_stop());
     }
     config
-}
-
-/// Whether the fit's stop request (see [`with_stop`]) has fired: later stages then keep the
-/// best point so far instead of refitting.
-pub(super) fn stop_requested(config: &FitConfig) -> bool {
-    config.lm.stop.as_ref().is_some_and(Stop::is_requested)
 }

@@ -49,7 +49,7 @@ pub(super) fn identify(
     let mut g_median = None;
     if has_kbs && seek_verdict {
         let sig = problem.layout.find("sigma")[0];
-        let g = median_g(input, run.values[sig]);
+        let g = input.geo.median_g(run.values[sig]);
         g_median = Some(g);
         if let Some(v) = kbs_verdict(&problem.layout, &unc, &run.values, g) {
             verdict = v;
@@ -126,14 +126,6 @@ pub(super) fn log_covariance(
     DMatrix::from_fn(free.len(), free.len(), |i, j| {
         unc.covariance[(i, j)] * f[i] * f[j]
     })
-}
-
-/// Median of g over the samples at σ = `sigma`.
-pub(super) fn median_g(input: &FitInput, sigma: f64) -> f64 {
-    let g: Vec<f64> = (0..input.geo.len())
-        .map(|i| input.geo.g(i, sigma))
-        .collect();
-    stats::median(&g)
 }
 
 /// Decide whether the (σ, T, scale) block is only partly determined, and which regime's

@@ -1,8 +1,9 @@
 //! Fitting: Levenberg–Marquardt as an argmin solver ([`lm`]), covariance and
 //! identifiability ([`stats`]), the reflectance least-squares problem ([`problem`]) and its parameters ([`layout`]),
 //! starting values ([`init`]) and the whole fit ([`driver`]), whose stages each have a
-//! file: start search (`start`), solve (`solve`), identify (`identify`), reduce
-//! (`reduce`), validate (`validate`) and assemble (`assemble`); a dataset's fit with
+//! file: prepare (`prepare`), start search (`start`), solve (`solve`), identify
+//! (`identify`), reduce (`reduce`), accept (`accept`, with the domain's edges in `edges`)
+//! and assemble (`assemble`); a dataset's fit with
 //! model selection, shared by the CLI and the Python package ([`dataset`]).
 
 pub mod adequacy;
@@ -22,12 +23,14 @@ pub mod stats;
 pub mod validity;
 pub mod weights;
 
+mod accept;
 mod assemble;
 mod bounds;
 mod config;
+mod edges;
 mod identify;
+mod prepare;
 mod reduce;
 mod result;
 mod solve;
 mod start;
-mod validate;

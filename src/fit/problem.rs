@@ -130,7 +130,7 @@ pub struct FitProblem<'a> {
     /// The robust loss on the weighted residuals (linear: plain least squares).
     loss: Loss,
     /// The Gaussian lobe's width: (model parameter index of `w`, its lower bound from the
-    /// angular sampling, [`super::validate::width_floor`]); None without a lobe.
+    /// angular sampling, [`Geometry::width_floor`]); None without a lobe.
     w_floor: Option<(usize, f64)>,
     /// The Jacobian (and with a robust loss the step residuals) computed alongside the last
     /// residual evaluation: the models produce derivatives at little extra cost, and LM asks
@@ -468,7 +468,7 @@ fn channel_roughness(
 /// of `w`, bound), None for models without a lobe or samples that resolve no width.
 fn width_floor(model: &dyn Model, geo: &Geometry) -> Option<(usize, f64)> {
     let jw = model.params().iter().position(|s| s.name == "w")?;
-    Some((jw, super::validate::width_floor(geo)?))
+    Some((jw, geo.width_floor()?))
 }
 
 /// Whether every channel's lobe width w is at least its floor (true without one).
@@ -508,7 +508,7 @@ impl FitProblem<'_> {
     /// evaluated at their stated cost and accuracy: finite values, σ, T > 0 and normal,
     /// g ≤ [`G_FIT_MAX`], a ≤ [`A_FIT_MAX`], and a Gaussian lobe no narrower than half the
     /// narrowest width the angular sampling resolves
-    /// ([`super::validate::width_floor`]). Outside, the solver sees non-finite residuals and
+    /// ([`Geometry::width_floor`]). Outside, the solver sees non-finite residuals and
     /// rejects the step.
     pub fn in_domain(&self, p: &[f64]) -> bool {
         let Some(sc) = channel_roughness(self.model, &self.layout, p) else {

@@ -10,25 +10,14 @@
 
 use super::config::FitConfig;
 use super::identify::{log_covariance, uncertainty_of, Identified, RANK_THRESHOLD};
+use super::prepare::rough_by_construction;
 use super::problem::{FitInput, FitProblem, ParamLayout};
-use super::result::Verdict;
+use super::result::{Solved, Verdict};
 use super::solve::{run_lm, Run};
 use super::stats;
 use crate::error::Result;
 use crate::model::Model;
 use nalgebra::DMatrix;
-
-/// The problem and solver run a report describes (the first solve, or the reduced refit),
-/// with its uncertainty, verdict and the notes that explain the verdict.
-pub(super) struct Solved<'m> {
-    pub problem: FitProblem<'m>,
-    pub run: Run,
-    pub unc: stats::Uncertainty,
-    pub verdict: Verdict,
-    pub notes: Vec<String>,
-    /// Why the point is not a usable optimum ([`super::validate::accept`]; also in `notes`).
-    pub unusable: Option<String>,
-}
 
 /// The reduced refit when the verdict is a known regime and σ is free; otherwise the first
 /// solve as it is. The refit starts at the first solve's optimum, and its report counts the
@@ -49,7 +38,7 @@ pub(super) fn reduce<'m>(
         notes: Vec::new(),
         unusable: None,
     };
-    if super::validate::rough_by_construction(model, config) {
+    if rough_by_construction(model, config) {
         // σ is held from the start: nothing to reduce.
         solved.notes.push(ROUGH_MODEL_NOTE.to_string());
         return Ok(solved);
@@ -63,7 +52,7 @@ pub(super) fn reduce<'m>(
     let sig = solved.problem.layout.find("sigma")[0];
     let regime = matches!(id.verdict, Verdict::Rough | Verdict::Smooth);
     // After a stop request the first solve's point is the best so far: no refit.
-    let mut stopped = super::driver::stop_requested(config);
+    let mut stopped = config.stop_requested();
     if regime && !stopped && solved.problem.layout.params[sig].fixed.is_none() {
         let mut reduced = solved.problem.layout.clone();
         reduced.params[sig].fixed = Some(solved.run.values[sig]);
@@ -73,7 +62,7 @@ pub(super) fn reduce<'m>(
             FitProblem::new(model, reduced, input, config.residual, floor)?.with_loss(config.loss);
         let mut red = run_lm(&problem_red, &p_start, &config.lm);
         let finite = red.lm.cost.is_finite() && red.lm.jacobian.iter().all(|v| v.is_finite());
-        if !finite && super::driver::stop_requested(config) {
+        if !finite && config.stop_requested() {
             // Stopped before the refit had a point with its Jacobian: the first solve stays.
             stopped = true;
         } else {
@@ -83,7 +72,7 @@ pub(super) fn reduce<'m>(
             // is not evaluated (NaN), and the conditional uncertainty stays.
             let x = solved.problem.layout.to_x(&red.values);
             let jac = solved.problem.jacobian_until(&x, config.lm.stop.as_ref());
-            if !jac.iter().all(|v| v.is_finite()) && super::driver::stop_requested(config) {
+            if !jac.iter().all(|v| v.is_finite()) && config.stop_requested() {
                 solved.notes.push(MARGINAL_NOT_COMPUTED.to_string());
             }
             solved.unc = marginal_uncertainty(&solved.problem, &jac, &red, id.verdict, conditional);
@@ -93,7 +82,7 @@ pub(super) fn reduce<'m>(
     }
     if stopped && regime {
         // The unreduced point is the best found, not the fit's answer.
-        super::driver::mark_cut(&mut solved.run, config);
+        solved.run.mark_cut(&config.lm);
     }
     solved.notes.push(if stopped && regime {
         format!("the fit was stopped before the reduced refit (median g = {g_median:.3e}): the data determines only a regime's combinations, and σ, T, scale are those of the unreduced fit")
@@ -108,7 +97,7 @@ pub(super) fn reduce<'m>(
 const MARGINAL_NOT_COMPUTED: &str = "the fit was stopped before the marginal uncertainty (σ free) of the determined combinations was computed: their standard errors are those with σ held at its estimate, which can be too narrow";
 
 /// The note of a `kbs-rough` fit (σ held by construction, see
-/// [`super::validate::rough_by_construction`]).
+/// [`rough_by_construction`]).
 const ROUGH_MODEL_NOTE: &str = "kbs-rough (the paper's rough approximation, eq. 43) depends on σ and T only through T/σ: the data determines the slope T/σ (Beckmann's α = 2σ/T) and the lobe amplitude s·(T/σ)², but not σ and T separately; σ was held and σ, T are reported as undetermined (fit kbs for σ and T, which the full model can separate only where the lobe is not fully rough)";
 
 /// The report's note on a verdict other than [`Verdict::Full`].

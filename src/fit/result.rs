@@ -4,10 +4,24 @@
 
 use super::lm::Termination;
 use super::loss::Loss;
-use super::problem::ParamLayout;
+use super::problem::{FitProblem, ParamLayout};
+use super::solve::Run;
+use super::stats;
 use crate::model::Mode;
 use nalgebra::DMatrix;
 use std::collections::BTreeMap;
+
+/// The problem and solver run a report describes (the first solve, or the reduced refit),
+/// with its uncertainty, verdict and the notes that explain the verdict.
+pub(super) struct Solved<'m> {
+    pub problem: FitProblem<'m>,
+    pub run: Run,
+    pub unc: stats::Uncertainty,
+    pub verdict: Verdict,
+    pub notes: Vec<String>,
+    /// Why the point is not a usable optimum ([`super::accept::accept`]; also in `notes`).
+    pub unusable: Option<String>,
+}
 
 /// One fitted parameter.
 #[derive(Debug, Clone, serde::Serialize)]

@@ -15,6 +15,17 @@ pub(super) struct Run {
     pub joined: bool,
 }
 
+impl Run {
+    /// A converged run kept while a stop request cut the other starts short ends with the
+    /// stop's termination: it is the best point found, not the fit's answer.
+    pub fn mark_cut(&mut self, config: &LmConfig) {
+        let why = config.stop.as_ref().and_then(Stop::requested);
+        if let Some(why) = why.filter(|_| self.lm.termination.converged()) {
+            self.lm.termination = why;
+        }
+    }
+}
+
 /// Minimise `problem` from `p0` (parameter space, layout order): the solver works in the
 /// transformed space x of the layout, and the result is mapped back.
 pub(super) fn run_lm(problem: &FitProblem, p0: &[f64], config: &LmConfig) -> Run {
@@ -153,7 +164,7 @@ impl SigmaRange {
             }
         };
         let (sigma, t) = (free("sigma")?, free("T")?);
-        let g1 = super::identify::median_g(input, 1.0);
+        let g1 = input.geo.median_g(1.0);
         let (min, max) = ((SMOOTH_RIDGE_G / g1).sqrt(), (RIDGE_G / g1).sqrt());
         let scale = free("scale");
         (min.is_normal() && max.is_finite()).then_some(SigmaRange {

@@ -117,12 +117,11 @@ impl<'m> Refiners<'m> {
     /// [`init::SMOOTH_BAND_G`]), between 1, rough 2 (above [`init::ROUGH_BAND_G`]); None
     /// without σ.
     fn band(&self, p: &[f64]) -> Option<u8> {
-        self.sigma_k
-            .map(|k| match super::identify::median_g(&self.sub, p[k]) {
-                g if g < init::SMOOTH_BAND_G => 0,
-                g if g > init::ROUGH_BAND_G => 2,
-                _ => 1,
-            })
+        self.sigma_k.map(|k| match self.sub.geo.median_g(p[k]) {
+            g if g < init::SMOOTH_BAND_G => 0,
+            g if g > init::ROUGH_BAND_G => 2,
+            _ => 1,
+        })
     }
 
     /// Append a copy of the best smooth-band candidate when the grid ranks it within
@@ -282,7 +281,7 @@ pub(super) fn starting_point(
     // After a stop request nothing is refined (the fit's first evaluation on the whole data
     // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
-        let at_edge = |p: &[f64]| super::validate::at_kbs_edge(layout, input, p);
+        let at_edge = |p: &[f64]| super::edges::at_kbs_edge(layout, input, p);
         let chosen = refine_and_choose(
             &refiners,
             &candidates,
