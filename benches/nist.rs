@@ -15,8 +15,8 @@
 #[path = "../tests/nist/problems.rs"]
 mod problems;
 
-use goniofit::fit::lm::{minimize, LeastSquaresProblem as _, LmConfig};
 use goniofit::fit::stats::median;
+use goniofit::lm::{minimize, LeastSquaresProblem as _, LmConfig};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use problems::{lre, Nist};
@@ -60,7 +60,7 @@ struct Ours<'a> {
     njac: Cell<u64>,
 }
 
-impl goniofit::fit::lm::LeastSquaresProblem for Ours<'_> {
+impl goniofit::lm::LeastSquaresProblem for Ours<'_> {
     fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
         self.nres.set(self.nres.get() + 1);
         self.p.residuals(x)

@@ -1,7 +1,8 @@
 //! goniofit: fit physical light-scattering models to gonioreflectometer measurements.
 //!
 //! Layers: [`geometry`] (angles and per-sample quantities), [`model`] (one file per model),
-//! [`fit`] (Levenberg–Marquardt as an argmin solver, statistics), [`io`] (readers and
+//! [`lm`] (Levenberg–Marquardt as an argmin solver, on argmin, nalgebra and std alone),
+//! [`fit`] (the fit pipeline and its statistics), [`io`] (readers and
 //! writers), [`report`] and [`plot`].
 
 pub mod design;
@@ -9,6 +10,7 @@ pub mod error;
 pub mod fit;
 pub mod geometry;
 pub mod io;
+pub mod lm;
 pub mod model;
 pub mod plot;
 pub mod recover;

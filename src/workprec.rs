@@ -16,10 +16,10 @@
 use crate::error::Result;
 use crate::fit::driver::{self, FitConfig, FitInput};
 use crate::fit::init;
-use crate::fit::lm::{self, LeastSquaresProblem, LmConfig};
 use crate::fit::problem::{Channels, FitProblem, ParamLayout, ResidualKind};
 use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
+use crate::lm::{self, LeastSquaresProblem, LmConfig};
 use crate::model::{self, EvalMode, Model, ModelOptions};
 use crate::synth::{self, Layout, Noise};
 use nalgebra::{DMatrix, DVector};

@@ -275,8 +275,8 @@ fn problem_jacobian_matches_central_differences() {
     // The solver's Jacobian (√w ∂r/∂f ∂f/∂p dp/dx, assembled per block) against central
     // differences of its residuals: every residual kind, two channels with per-channel
     // scales, unequal weights, and one parameter held fixed.
-    use goniofit::fit::lm::{finite_difference_jacobian, LeastSquaresProblem};
     use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
+    use goniofit::lm::{finite_difference_jacobian, LeastSquaresProblem};
     let model = by_name("kbs+lambert", &ModelOptions::default()).unwrap();
     let mut input = joint_synthetic(
         "kbs+lambert",
@@ -381,7 +381,7 @@ fn with_stoppable_kbs(
         &goniofit::fit::problem::FitProblem,
         &nalgebra::DVector<f64>,
         &std::sync::atomic::AtomicBool,
-        &goniofit::fit::lm::Stop,
+        &goniofit::lm::Stop,
     ),
 ) {
     use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
@@ -399,7 +399,7 @@ fn with_stoppable_kbs(
     let problem =
         FitProblem::new(model.as_ref(), layout, &input, ResidualKind::Absolute, 1e-9).unwrap();
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let stop = goniofit::fit::lm::Stop::new(None, Some(flag.clone()));
+    let stop = goniofit::lm::Stop::new(None, Some(flag.clone()));
     check(&input, &problem, &x, &flag, &stop);
 }
 

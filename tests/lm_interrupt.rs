@@ -6,7 +6,7 @@
 #[cfg(unix)]
 #[test]
 fn sigint_interrupts_a_running_fit() {
-    use goniofit::fit::lm::{minimize, LeastSquaresProblem, LmConfig, Termination};
+    use goniofit::lm::{minimize, LeastSquaresProblem, LmConfig, Termination};
     use nalgebra::{DMatrix, DVector};
     use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -32,7 +32,7 @@ fn sigint_interrupts_a_running_fit() {
 
     // The host's handler: the library installs none.
     ctrlc::set_handler(|| {
-        goniofit::fit::lm::stop::interrupt();
+        goniofit::lm::stop::interrupt();
     })
     .expect("install the handler");
     let p = Slow(AtomicU64::new(0));

@@ -12,8 +12,8 @@
 #[path = "nist/problems.rs"]
 mod problems;
 
-use goniofit::fit::lm::{finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig};
 use goniofit::fit::stats::uncertainty;
+use goniofit::lm::{finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig};
 use nalgebra::DVector;
 use problems::{lre, Nist};
 use std::path::Path;

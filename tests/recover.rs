@@ -1,7 +1,7 @@
 //! A seeded small recovery run: coverage of the reported uncertainties in a sensible band,
 //! and small recovery errors in the quantities the fits say the data determines.
 
-use goniofit::fit::lm::Stop;
+use goniofit::lm::Stop;
 use goniofit::recover::{self, RecoverConfig, Regime};
 
 /// Every scored quantity of `r` within `max_rel` of its truth.

@@ -4,9 +4,9 @@
 //! or stops with a clear reason; never NaN in a reported value, never a panic.
 
 use goniofit::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
-use goniofit::fit::lm::LmConfig;
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::{Geometry, Quantity};
+use goniofit::lm::LmConfig;
 use goniofit::model::{by_name, ModelOptions};
 use goniofit::synth::{generate, AnglesDeg, Layout, Noise, NoiseKind};
 use std::time::Duration;

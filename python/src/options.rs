@@ -6,11 +6,11 @@
 use crate::convert::to_py_err;
 use goniofit::fit::dataset::DatasetFit;
 use goniofit::fit::driver::FitConfig;
-use goniofit::fit::lm::LmConfig;
 use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::arrays;
+use goniofit::lm::LmConfig;
 use goniofit::model::fresnel::Fresnel;
 use goniofit::model::shadowing::Shadowing;
 use goniofit::model::{self, EvalMode, Model, ModelOptions};

@@ -5,11 +5,11 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
 use goniofit::fit::driver::{FitConfig, FitInput};
-use goniofit::fit::lm::{LmConfig, Stop};
 use goniofit::fit::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::{self, Dataset, FileSet, ReadOptions};
+use goniofit::lm::{LmConfig, Stop};
 use goniofit::model::parse_assignments;
 use goniofit::report::outcome::SettingSource;
 use goniofit::report::{self, RunInfo};
@@ -436,7 +436,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
 /// outputs were written) still says the run was interrupted: every output is complete, and
 /// the exit code is 3.
 fn exit_code(outcomes: &[Outcome], skipped: &[String], stop: &Stop) -> u8 {
-    let interrupted = stop.requested() == Some(goniofit::fit::lm::Termination::Interrupted);
+    let interrupted = stop.requested() == Some(goniofit::lm::Termination::Interrupted);
     let all_usable = outcomes
         .iter()
         .all(|o| o.result.converged() && !o.intervals_stopped && o.result.fitted_computed);

@@ -2,7 +2,7 @@
 //! uncertainties.
 
 use clap::Args;
-use goniofit::fit::lm::Stop;
+use goniofit::lm::Stop;
 use goniofit::recover::{self, RecoverConfig};
 use std::io::IsTerminal as _;
 use std::time::Duration;

@@ -8,7 +8,7 @@
 /// installed, signals keep their previous behaviour.
 pub fn install() {
     let _ = ctrlc::set_handler(|| {
-        if !goniofit::fit::lm::stop::interrupt() {
+        if !goniofit::lm::stop::interrupt() {
             goniofit::io::output::remove_temporaries();
             std::process::exit(130);
         }

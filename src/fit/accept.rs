@@ -3,11 +3,11 @@
 //! report gives on points that are not.
 
 use super::edges::{at_lower_bound, below, MIN_KT, MIN_T_OVER_SIGMA};
-use super::lm::Termination;
 use super::problem::{FitInput, FitParam, ParamLayout, LINEAR};
 use super::result::{Solved, Verdict};
 use super::stats;
 use crate::geometry::{Geometry, MIN_FLANK_SAMPLES};
+use crate::lm::Termination;
 use crate::model::ParamSpec;
 
 /// The note for a parameter at its lower bound.

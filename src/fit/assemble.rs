@@ -158,7 +158,7 @@ fn checked(
 fn fitted_at_point(
     problem: &FitProblem,
     input: &FitInput,
-    lm: &super::lm::LmReport,
+    lm: &crate::lm::LmReport,
     p: &[f64],
     config: &FitConfig,
     notes: &mut Vec<String>,
@@ -198,7 +198,7 @@ pub const SAMPLES_NOT_COMPUTED: &str = "the fit was stopped before the evaluatio
 pub const QUICK_EVALUATION_SECONDS: f64 = 0.25;
 
 /// Whether the solver's evaluations took at most [`QUICK_EVALUATION_SECONDS`] each.
-fn quick(lm: &super::lm::LmReport) -> bool {
+fn quick(lm: &crate::lm::LmReport) -> bool {
     lm.seconds <= QUICK_EVALUATION_SECONDS * lm.evaluations.max(1) as f64
 }
 
@@ -245,7 +245,7 @@ fn goodness(
     p: &[f64],
     n_free: usize,
     weights_are_uncertainties: bool,
-    stop: Option<&super::lm::Stop>,
+    stop: Option<&crate::lm::Stop>,
 ) -> Option<Goodness> {
     let n = problem.len();
     let (fitted, _) = problem.model_values_until(p, false, stop)?;

@@ -13,8 +13,8 @@
 //! solver then confirms it on the whole problem (the amplitude's column is 0 there, so the
 //! confirmation ends at once, and the report's Jacobian is that of every free parameter).
 
-use super::lm::{self, LeastSquaresProblem, LmConfig, LmReport};
 use super::problem::ParamLayout;
+use crate::lm::{self, LeastSquaresProblem, LmConfig, LmReport};
 use nalgebra::{DMatrix, DVector};
 
 /// Relative cost by which removing an amplitude (p = 0, the others held) may raise the

@@ -1,9 +1,9 @@
 //! What a fit is asked to do: the model, residual kind, starting values, fixed parameters
 //! and solver settings ([`FitConfig`]), and the residual floor that follows from them.
 
-use super::lm::{LmConfig, Stop};
 use super::loss::Loss;
 use super::problem::ResidualKind;
+use crate::lm::{LmConfig, Stop};
 use crate::model::ModelOptions;
 
 /// Everything about a fit except the data.

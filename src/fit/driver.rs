@@ -16,7 +16,6 @@ use super::edges::at_kbs_edge;
 pub use super::identify::{
     ALIGN, DETERMINED_MAX_LOG_SE, LOOSE_LOG_SE, RANK_THRESHOLD, ROUGH_G, SMOOTH_G,
 };
-use super::lm::Stop;
 use super::prepare::{prepare, rough_by_construction};
 pub use super::problem::FitInput;
 use super::problem::FitProblem;
@@ -25,6 +24,7 @@ pub use super::result::{Derived, FitResult, ParamResult, StageSeconds, Verdict};
 pub use super::start::{GRID_TOL, REFINE_TOL};
 use super::{accept, assemble, identify, reduce, solve, start};
 use crate::error::{Error, Result};
+use crate::lm::Stop;
 use crate::model::{self, EvalMode, Model};
 use std::time::Instant;
 
@@ -94,9 +94,9 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
 /// whole data (`n` samples) had finished — while the starting values were searched for, or
 /// in that evaluation: no point of the fit has a cost on the data, so there is nothing to
 /// report (the CLI prints this message and exits 3).
-fn stopped_before_first_evaluation(why: super::lm::Termination, n: usize) -> Error {
+fn stopped_before_first_evaluation(why: crate::lm::Termination, n: usize) -> Error {
     let hint = match why {
-        super::lm::Termination::Timeout => " (a larger --timeout lets one evaluation finish)",
+        crate::lm::Termination::Timeout => " (a larger --timeout lets one evaluation finish)",
         _ => "",
     };
     Error::Stopped(format!(
@@ -281,7 +281,7 @@ fn leave_small_basins(
 fn was_stopped(run: &solve::Run) -> bool {
     matches!(
         run.lm.termination,
-        super::lm::Termination::Timeout | super::lm::Termination::Interrupted
+        crate::lm::Termination::Timeout | crate::lm::Termination::Interrupted
     )
 }
 

@@ -7,9 +7,9 @@
 
 use super::amplitudes::{self, Prepared};
 use super::grid_cache;
-use super::lm::Stop;
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::stats::median;
+use crate::lm::Stop;
 use rayon::prelude::*;
 
 /// Largest number of samples the coarse grid is evaluated on.
@@ -51,7 +51,7 @@ pub fn search_samples(model: &dyn crate::model::Model) -> usize {
 }
 
 /// Samples nearest the mirror direction that the start search's sample always holds
-/// ([`search_sample`]).
+/// ([`search_input`]).
 pub const NEAR_SPECULAR_SAMPLES: usize = 32;
 
 /// Parameters that enter the model linearly (solved exactly at each grid point).

@@ -332,7 +332,7 @@ mod tests {
         }
     }
 
-    impl crate::fit::lm::LeastSquaresProblem for Line {
+    impl crate::lm::LeastSquaresProblem for Line {
         fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
             self.eval(x).0
         }
@@ -372,8 +372,8 @@ mod tests {
                 y: y.clone(),
                 loss,
             };
-            let config = crate::fit::lm::LmConfig::default();
-            let rep = crate::fit::lm::minimize(&p, DVector::from_vec(vec![1.2, 1.7]), &config);
+            let config = crate::lm::LmConfig::default();
+            let rep = crate::lm::minimize(&p, DVector::from_vec(vec![1.2, 1.7]), &config);
             assert!(rep.termination.converged(), "{kind}: {:?}", rep.termination);
             // Stationarity of the robust cost: Σ ψ(fᵢ) ∂fᵢ/∂x = 0 (relative to Σ|ψ|).
             let f: Vec<f64> = (0..t.len())

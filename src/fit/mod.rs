@@ -1,4 +1,4 @@
-//! Fitting: Levenberg–Marquardt as an argmin solver ([`lm`]), covariance and
+//! Fitting with the Levenberg–Marquardt solver of [`crate::lm`]: covariance and
 //! identifiability ([`stats`]), the reflectance least-squares problem ([`problem`]) and its parameters ([`layout`]),
 //! starting values ([`init`]) and the whole fit ([`driver`]), whose stages each have a
 //! file: prepare (`prepare`), start search (`start`), solve (`solve`), identify
@@ -14,7 +14,6 @@ pub mod driver;
 pub mod grid_cache;
 pub mod init;
 pub mod layout;
-pub mod lm;
 pub mod loss;
 pub mod problem;
 pub mod profile;

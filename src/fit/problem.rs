@@ -11,10 +11,10 @@
 //!
 pub use super::channels::Channels;
 pub use super::layout::{FitParam, ParamLayout, Transform, LINEAR, PER_CHANNEL};
-use super::lm::{LeastSquaresProblem, Stop};
 use super::loss::Loss;
 use crate::error::{Error, Result};
 use crate::geometry::{Column, Geometry, PerSample};
+use crate::lm::{LeastSquaresProblem, Stop};
 use crate::model::{Mode, Model};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;

@@ -30,8 +30,8 @@
 //! profile quadratic near the end puts it within 0.1 % of its distance from the estimate;
 //! each refit runs to a relative cost change that keeps the error of Δχ² a tenth of that.
 
-use super::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 use super::problem::{FitProblem, Transform};
+use crate::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
 

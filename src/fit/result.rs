@@ -2,11 +2,11 @@
 //! determines each, derived quantities, the verdict, goodness of fit and residuals
 //! ([`FitResult`]). The conventions are in [`super::driver`]'s module doc.
 
-use super::lm::Termination;
 use super::loss::Loss;
 use super::problem::{FitProblem, ParamLayout};
 use super::solve::Run;
 use super::stats;
+use crate::lm::Termination;
 use crate::model::Mode;
 use nalgebra::DMatrix;
 use std::collections::BTreeMap;

@@ -2,8 +2,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 use super::problem::{FitInput, FitProblem};
+use crate::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 
 /// An LM run in parameter space.
 pub(super) struct Run {

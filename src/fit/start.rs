@@ -7,10 +7,10 @@
 
 use super::config::FitConfig;
 use super::init;
-use super::lm::{LmConfig, Stop};
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::solve::{run_lm, Run};
 use crate::error::Result;
+use crate::lm::{LmConfig, Stop};
 use crate::model::{self, EvalMode, Model, ModelOptions};
 use rayon::prelude::*;
 use std::time::Instant;

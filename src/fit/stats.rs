@@ -231,6 +231,10 @@ pub fn correlation(cov: &DMatrix<f64>, stderr: &DVector<f64>) -> DMatrix<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lm::tests::{decay, decay_data, v, Closure};
+    use crate::lm::{
+        finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig, Transformed,
+    };
     use approx::assert_relative_eq;
 
     #[test]
@@ -363,7 +367,6 @@ mod tests {
     /// match the scatter of the estimates.
     #[test]
     fn synthetic_recovery_is_calibrated() {
-        use crate::fit::lm::{minimize, LeastSquaresProblem, LmConfig};
         use rand::SeedableRng;
         use rand_distr::{Distribution, Normal};
 
@@ -470,5 +473,95 @@ mod tests {
             max_relative = 1e-11
         );
         assert_eq!(ub.rank, 3);
+    }
+
+    #[test]
+    fn rank_deficient_jacobian() {
+        // r = (a + b)·t − 2t + noise: only a + b is determined.
+        let t: Vec<f64> = (1..=5).map(|i| i as f64).collect();
+        let noise = [0.01, -0.02, 0.0, 0.015, -0.005];
+        let p = Closure {
+            r: |x: &DVector<f64>| {
+                DVector::from_iterator(
+                    5,
+                    (0..5).map(|i| (x[0] + x[1]) * t[i] - 2.0 * t[i] + noise[i]),
+                )
+            },
+            j: |_: &DVector<f64>| DMatrix::from_fn(5, 2, |i, _| t[i]),
+        };
+        let rep = minimize(&p, v(&[5.0, -7.0]), &LmConfig::default());
+        assert!(rep.termination.converged(), "{:?}", rep.termination);
+        let sum_ls = 2.0 - (0..5).map(|i| noise[i] * t[i]).sum::<f64>() / 55.0;
+        assert_relative_eq!(rep.x[0] + rep.x[1], sum_ls, epsilon = 1e-12);
+        assert!(rep.x.iter().all(|v| v.is_finite()));
+        let u = uncertainty(&rep.jacobian, rep.cost, 5, 1e-10);
+        assert_eq!(u.rank, 1);
+        assert!(u.condition.is_infinite() || u.condition > 1e14);
+        assert_eq!(u.undetermined.len(), 1);
+        let d = &u.undetermined[0];
+        assert_relative_eq!(d[0].abs(), std::f64::consts::FRAC_1_SQRT_2, epsilon = 1e-12);
+        assert_relative_eq!(d[0], -d[1], epsilon = 1e-12);
+        // Pseudo-inverse: the determined combination a + b has variance s²/Σt², the
+        // undetermined one a − b gets none.
+        let s2 = 2.0 * rep.cost / 3.0;
+        let var_sum = u.covariance.sum();
+        assert_relative_eq!(var_sum, s2 / 55.0, max_relative = 1e-10);
+    }
+
+    #[test]
+    fn transformed_log_and_fixed_parameters() {
+        // Inner parameters (a, b, c) of y = a·exp(−b t) + c, with c fixed at 0 and b on a
+        // log scale: the fit must match the direct two-parameter fit.
+        let (t, y) = decay_data();
+        let inner = Closure {
+            r: |x: &DVector<f64>| {
+                DVector::from_iterator(
+                    t.len(),
+                    t.iter()
+                        .zip(&y)
+                        .map(|(&t, &y)| x[0] * (-x[1] * t).exp() + x[2] - y),
+                )
+            },
+            j: |x: &DVector<f64>| {
+                let mut j = DMatrix::zeros(t.len(), 3);
+                for (i, &t) in t.iter().enumerate() {
+                    let e = (-x[1] * t).exp();
+                    j[(i, 0)] = e;
+                    j[(i, 1)] = -x[0] * t * e;
+                    j[(i, 2)] = 1.0;
+                }
+                j
+            },
+        };
+        let tr =
+            Transformed::new(inner, vec![false, true, false], vec![None, None, Some(0.0)]).unwrap();
+        assert_eq!(tr.n_free(), 2);
+        assert_eq!(tr.free_indices(), &[0, 1]);
+        let z0 = tr.to_free(&v(&[1.0, 0.1, 123.0])).unwrap();
+        assert_relative_eq!(z0[1], 0.1f64.ln());
+        // Chain rule against finite differences.
+        let jz = tr.jacobian(&z0);
+        let jn = finite_difference_jacobian(|z| tr.residuals(z), &z0, None);
+        assert!((&jz - &jn).amax() < 1e-8 * jz.amax());
+        let rep_z = minimize(&tr, z0, &LmConfig::default());
+        let rep_x = minimize(&decay(), v(&[1.0, 0.1]), &LmConfig::default());
+        let x = tr.to_full(&rep_z.x);
+        assert_relative_eq!(x[0], rep_x.x[0], epsilon = 1e-8);
+        assert_relative_eq!(x[1], rep_x.x[1], epsilon = 1e-8);
+        assert_eq!(x[2], 0.0);
+        // Delta method: the covariance of (a, b) equals the direct fit's.
+        let uz = uncertainty(&rep_z.jacobian, rep_z.cost, 20, 1e-12);
+        let ux = uncertainty(&rep_x.jacobian, rep_x.cost, 20, 1e-12);
+        let cx = tr.covariance_to_full(&rep_z.x, &uz.covariance);
+        assert_eq!(cx.shape(), (3, 3));
+        for i in 0..2 {
+            for j in 0..2 {
+                assert_relative_eq!(cx[(i, j)], ux.covariance[(i, j)], max_relative = 1e-6);
+            }
+        }
+        assert_eq!(cx[(2, 2)], 0.0);
+        assert!(tr.to_free(&v(&[1.0, -0.1, 0.0])).is_err());
+        assert!(Transformed::new((), vec![true], vec![Some(-1.0)]).is_err());
+        assert!(Transformed::new((), vec![true, false], vec![None]).is_err());
     }
 }

@@ -25,10 +25,10 @@
 use crate::error::{Error, Result};
 use crate::fit::adequacy::AdequacyVerdict;
 use crate::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
-use crate::fit::lm::{LmConfig, Stop, Termination};
 use crate::fit::problem::Channels;
 use crate::fit::stats::median;
 use crate::geometry::{Geometry, Quantity};
+use crate::lm::{LmConfig, Stop, Termination};
 use crate::model::fresnel::Fresnel;
 use crate::model::shadowing::Shadowing;
 use crate::model::{self, ModelOptions};

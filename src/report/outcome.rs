@@ -24,7 +24,7 @@ impl Candidate<'_> {
         let r = self.result;
         if r.converged() {
             "converged".into()
-        } else if r.termination == crate::fit::lm::Termination::Degenerate {
+        } else if r.termination == crate::lm::Termination::Degenerate {
             "degenerate (not usable)".into()
         } else {
             format!("not converged ({}; not usable)", termination_name(r))

@@ -2,7 +2,7 @@
 //! each model with its analytic Jacobian. Shared by `tests/nist.rs` and `benches/nist.rs`.
 #![allow(dead_code, clippy::needless_range_loop)]
 
-use goniofit::fit::lm::LeastSquaresProblem;
+use goniofit::lm::LeastSquaresProblem;
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 use std::path::Path;

@@ -5,9 +5,9 @@
 use super::DatasetFit;
 use crate::error::Result;
 use crate::fit::driver::{self, FitInput, FitResult};
-use crate::fit::lm::Stop;
 use crate::fit::problem::FitProblem;
 use crate::fit::profile::{Interval, Profiler, Target};
+use crate::lm::Stop;
 
 /// Fits with more free parameters than this get no profile intervals (each needs two
 /// walks of refits per quantity).

@@ -10,12 +10,12 @@
 pub mod intervals;
 
 use super::driver::{self, FitConfig, FitInput, FitResult};
-use super::lm::Stop;
 use super::problem::{Channels, ResidualKind};
 use super::weights::residual_weights;
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Quantity};
 use crate::io::{self, Dataset};
+use crate::lm::Stop;
 use crate::model::{self, domain::short_number, ModelOptions};
 use crate::report;
 
@@ -48,7 +48,7 @@ pub struct DatasetFit {
     pub wavelength: Option<f64>,
     /// The fit's settings; `model` and `weights_are_uncertainties` are set per candidate
     /// and dataset. `config.lm.stop` (if any) is shared by every candidate; without one the
-    /// fit makes its own from `config.lm` ([`crate::fit::lm::LmConfig::new_stop`]).
+    /// fit makes its own from `config.lm` ([`crate::lm::LmConfig::new_stop`]).
     pub config: FitConfig,
     /// Standard errors from the stated uncertainties as they are (scipy's
     /// `absolute_sigma=True`), not rescaled by the residual scatter.

@@ -92,6 +92,7 @@
 //! * `transform.rs`: [`Transformed`] (log and fixed parameters); `fd.rs`: finite differences.
 
 mod fd;
+mod invalid;
 mod lmpar;
 mod norm;
 mod polish;
@@ -102,7 +103,7 @@ mod step;
 pub mod stop;
 mod termination;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 mod transform;
 mod work;
 
@@ -115,9 +116,8 @@ use argmin::core::{
 };
 use nalgebra::{DMatrix, DVector};
 
-use crate::Error;
-
 pub use fd::finite_difference_jacobian;
+pub use invalid::Invalid;
 pub use run::{minimize, ArgminAdapter, LeastSquaresProblem, LmConfig, LmReport, StepResiduals};
 pub use stop::Stop;
 pub use termination::Termination;
@@ -182,57 +182,55 @@ impl LevenbergMarquardt {
         }
     }
 
-    fn check_tol(name: &str, v: f64) -> Result<f64, Error> {
+    fn check_tol(name: &str, v: f64) -> Result<f64, Invalid> {
         if v.is_finite() && v >= 0.0 {
             Ok(v)
         } else {
-            Err(Error::Param {
-                name: name.to_string(),
-                message: format!(
-                    "{v} is not a valid tolerance; use a finite number ≥ 0, e.g. 1e-10"
-                ),
-            })
+            Err(Invalid::new(
+                name,
+                format!("{v} is not a valid tolerance; use a finite number ≥ 0, e.g. 1e-10"),
+            ))
         }
     }
 
     /// Relative cost-reduction tolerance (finite, ≥ 0).
-    pub fn with_ftol(mut self, v: f64) -> Result<Self, Error> {
+    pub fn with_ftol(mut self, v: f64) -> Result<Self, Invalid> {
         self.ftol = Self::check_tol("ftol", v)?;
         Ok(self)
     }
 
     /// Relative step-size tolerance (finite, ≥ 0).
-    pub fn with_xtol(mut self, v: f64) -> Result<Self, Error> {
+    pub fn with_xtol(mut self, v: f64) -> Result<Self, Invalid> {
         self.xtol = Self::check_tol("xtol", v)?;
         Ok(self)
     }
 
     /// Gradient tolerance on the cosine between `r` and the columns of `J` (finite, ≥ 0).
-    pub fn with_gtol(mut self, v: f64) -> Result<Self, Error> {
+    pub fn with_gtol(mut self, v: f64) -> Result<Self, Invalid> {
         self.gtol = Self::check_tol("gtol", v)?;
         Ok(self)
     }
 
     /// Initial trust radius factor: `Δ₀ = factor · ‖D x₀‖` (MINPACK `factor`, default 100;
     /// must be finite and > 0).
-    pub fn with_stepbound(mut self, v: f64) -> Result<Self, Error> {
+    pub fn with_stepbound(mut self, v: f64) -> Result<Self, Invalid> {
         if !(v.is_finite() && v > 0.0) {
-            return Err(Error::Param {
-                name: "stepbound".into(),
-                message: format!("{v} must be a finite number > 0, e.g. 100"),
-            });
+            return Err(Invalid::new(
+                "stepbound",
+                format!("{v} must be a finite number > 0, e.g. 100"),
+            ));
         }
         self.stepbound = v;
         Ok(self)
     }
 
     /// Maximum number of residual evaluations (including the one at the start; ≥ 1).
-    pub fn with_max_evals(mut self, v: u64) -> Result<Self, Error> {
+    pub fn with_max_evals(mut self, v: u64) -> Result<Self, Invalid> {
         if v == 0 {
-            return Err(Error::Param {
-                name: "max_evals".into(),
-                message: "0 evaluations cannot start a fit; use at least 1".into(),
-            });
+            return Err(Invalid::new(
+                "max_evals",
+                "0 evaluations cannot start a fit; use at least 1".into(),
+            ));
         }
         self.max_evals = v;
         Ok(self)

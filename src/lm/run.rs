@@ -23,10 +23,10 @@ pub trait LeastSquaresProblem {
     /// Weighted residuals at `x`. May contain NaN or ±∞ (e.g. outside the model's domain):
     /// such a trial point is rejected and the trust region shrinks.
     fn residuals(&self, x: &DVector<f64>) -> DVector<f64>;
-    /// Jacobian `∂r̃ᵢ/∂xⱼ` (`m × n`), analytic; see [`finite_difference_jacobian`] otherwise.
+    /// Jacobian `∂r̃ᵢ/∂xⱼ` (`m × n`), analytic; see [`super::finite_difference_jacobian`] otherwise.
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64>;
     /// The residuals the step's linear model uses at `x`, when they are not
-    /// [`Self::residuals`]. With a robust loss (`crate::fit::loss`), `residuals` are the
+    /// [`Self::residuals`]. With a robust loss (IRLS), `residuals` are the
     /// cost residuals (½‖r‖² is the cost, which the ratio test and stopping rules need) and
     /// `jacobian` is the IRLS-corrected `J̃`, whose step needs the corrected residuals `f̃`
     /// (`J̃ᵀf̃` is the gradient of the cost, `J̃ᵀJ̃` its Gauss–Newton Hessian). None, the

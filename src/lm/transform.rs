@@ -2,8 +2,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::LeastSquaresProblem;
-use crate::Error;
+use super::{Invalid, LeastSquaresProblem};
 
 /// A [`LeastSquaresProblem`] over the *free* parameters of an inner problem: parameters with
 /// `fixed[j] = Some(v)` are held at `v`; free parameters with `log_mask[j] = true` are
@@ -24,24 +23,27 @@ pub struct Transformed<P> {
 impl<P> Transformed<P> {
     /// `log_mask` and `fixed` have one entry per parameter of `inner`. Fixed values must be
     /// finite, and positive where `log_mask` is set.
-    pub fn new(inner: P, log_mask: Vec<bool>, fixed: Vec<Option<f64>>) -> Result<Self, Error> {
+    pub fn new(inner: P, log_mask: Vec<bool>, fixed: Vec<Option<f64>>) -> Result<Self, Invalid> {
         if log_mask.len() != fixed.len() {
-            return Err(Error::Usage(format!(
-                "Transformed: log_mask has {} entries but fixed has {}; give one per parameter",
-                log_mask.len(),
-                fixed.len()
-            )));
+            return Err(Invalid::new(
+                "fixed",
+                format!(
+                    "{} entries but log_mask has {}; give one per parameter",
+                    fixed.len(),
+                    log_mask.len()
+                ),
+            ));
         }
         for (j, f) in fixed.iter().enumerate() {
             if let Some(v) = f {
                 if !v.is_finite() || (log_mask[j] && *v <= 0.0) {
-                    return Err(Error::Param {
-                        name: format!("#{j}"),
-                        message: format!(
+                    return Err(Invalid::new(
+                        format!("#{j}"),
+                        format!(
                             "fixed value {v} is not allowed (must be finite{})",
                             if log_mask[j] { " and > 0" } else { "" }
                         ),
-                    });
+                    ));
                 }
             }
         }
@@ -76,22 +78,21 @@ impl<P> Transformed<P> {
 
     /// Free (log-)coordinates of a full parameter vector; fixed entries of `x` are ignored.
     /// Fails when a log parameter is not positive.
-    pub fn to_free(&self, x: &DVector<f64>) -> Result<DVector<f64>, Error> {
+    pub fn to_free(&self, x: &DVector<f64>) -> Result<DVector<f64>, Invalid> {
         if x.len() != self.n_full() {
-            return Err(Error::Usage(format!(
-                "expected {} parameters, got {}",
-                self.n_full(),
-                x.len()
-            )));
+            return Err(Invalid::new(
+                "x",
+                format!("expected {} parameters, got {}", self.n_full(), x.len()),
+            ));
         }
         let mut z = DVector::zeros(self.free.len());
         for (k, &j) in self.free.iter().enumerate() {
             z[k] = if self.log_mask[j] {
                 if x[j].is_nan() || x[j] <= 0.0 {
-                    return Err(Error::Param {
-                        name: format!("#{j}"),
-                        message: format!("{} must be > 0 (it is fitted on a log scale)", x[j]),
-                    });
+                    return Err(Invalid::new(
+                        format!("#{j}"),
+                        format!("{} must be > 0 (it is fitted on a log scale)", x[j]),
+                    ));
                 }
                 x[j].ln()
             } else {
