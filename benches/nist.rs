@@ -15,7 +15,7 @@
 #[path = "../tests/nist/problems.rs"]
 mod problems;
 
-use goniofit::fit::stats::median;
+use goniofit::geometry::median;
 use goniofit::lm::{minimize, LeastSquaresProblem as _, LmConfig};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};

@@ -124,12 +124,12 @@ impl PerSample {
         }
     }
 
-    /// The median value ([`crate::fit::stats::median`]; NaN without samples).
+    /// The median value ([`crate::geometry::median`]; NaN without samples).
     pub fn median(&self) -> f64 {
         match self {
             PerSample::One { value, len } if *len > 0 => *value,
             PerSample::One { .. } => f64::NAN,
-            PerSample::Each(c) => crate::fit::stats::median(c),
+            PerSample::Each(c) => median(c),
         }
     }
 
@@ -582,13 +582,47 @@ impl Geometry {
     /// Median of g ([`Self::g`]) over the samples at σ = `sigma` (NaN without samples).
     pub fn median_g(&self, sigma: f64) -> f64 {
         let g: Vec<f64> = (0..self.len()).map(|i| self.g(i, sigma)).collect();
-        crate::fit::stats::median(&g)
+        median(&g)
+    }
+}
+
+/// Median of the values that are not NaN: the middle one, or the mean of the two middle
+/// ones for an even count; NaN when there are none. Linear time.
+pub fn median(v: &[f64]) -> f64 {
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
+    let n = s.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    let (lower, &mut upper, _) = s.select_nth_unstable_by(n / 2, f64::total_cmp);
+    if n % 2 == 1 {
+        upper
+    } else {
+        0.5 * (lower.iter().copied().fold(f64::NEG_INFINITY, f64::max) + upper)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn median_of_odd_even_empty_and_nan() {
+        assert!(median(&[]).is_nan());
+        assert!(median(&[f64::NAN]).is_nan());
+        assert_eq!(median(&[3.0]), 3.0);
+        assert_eq!(median(&[4.0, 1.0]), 2.5);
+        assert_eq!(median(&[5.0, -1.0, f64::NAN, 2.0, 2.0, 9.0]), 2.0);
+        let v: Vec<f64> = (0..1001)
+            .map(|i| ((i * 7919) % 1001) as f64 * 0.5)
+            .collect();
+        assert_eq!(median(&v), 250.0);
+        assert_eq!(median(&v[..1000]), {
+            let mut s = v[..1000].to_vec();
+            s.sort_by(f64::total_cmp);
+            0.5 * (s[499] + s[500])
+        });
+    }
 
     #[test]
     fn vectors_round_trip_to_angles() {

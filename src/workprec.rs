@@ -15,9 +15,9 @@
 
 use crate::error::Result;
 use crate::fit::driver::{self, FitConfig, FitInput};
-use crate::fit::init;
 use crate::fit::problem::{Channels, FitProblem, ParamLayout, ResidualKind};
-use crate::fit::stats::median;
+use crate::fit::start::grid;
+use crate::geometry::median;
 use crate::geometry::{Geometry, Quantity};
 use crate::lm::{self, LeastSquaresProblem, LmConfig};
 use crate::model::{self, EvalMode, Model, ModelOptions};
@@ -414,7 +414,7 @@ fn shared_start(
             ..ModelOptions::default()
         },
     )?;
-    let candidates = init::initial_values(
+    let candidates = grid::initial_values(
         problem,
         grid_model.as_ref(),
         input,

@@ -423,7 +423,7 @@ fn profile_intervals_of_a_linear_model_are_t_times_the_standard_error() {
     let (s, se) = (f(&p["value"]), f(&p["stderr"]));
     let dof = (v["n"].as_u64().unwrap() - 1) as f64;
     for (key, prob) in [("interval68", 0.682_689_492_137_086), ("interval95", 0.95)] {
-        let t = goniofit::fit::profile::student_t_quantile(0.5 * (1.0 + prob), dof);
+        let t = goniofit::fit::stats::profile::student_t_quantile(0.5 * (1.0 + prob), dof);
         let (lo, hi) = interval(&p[key]);
         let (lo, hi) = (lo.unwrap(), hi.unwrap());
         assert!(
@@ -536,10 +536,10 @@ fn profile_ends_are_where_a_fit_holding_the_parameter_reaches_the_threshold() {
         let (lo, hi) = interval(&v["params"][name][key]);
         let end = [lo, hi][side].unwrap();
         let fix = format!("{name}={end:.17e}");
-        let th = goniofit::fit::profile::threshold(prob, chi2_min, dof, false);
+        let th = goniofit::fit::stats::profile::threshold(prob, chi2_min, dof, false);
         let delta = chi2_holding(&GARNET_550, &fix) - chi2_min;
         assert!(
-            ((delta / th).sqrt() - 1.0).abs() < 2.0 * goniofit::fit::profile::CROSS_TOL,
+            ((delta / th).sqrt() - 1.0).abs() < 2.0 * goniofit::fit::stats::profile::CROSS_TOL,
             "{name} {key} end {end}: Δχ² {delta} against the threshold {th}"
         );
     }
@@ -562,7 +562,7 @@ fn a_profile_flat_out_to_the_domain_edge_is_open() {
     let v = fit_json(&[&args[..], &["--json", GARNET]].concat());
     let chi2_min = f(&v["chi2"]);
     let dof = v["n"].as_u64().unwrap() as usize - 4;
-    let th = goniofit::fit::profile::threshold(0.95, chi2_min, dof, false);
+    let th = goniofit::fit::stats::profile::threshold(0.95, chi2_min, dof, false);
     for name in ["sigma", "T"] {
         let (lo, hi) = interval(&v["params"][name]["interval95"]);
         assert!(lo.unwrap() < f(&v["params"][name]["value"]) && hi.is_none());

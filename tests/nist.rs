@@ -12,7 +12,7 @@
 #[path = "nist/problems.rs"]
 mod problems;
 
-use goniofit::fit::stats::uncertainty;
+use goniofit::fit::stats::covariance::uncertainty;
 use goniofit::lm::{finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig};
 use nalgebra::DVector;
 use problems::{lre, Nist};

@@ -6,7 +6,7 @@
 use crate::convert::to_py_err;
 use goniofit::fit::dataset::DatasetFit;
 use goniofit::fit::driver::FitConfig;
-use goniofit::fit::loss::{Loss, LossKind};
+use goniofit::fit::problem::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::arrays;

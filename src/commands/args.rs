@@ -1,7 +1,7 @@
 //! Command-line argument types shared by several subcommands.
 
 use clap::ValueEnum;
-use goniofit::fit::loss::LossKind;
+use goniofit::fit::problem::loss::LossKind;
 use goniofit::geometry::Quantity;
 use goniofit::model::fresnel::Fresnel;
 use goniofit::model::shadowing::Shadowing;

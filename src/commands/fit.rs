@@ -5,7 +5,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::fit::dataset::{fit_dataset, DatasetFit, Outcome};
 use goniofit::fit::driver::{FitConfig, FitInput};
-use goniofit::fit::loss::{Loss, LossKind};
+use goniofit::fit::problem::loss::{Loss, LossKind};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::Quantity;
 use goniofit::io::{self, Dataset, FileSet, ReadOptions};

@@ -20,7 +20,7 @@ mod quantities;
 pub mod simulate;
 
 use crate::error::{Error, Result};
-use crate::fit::layout::PER_CHANNEL;
+use crate::fit::problem::layout::PER_CHANNEL;
 use crate::geometry::{Geometry, Quantity, Sample};
 use crate::model::Model;
 use crate::synth::AnglesDeg;

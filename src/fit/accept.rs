@@ -2,10 +2,10 @@
 //! domain, resolved by the angular sampling, with a full-rank Jacobian), and the notes the
 //! report gives on points that are not.
 
-use super::edges::{at_lower_bound, below, MIN_KT, MIN_T_OVER_SIGMA};
+use super::problem::edges::{at_lower_bound, below, MIN_KT, MIN_T_OVER_SIGMA};
 use super::problem::{FitInput, FitParam, ParamLayout, LINEAR};
 use super::result::{Solved, Verdict};
-use super::stats;
+use super::stats::covariance;
 use crate::geometry::{Geometry, MIN_FLANK_SAMPLES};
 use crate::lm::Termination;
 use crate::model::ParamSpec;
@@ -41,7 +41,7 @@ pub(super) fn degeneracy(
     specs: &[ParamSpec],
     input: &FitInput,
     p: &[f64],
-    unc: &stats::Uncertainty,
+    unc: &covariance::Uncertainty,
 ) -> Option<String> {
     let first = |name: &str| layout.find(name).first().copied();
     if let (Some(ks), Some(kt)) = (first("sigma"), first("T")) {
@@ -100,7 +100,7 @@ pub(super) fn degeneracy(
 }
 
 /// Names of the free parameters that take part in the Jacobian's null space.
-fn null_space_names(layout: &ParamLayout, unc: &stats::Uncertainty) -> Vec<String> {
+fn null_space_names(layout: &ParamLayout, unc: &covariance::Uncertainty) -> Vec<String> {
     let free = layout.free();
     let mut names: Vec<String> = free
         .iter()

@@ -3,15 +3,15 @@
 //! The conventions (cost, χ², covariance, AIC/BIC) are in [`super::driver`]'s module doc.
 
 use super::accept::{lower_bound_note, termination_note};
-use super::adequacy::{self, Adequacy};
 use super::config::FitConfig;
-use super::edges::at_lower_bound;
 use super::identify::{log_covariance, DETERMINED_MAX_LOG_SE};
+use super::problem::edges::at_lower_bound;
 use super::problem::{FitInput, FitProblem, ParamLayout, ResidualKind};
 use super::result::{Derived, FitResult, ParamResult, Solved, StageSeconds, Verdict};
 use super::start::Start;
-use super::stats;
-use super::validity;
+use super::stats::adequacy::{self, Adequacy};
+use super::stats::covariance;
+use super::stats::validity;
 use crate::model::{Model, ParamSpec};
 use nalgebra::DMatrix;
 use std::collections::BTreeMap;
@@ -380,7 +380,7 @@ fn param_results(
     layout: &ParamLayout,
     specs: &[ParamSpec],
     p: &[f64],
-    unc: &stats::Uncertainty,
+    unc: &covariance::Uncertainty,
     verdict: Verdict,
     notes: &mut Vec<String>,
 ) -> Vec<ParamResult> {
@@ -460,7 +460,7 @@ fn derived_quantities(
     layout: &ParamLayout,
     specs: &[ParamSpec],
     p: &[f64],
-    unc: &stats::Uncertainty,
+    unc: &covariance::Uncertainty,
     verdict: Verdict,
 ) -> Vec<Derived> {
     let free = layout.free();

@@ -1,7 +1,7 @@
 //! What a fit is asked to do: the model, residual kind, starting values, fixed parameters
 //! and solver settings ([`FitConfig`]), and the residual floor that follows from them.
 
-use super::loss::Loss;
+use super::problem::loss::Loss;
 use super::problem::ResidualKind;
 use crate::lm::{LmConfig, Stop};
 use crate::model::ModelOptions;

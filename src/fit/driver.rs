@@ -12,11 +12,11 @@
 
 pub use super::assemble::standardized_residuals;
 pub use super::config::{residual_floor, FitConfig};
-use super::edges::at_kbs_edge;
 pub use super::identify::{
     ALIGN, DETERMINED_MAX_LOG_SE, LOOSE_LOG_SE, RANK_THRESHOLD, ROUGH_G, SMOOTH_G,
 };
 use super::prepare::{prepare, rough_by_construction};
+use super::problem::edges::at_kbs_edge;
 pub use super::problem::FitInput;
 use super::problem::FitProblem;
 use super::problem::ParamLayout;
@@ -235,7 +235,7 @@ fn leave_small_basins(
     let nonlinear: Vec<usize> = layout
         .free()
         .into_iter()
-        .filter(|&k| !super::layout::LINEAR.contains(&specs[layout.params[k].spec].name))
+        .filter(|&k| !super::problem::layout::LINEAR.contains(&specs[layout.params[k].spec].name))
         .collect();
     let cost = |q: &[f64]| {
         let (f, _) = problem.model_values(q, false);

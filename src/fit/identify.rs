@@ -5,7 +5,7 @@
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::result::Verdict;
 use super::solve::Run;
-use super::stats;
+use super::stats::covariance;
 use nalgebra::{DMatrix, DVector};
 
 /// Largest standard error of ln p for a parameter to count as determined.
@@ -29,7 +29,7 @@ pub const RANK_THRESHOLD: f64 = 1e-9;
 
 /// The identifiability of one solved problem.
 pub(super) struct Identified {
-    pub unc: stats::Uncertainty,
+    pub unc: covariance::Uncertainty,
     pub verdict: Verdict,
     /// Median g over the samples at the fitted σ (KBS models, when the verdict was asked).
     pub g_median: Option<f64>,
@@ -64,10 +64,10 @@ pub(super) fn identify(
 
 /// Uncertainty in the solver's variables (free parameters), from the Jacobian at the
 /// optimum. An amplitude held at its bound by the solve's active set (x = 0 exactly:
-/// [`super::bounds`]) is a constraint the optimum meets, not a direction the data leaves
+/// [`super::problem::bounds`]) is a constraint the optimum meets, not a direction the data leaves
 /// open: the uncertainty is that of the other parameters with it held, and its own
 /// standard error and covariances are 0 (the report says it is at its bound).
-pub(super) fn uncertainty_of(problem: &FitProblem, run: &Run) -> stats::Uncertainty {
+pub(super) fn uncertainty_of(problem: &FitProblem, run: &Run) -> covariance::Uncertainty {
     let layout = &problem.layout;
     let free = layout.free();
     let at_bound: Vec<usize> = (0..free.len())
@@ -75,11 +75,11 @@ pub(super) fn uncertainty_of(problem: &FitProblem, run: &Run) -> stats::Uncertai
         .collect();
     let jac = &run.lm.jacobian;
     if at_bound.is_empty() || jac.ncols() != free.len() {
-        return stats::uncertainty(jac, run.lm.cost, problem.len(), RANK_THRESHOLD);
+        return covariance::uncertainty(jac, run.lm.cost, problem.len(), RANK_THRESHOLD);
     }
     let kept: Vec<usize> = (0..free.len()).filter(|j| !at_bound.contains(j)).collect();
     let sub = jac.select_columns(&kept);
-    let u = stats::uncertainty(&sub, run.lm.cost, problem.len(), RANK_THRESHOLD);
+    let u = covariance::uncertainty(&sub, run.lm.cost, problem.len(), RANK_THRESHOLD);
     let p = free.len();
     let spread = |m: &DMatrix<f64>| {
         let mut out = DMatrix::zeros(p, p);
@@ -94,7 +94,7 @@ pub(super) fn uncertainty_of(problem: &FitProblem, run: &Run) -> stats::Uncertai
     for (a, &ja) in kept.iter().enumerate() {
         stderr[ja] = u.stderr[a];
     }
-    stats::Uncertainty {
+    covariance::Uncertainty {
         covariance: spread(&u.covariance),
         correlation: spread(&u.correlation),
         stderr,
@@ -118,7 +118,7 @@ pub(super) fn uncertainty_of(problem: &FitProblem, run: &Run) -> stats::Uncertai
 /// covariance: d ln p = (dp/dx) dx / p.
 pub(super) fn log_covariance(
     layout: &ParamLayout,
-    unc: &stats::Uncertainty,
+    unc: &covariance::Uncertainty,
     p: &[f64],
 ) -> DMatrix<f64> {
     let free = layout.free();
@@ -139,7 +139,7 @@ pub(super) fn log_covariance(
 /// parameters are reported as undetermined rather than with a misleading error bar.
 fn kbs_verdict(
     layout: &ParamLayout,
-    unc: &stats::Uncertainty,
+    unc: &covariance::Uncertainty,
     p: &[f64],
     g_median: f64,
 ) -> Option<Verdict> {
@@ -201,7 +201,7 @@ fn log_factors(layout: &ParamLayout, p: &[f64]) -> Vec<f64> {
 /// `idx` holds the positions among the free parameters of σ, T and (when free) the scale.
 fn weakest_direction(
     cov: &DMatrix<f64>,
-    unc: &stats::Uncertainty,
+    unc: &covariance::Uncertainty,
     log_factor: &[f64],
     idx: &[usize],
     rank_deficient: bool,

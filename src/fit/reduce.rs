@@ -14,7 +14,7 @@ use super::prepare::rough_by_construction;
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::result::{Solved, Verdict};
 use super::solve::{run_lm, Run};
-use super::stats;
+use super::stats::covariance;
 use crate::error::Result;
 use crate::model::Model;
 use nalgebra::DMatrix;
@@ -142,10 +142,10 @@ fn marginal_uncertainty(
     jac: &DMatrix<f64>,
     red: &Run,
     verdict: Verdict,
-    mut conditional: stats::Uncertainty,
-) -> stats::Uncertainty {
+    mut conditional: covariance::Uncertainty,
+) -> covariance::Uncertainty {
     let layout = &full.layout;
-    let unc = stats::uncertainty(jac, red.lm.cost, full.len(), RANK_THRESHOLD);
+    let unc = covariance::uncertainty(jac, red.lm.cost, full.len(), RANK_THRESHOLD);
     let c_full = log_covariance(layout, &unc, &red.values);
     let free = layout.free();
     let Some(i_sigma) = free.iter().position(|&k| layout.params[k].name == "sigma") else {
@@ -183,7 +183,7 @@ fn marginal_uncertainty(
         cov.nrows(),
         (0..cov.nrows()).map(|i| cov[(i, i)].max(0.0).sqrt()),
     );
-    conditional.correlation = stats::correlation(&cov, &se);
+    conditional.correlation = covariance::correlation(&cov, &se);
     conditional.stderr = se;
     conditional.covariance = cov;
     conditional.residual_variance = unc.residual_variance;

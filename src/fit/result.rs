@@ -2,10 +2,10 @@
 //! determines each, derived quantities, the verdict, goodness of fit and residuals
 //! ([`FitResult`]). The conventions are in [`super::driver`]'s module doc.
 
-use super::loss::Loss;
+use super::problem::loss::Loss;
 use super::problem::{FitProblem, ParamLayout};
 use super::solve::Run;
-use super::stats;
+use super::stats::covariance;
 use crate::lm::Termination;
 use crate::model::Mode;
 use nalgebra::DMatrix;
@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 pub(super) struct Solved<'m> {
     pub problem: FitProblem<'m>,
     pub run: Run,
-    pub unc: stats::Uncertainty,
+    pub unc: covariance::Uncertainty,
     pub verdict: Verdict,
     pub notes: Vec<String>,
     /// Why the point is not a usable optimum ([`super::accept::accept`]; also in `notes`).
@@ -41,7 +41,7 @@ pub struct ParamResult {
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageSeconds {
     /// Checks, the full problem and the start grid's candidates (the grid's model side is
-    /// computed once per layout, [`super::grid_cache`]).
+    /// computed once per layout, [`super::start::grid_cache`]).
     pub grid: f64,
     /// The quick refinement of the grid's candidates on the subsample.
     pub refine: f64,
@@ -143,11 +143,11 @@ pub struct FitResult {
     /// domain, a lobe the sampling does not resolve, a lost rank; also among `notes`).
     pub unusable: Option<String>,
     /// Whether the fitted surface satisfies the paper's assumptions (KBS models; a warning,
-    /// not a failure): [`super::validity`].
-    pub validity: Option<super::validity::Validity>,
+    /// not a failure): [`super::stats::validity`].
+    pub validity: Option<super::stats::validity::Validity>,
     /// Whether the model describes the data and the weights match the noise, from the
-    /// residuals ([`super::adequacy`]; a verdict, not a failure).
-    pub adequacy: super::adequacy::Adequacy,
+    /// residuals ([`super::stats::adequacy`]; a verdict, not a failure).
+    pub adequacy: super::stats::adequacy::Adequacy,
     /// The robust loss the fit minimised (linear: plain least squares).
     pub loss: Loss,
     /// Under a robust loss, how many samples have a weighted residual beyond `f_scale`

@@ -45,10 +45,10 @@ pub(super) fn run_lm_in(
     let x0 = problem.layout.to_x(p0);
     let layout = &problem.layout;
     let lm = match (&config.stop, range, trail) {
-        (None, None, None) => super::bounds::minimize(layout, problem, x0, config),
+        (None, None, None) => super::problem::bounds::minimize(layout, problem, x0, config),
         (stop, range, trail) => {
             let guarded = Guarded::new(problem, stop.as_ref(), range, trail);
-            super::bounds::minimize(layout, &guarded, x0, config)
+            super::problem::bounds::minimize(layout, &guarded, x0, config)
         }
     };
     problem.forget_cached();

@@ -23,10 +23,10 @@
 //! `sigma_L` column would fit them.
 
 use crate::error::{Error, Result};
-use crate::fit::adequacy::AdequacyVerdict;
 use crate::fit::driver::{self, FitConfig, FitInput, FitResult, Verdict};
 use crate::fit::problem::Channels;
-use crate::fit::stats::median;
+use crate::fit::stats::adequacy::AdequacyVerdict;
+use crate::geometry::median;
 use crate::geometry::{Geometry, Quantity};
 use crate::lm::{LmConfig, Stop, Termination};
 use crate::model::fresnel::Fresnel;
@@ -164,7 +164,7 @@ pub struct SceneResult {
     pub error: Option<String>,
     /// The adequacy verdict of the fit (None when the fit returned an error) and the codes
     /// of its reasons: a correct model with correct weights should be flagged in at most
-    /// [`crate::fit::adequacy::ALPHA`] of the scenes.
+    /// [`crate::fit::stats::adequacy::ALPHA`] of the scenes.
     pub adequacy: Option<AdequacyVerdict>,
     pub adequacy_reasons: Vec<&'static str>,
     /// With a Fresnel factor: whether the fit says the data determines n (None without

@@ -99,7 +99,7 @@ impl RecoverReport {
             "adequacy: {} of {} scenes flagged (correct model and weights: expected at most {} %){}",
             self.adequacy_flagged,
             self.scenes,
-            100.0 * crate::fit::adequacy::ALPHA,
+            100.0 * crate::fit::stats::adequacy::ALPHA,
             if self.adequacy_reasons.is_empty() {
                 String::new()
             } else {

@@ -6,7 +6,7 @@
 use super::text::interval_text;
 use super::RunInfo;
 use crate::fit::driver::{FitResult, Verdict};
-use crate::fit::profile::LEVELS;
+use crate::fit::stats::profile::LEVELS;
 use std::fmt::Write;
 
 /// Text with `&`, `<`, `>`, `"` escaped for HTML.

@@ -2,7 +2,7 @@
 
 use super::RunInfo;
 use crate::fit::driver::FitResult;
-use crate::fit::profile::LEVELS;
+use crate::fit::stats::profile::LEVELS;
 use serde_json::{json, Map, Value};
 
 /// Finite numbers as numbers, the rest as null (JSON has no NaN).

@@ -28,7 +28,7 @@ pub struct RunInfo {
     /// Profile-likelihood intervals of the parameters and derived quantities (empty when
     /// not computed).
     #[serde(skip)]
-    pub intervals: Vec<crate::fit::profile::Interval>,
+    pub intervals: Vec<crate::fit::stats::profile::Interval>,
     /// Wall-clock seconds the intervals took (0 when not computed).
     pub interval_seconds: f64,
 }

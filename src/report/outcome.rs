@@ -184,8 +184,8 @@ pub fn setting(
     input: &crate::fit::driver::FitInput,
     source: &SettingSource,
 ) -> super::Setting {
+    use crate::fit::problem::weights::{floor_raised, residual_weights};
     use crate::fit::problem::ResidualKind;
-    use crate::fit::weights::{floor_raised, residual_weights};
     let residual = source.residual;
     let floor = crate::fit::dataset::floor_for(source.floor, &input.y);
     let (_, weights) = residual_weights(

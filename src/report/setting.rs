@@ -1,8 +1,8 @@
 //! What a fit was run on and how: the whole setting a report carries (so a reader, or
 //! `goniofit plot`, needs nothing else), and the units of every reported quantity.
 
+use crate::fit::problem::weights::WeightsInfo;
 use crate::fit::problem::ResidualKind;
-use crate::fit::weights::WeightsInfo;
 use crate::geometry::Quantity;
 use serde::Serialize;
 

@@ -3,8 +3,8 @@
 
 use super::setting::Units;
 use super::text::fixed;
-use crate::fit::adequacy::AdequacyVerdict;
 use crate::fit::driver::{FitResult, Verdict};
+use crate::fit::stats::adequacy::AdequacyVerdict;
 use std::fmt::Write;
 
 /// A fit's summary.

@@ -233,8 +233,8 @@ fn g4(v: f64) -> String {
 }
 
 /// One interval as text: `[lo, hi]`, or a one-sided bound ("> lo") where a side is open.
-pub fn interval_text(l: &crate::fit::profile::Level) -> String {
-    use crate::fit::profile::Bound;
+pub fn interval_text(l: &crate::fit::stats::profile::Level) -> String {
+    use crate::fit::stats::profile::Bound;
     match (l.lo, l.hi) {
         (Bound::Open(_), Bound::Open(_)) => "not bounded by the data".into(),
         (Bound::Edge(v), Bound::Open(_)) => {
@@ -278,7 +278,7 @@ fn interval_lines(s: &mut String, r: &FitResult, info: &RunInfo) {
         } else {
             units.of_derived(&iv.name, r.verdict == Verdict::Smooth)
         };
-        let parts: Vec<String> = crate::fit::profile::LEVELS
+        let parts: Vec<String> = crate::fit::stats::profile::LEVELS
             .iter()
             .filter_map(|&p| iv.at(p))
             .map(|l| format!("{:.0}%: {}", l.prob * 100.0, interval_text(l)))

@@ -49,7 +49,7 @@ FIT = ["fit", *COMMON, "--residual", "log", "--no-reduce", "--no-intervals", "--
        "--threads", "1"]
 PAINTS = ["acryl_blue", "cayman", "garnet_red", "krylon_blue"]
 CURET = "data/curet/curet.csv"
-# The edges of the physical domain (as src/fit/validate.rs states them).
+# The edges of the physical domain (as src/fit/problem/edges.rs states them).
 MIN_T_OVER_SIGMA = 0.1
 MIN_KT = 0.1
 MIN_SIGMA_OVER_LAMBDA = 1e-6

@@ -1,4 +1,4 @@
-//! Profile-likelihood intervals of a dataset's chosen fit ([`crate::fit::profile`]): every
+//! Profile-likelihood intervals of a dataset's chosen fit ([`crate::fit::stats::profile`]): every
 //! free parameter, the parameters the reduced fit held, and T/σ, Beckmann's α, the
 //! amplitudes and the reflectance factors.
 
@@ -6,7 +6,7 @@ use super::DatasetFit;
 use crate::error::Result;
 use crate::fit::driver::{self, FitInput, FitResult};
 use crate::fit::problem::FitProblem;
-use crate::fit::profile::{Interval, Profiler, Target};
+use crate::fit::stats::profile::{Interval, Profiler, Target};
 use crate::lm::Stop;
 
 /// Fits with more free parameters than this get no profile intervals (each needs two

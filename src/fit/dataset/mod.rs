@@ -10,8 +10,8 @@
 pub mod intervals;
 
 use super::driver::{self, FitConfig, FitInput, FitResult};
+use super::problem::weights::residual_weights;
 use super::problem::{Channels, ResidualKind};
-use super::weights::residual_weights;
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Quantity};
 use crate::io::{self, Dataset};
@@ -123,7 +123,7 @@ pub struct Outcome {
     /// The chosen candidate (with the joint-fit note for several channels).
     pub result: FitResult,
     /// Profile-likelihood intervals of `result` (empty when not computed).
-    pub intervals: Vec<super::profile::Interval>,
+    pub intervals: Vec<super::stats::profile::Interval>,
     /// Wall-clock seconds the intervals took (0 when not computed).
     pub interval_seconds: f64,
     /// Whether a stop (signal or time limit) cut the intervals' walks short, so that none
@@ -191,7 +191,7 @@ pub fn check_magnitudes(ds: &Dataset) -> Result<()> {
 
 /// The fit's data from a dataset (checked with [`check_magnitudes`]): geometry (λ from
 /// `wavelength`, else the dataset's own, else 1 unless `needs_wavelength`), values, the
-/// weights transformed for the residual kind ([`super::weights`]), and the channel index of
+/// weights transformed for the residual kind ([`super::problem::weights`]), and the channel index of
 /// every sample with the channel names (as printed: control and bidi characters escaped)
 /// in first-appearance order.
 pub fn fit_input(
@@ -465,7 +465,7 @@ fn intervals_of(
     result: &mut FitResult,
     uncertainties: bool,
     stop: &Stop,
-) -> Result<(Vec<super::profile::Interval>, bool)> {
+) -> Result<(Vec<super::stats::profile::Interval>, bool)> {
     let wanted = spec.intervals && result.n_free <= MAX_PROFILED;
     if !wanted {
         return Ok((Vec::new(), false));

@@ -28,7 +28,7 @@
 pub mod distributions;
 mod wording;
 
-use crate::fit::channels::Channels;
+use crate::fit::problem::channels::Channels;
 use crate::fit::problem::ResidualKind;
 use crate::geometry::{Geometry, PerSample};
 use distributions::{chi2_sf, normal_sf, sign_test, slope, spearman, Runs};

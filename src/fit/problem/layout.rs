@@ -32,7 +32,7 @@ pub enum Transform {
 }
 
 /// Parameters that enter the model linearly: amplitudes, non-negative, and solved exactly
-/// at each point of the starting-value grid ([`super::init`]).
+/// at each point of the starting-value grid ([`crate::fit::start::grid`]).
 pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
 
 impl Transform {

@@ -7,7 +7,7 @@
 //! weight is 1/σ_r², so reduced χ² ≈ 1 when σ_L is right, whatever the residual kind. A
 //! `weight` column is taken as given (it states the weight of the residual itself).
 
-use super::problem::ResidualKind;
+use super::ResidualKind;
 use crate::geometry::PerSample;
 
 /// Where the weights came from, and how they were transformed.

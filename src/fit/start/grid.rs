@@ -7,8 +7,8 @@
 
 use super::amplitudes::{self, Prepared};
 use super::grid_cache;
-use super::problem::{FitInput, FitProblem, ParamLayout};
-use super::stats::median;
+use crate::fit::problem::{FitInput, FitProblem, ParamLayout};
+use crate::geometry::median;
 use crate::lm::Stop;
 use rayon::prelude::*;
 
@@ -55,7 +55,7 @@ pub fn search_samples(model: &dyn crate::model::Model) -> usize {
 pub const NEAR_SPECULAR_SAMPLES: usize = 32;
 
 /// Parameters that enter the model linearly (solved exactly at each grid point).
-pub use super::problem::LINEAR;
+pub use crate::fit::problem::LINEAR;
 
 /// Grid values for a nonlinear parameter, in the unit of the reference wavelength `lambda`.
 fn grid_for(name: &str, lambda: f64) -> Vec<f64> {

@@ -11,7 +11,7 @@
 //! A fit whose layout is new computes the same basis, so a cache hit changes nothing but
 //! the time (the texel batch's 2,000 fits give the same bits with and without it).
 
-use super::problem::FitProblem;
+use crate::fit::problem::FitProblem;
 use crate::geometry::Geometry;
 use std::sync::{Arc, Mutex};
 
@@ -47,7 +47,7 @@ impl Key {
     pub fn new(
         model_name: &str,
         geo: &Geometry,
-        channel: &super::problem::Channels,
+        channel: &crate::fit::problem::Channels,
         axes: &[Vec<f64>],
     ) -> Self {
         let mut k: Vec<u64> = Vec::with_capacity(16 + 9 * geo.len());

@@ -17,22 +17,6 @@
 
 use nalgebra::{DMatrix, DVector};
 
-/// Median of the values that are not NaN: the middle one, or the mean of the two middle
-/// ones for an even count; NaN when there are none. Linear time.
-pub fn median(v: &[f64]) -> f64 {
-    let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
-    let n = s.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    let (lower, &mut upper, _) = s.select_nth_unstable_by(n / 2, f64::total_cmp);
-    if n % 2 == 1 {
-        upper
-    } else {
-        0.5 * (lower.iter().copied().fold(f64::NEG_INFINITY, f64::max) + upper)
-    }
-}
-
 /// Covariance and identifiability from the Jacobian at the optimum.
 #[derive(Debug, Clone)]
 pub struct Uncertainty {
@@ -236,24 +220,6 @@ mod tests {
         finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig, Transformed,
     };
     use approx::assert_relative_eq;
-
-    #[test]
-    fn median_of_odd_even_empty_and_nan() {
-        assert!(median(&[]).is_nan());
-        assert!(median(&[f64::NAN]).is_nan());
-        assert_eq!(median(&[3.0]), 3.0);
-        assert_eq!(median(&[4.0, 1.0]), 2.5);
-        assert_eq!(median(&[5.0, -1.0, f64::NAN, 2.0, 2.0, 9.0]), 2.0);
-        let v: Vec<f64> = (0..1001)
-            .map(|i| ((i * 7919) % 1001) as f64 * 0.5)
-            .collect();
-        assert_eq!(median(&v), 250.0);
-        assert_eq!(median(&v[..1000]), {
-            let mut s = v[..1000].to_vec();
-            s.sort_by(f64::total_cmp);
-            0.5 * (s[499] + s[500])
-        });
-    }
 
     /// Straight line y = a + b t: the textbook closed forms for the covariance,
     /// Var(b) = s²/Sₜₜ, Var(a) = s²(1/n + t̄²/Sₜₜ), Cov(a, b) = −s² t̄/Sₜₜ.

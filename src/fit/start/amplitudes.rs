@@ -14,7 +14,7 @@
 //!   the log residual itself, in ln p_c ([`LOG_ITERS`] steps at most).
 
 use super::grid_cache::PointBasis;
-use super::problem::{FitProblem, ResidualKind};
+use crate::fit::problem::{FitProblem, ResidualKind};
 use nalgebra::{DMatrix, DVector};
 
 /// Iterations of the Gauss–Newton refinement of log-residual amplitudes: the grid only ranks
@@ -366,7 +366,7 @@ fn set(
     p: &mut [f64],
     linear: &[usize],
     coef: &[f64],
-    layout: &super::layout::ParamLayout,
+    layout: &crate::fit::problem::layout::ParamLayout,
     basis: &PointBasis,
 ) {
     let n = basis.rest.len();

@@ -2,20 +2,32 @@
 //! (per channel, and in chunks for parallel evaluation), residuals of a chosen kind, and
 //! the mapping between the model's parameters and the solver's free variables.
 //!
-//! The parameters and their solver variables are [`super::layout`]'s (re-exported here).
+//! The parameters and their solver variables are [`layout`]'s (re-exported here).
 //! Residuals are weighted,
 //! r̃ᵢ = √wᵢ rᵢ, so the solver's cost ½‖r̃‖² is the fit cost ½ Σ wᵢ rᵢ².
 //!
-//! With a robust loss ([`super::loss`]) the solver sees the cost residuals, the corrected
-//! Jacobian and the step residuals of [`super::loss::Loss::correct`] instead.
+//! With a robust loss ([`loss`]) the solver sees the cost residuals, the corrected
+//! Jacobian and the step residuals of [`loss::Loss::correct`] instead.
 //!
-pub use super::channels::Channels;
-pub use super::layout::{FitParam, ParamLayout, Transform, LINEAR, PER_CHANNEL};
-use super::loss::Loss;
+//! Beside the problem: the channel index of every sample ([`channels`]), the weights from
+//! the data's uncertainty ([`weights`]), the active set of amplitudes at their bound 0
+//! (`bounds.rs`) and the edges of the physical domain a point can run to (`edges.rs`).
+
+pub mod channels;
+pub mod layout;
+pub mod loss;
+pub mod weights;
+
+pub(super) mod bounds;
+pub(super) mod edges;
+
 use crate::error::{Error, Result};
 use crate::geometry::{Column, Geometry, PerSample};
 use crate::lm::{LeastSquaresProblem, Stop};
 use crate::model::{Mode, Model};
+pub use channels::Channels;
+pub use layout::{FitParam, ParamLayout, Transform, LINEAR, PER_CHANNEL};
+use loss::Loss;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 

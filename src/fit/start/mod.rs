@@ -1,12 +1,19 @@
 //! Start search: where the full fit begins.
 //!
-//! The grid of [`init::initial_values`] ranks starting candidates on a subsample; each
+//! The grid of [`grid::initial_values`] ranks starting candidates on a subsample; each
 //! candidate is then refined with a quick Levenberg–Marquardt run on the same subsample,
 //! and the lowest refined cost inside the models' domain (on the full data) wins. All of
 //! it runs on subsamples, beside the setup of the full problem.
+//!
+//! The grid is [`grid`]; its linear amplitudes, solved exactly at every grid point, are
+//! [`amplitudes`]; the model's side of the grid, computed once per angular layout, is
+//! [`grid_cache`].
+
+pub mod amplitudes;
+pub mod grid;
+pub mod grid_cache;
 
 use super::config::FitConfig;
-use super::init;
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::solve::{run_lm, Run};
 use crate::error::Result;
@@ -30,13 +37,13 @@ pub const EDGE_MARGIN: f64 = 1e-3;
 /// subsample, the narrow one is 6 % lower on the full data).
 pub const RIVAL_MARGIN: f64 = 0.1;
 
-/// Most rival valleys solved on the whole data besides the winner's ([`choose_refined`]).
+/// Most rival valleys solved on the whole data besides the winner's (`choose_refined`).
 pub const RIVALS: usize = 2;
 
 /// Relative difference in every parameter within which two refined candidates ended at the
 /// same optimum: the refinement stops at relative steps of its `xtol` (10⁻⁶), so one valley
 /// reached from two starts agrees far closer than this, while distinct valleys of the grid
-/// lie a factor of ~2 apart ([`init::initial_values`]).
+/// lie a factor of ~2 apart ([`grid::initial_values`]).
 pub const SAME_OPTIMUM: f64 = 1e-3;
 
 /// Relative cost difference within which two refined KBS points with the same T/σ (to
@@ -114,12 +121,12 @@ impl<'m> Refiners<'m> {
     }
 
     /// The KBS regime band of point `p` by its median g on the subsample: smooth 0 (below
-    /// [`init::SMOOTH_BAND_G`]), between 1, rough 2 (above [`init::ROUGH_BAND_G`]); None
+    /// [`grid::SMOOTH_BAND_G`]), between 1, rough 2 (above [`grid::ROUGH_BAND_G`]); None
     /// without σ.
     fn band(&self, p: &[f64]) -> Option<u8> {
         self.sigma_k.map(|k| match self.sub.geo.median_g(p[k]) {
-            g if g < init::SMOOTH_BAND_G => 0,
-            g if g > init::ROUGH_BAND_G => 2,
+            g if g < grid::SMOOTH_BAND_G => 0,
+            g if g > grid::ROUGH_BAND_G => 2,
             _ => 1,
         })
     }
@@ -240,7 +247,7 @@ pub(super) fn starting_point(
     };
     let (rough_model, smooth_model) = (limit(EvalMode::Rough)?, limit(EvalMode::Smooth)?);
     let bar = search_bar(config.lm.progress);
-    let sub = init::search_input(input, init::search_samples(model));
+    let sub = grid::search_input(input, grid::search_samples(model));
     let exact = FitProblem::new(
         refine_model.as_ref(),
         layout.clone(),
@@ -258,7 +265,7 @@ pub(super) fn starting_point(
     };
     // The grid runs on (for KBS, at most GRID_SAMPLES of) the refinement's subsample.
     let stop = config.lm.stop.as_ref();
-    let mut candidates = init::initial_values(
+    let mut candidates = grid::initial_values(
         &refiners.exact,
         grid_model.as_ref(),
         &refiners.sub,
@@ -281,7 +288,7 @@ pub(super) fn starting_point(
     // After a stop request nothing is refined (the fit's first evaluation on the whole data
     // is then cut too, and the fit ends with nothing fitted).
     if refiners.sub.y.len() > layout.free().len() && !stopped(stop) {
-        let at_edge = |p: &[f64]| super::edges::at_kbs_edge(layout, input, p);
+        let at_edge = |p: &[f64]| super::problem::edges::at_kbs_edge(layout, input, p);
         let chosen = refine_and_choose(
             &refiners,
             &candidates,
@@ -346,7 +353,7 @@ fn refine_and_choose(
 /// Refine each candidate with a quick LM on the subsample (in parallel): the grid's best
 /// point can be a factor of a few off, or sit in the valley of the rough asymptote
 /// (σ → ∞ at fixed T/σ) while the truth is elsewhere. A candidate in the rough band
-/// (median g > [`init::ROUGH_BAND_G`]) is refined with the rough approximation and its
+/// (median g > [`grid::ROUGH_BAND_G`]) is refined with the rough approximation and its
 /// refined cost then taken with the exact model; candidate `smooth_held` is refined with the
 /// smooth approximation at its σ, and its cost taken the same way.
 /// Returns (cost, values) per candidate;
@@ -546,10 +553,10 @@ fn stopped(stop: Option<&Stop>) -> bool {
     stop.is_some_and(Stop::is_requested)
 }
 
-/// Factor by which [`slide_rough_ridge`] scales σ and T per step.
+/// Factor by which `slide_rough_ridge` scales σ and T per step.
 pub const RIDGE_STEP: f64 = 2.0;
 
-/// Most steps of [`slide_rough_ridge`] (σ up to 2¹² ≈ 4000 times the refined one; the
+/// Most steps of `slide_rough_ridge` (σ up to 2¹² ≈ 4000 times the refined one; the
 /// domain's g limit usually ends the slide first).
 pub const RIDGE_STEPS: usize = 12;
 

@@ -30,7 +30,7 @@
 //! profile quadratic near the end puts it within 0.1 % of its distance from the estimate;
 //! each refit runs to a relative cost change that keeps the error of Δχ² a tenth of that.
 
-use super::problem::{FitProblem, Transform};
+use crate::fit::problem::{FitProblem, Transform};
 use crate::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
@@ -302,7 +302,7 @@ impl<'a, 'p> Profiler<'a, 'p> {
         let x = problem.layout.to_x(p_best);
         let (r, j) = problem.residuals_and_jacobian(&x);
         let chi2_min = r.norm_squared();
-        let unc = super::stats::uncertainty(&j, 0.5 * chi2_min, problem.len(), 1e-9);
+        let unc = super::covariance::uncertainty(&j, 0.5 * chi2_min, problem.len(), 1e-9);
         let dof = problem.len().saturating_sub(x.len());
         // Each refit to the relative cost change that keeps the error of Δχ² below a tenth
         // of what CROSS_TOL allows at the smallest threshold (never looser than 1e-6).

@@ -13,7 +13,7 @@
 //! solver then confirms it on the whole problem (the amplitude's column is 0 there, so the
 //! confirmation ends at once, and the report's Jacobian is that of every free parameter).
 
-use super::problem::ParamLayout;
+use super::ParamLayout;
 use crate::lm::{self, LeastSquaresProblem, LmConfig, LmReport};
 use nalgebra::{DMatrix, DVector};
 
@@ -25,7 +25,7 @@ pub const BOUND_TRY: f64 = 1e-2;
 /// Minimise `problem` (solver variables of `layout`) from `x0`, then settle the amplitudes
 /// at their bound (see the module doc): the returned report is the lowest-cost of the run
 /// and the run with the bound active, with the work of both counted.
-pub(super) fn minimize<P: LeastSquaresProblem + ?Sized>(
+pub(in crate::fit) fn minimize<P: LeastSquaresProblem + ?Sized>(
     layout: &ParamLayout,
     problem: &P,
     x0: DVector<f64>,
