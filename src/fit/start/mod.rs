@@ -91,6 +91,36 @@ pub(super) struct Start {
     pub rivals: Vec<Vec<f64>>,
 }
 
+/// The models the start search evaluates, each at the accuracy its stage needs: the
+/// grid's ([`GRID_TOL`]), the refinement's ([`REFINE_TOL`]) and, for KBS models, the rough
+/// and smooth approximations that refine candidates in their bands (at [`REFINE_TOL`]).
+struct SearchModels {
+    grid: Box<dyn Model>,
+    refine: Box<dyn Model>,
+    rough: Option<Box<dyn Model>>,
+    smooth: Option<Box<dyn Model>>,
+}
+
+impl SearchModels {
+    /// The fit's `model` at the search's accuracies; `kbs`: whether it has σ (and so the
+    /// rough and smooth approximations).
+    fn new(model: &dyn Model, config: &FitConfig, kbs: bool) -> Result<Self> {
+        let grid = loose_model(model, config, GRID_TOL, None)?;
+        let refine = loose_model(model, config, REFINE_TOL, None)?;
+        let limit = |mode| {
+            kbs.then(|| loose_model(model, config, REFINE_TOL, Some(mode)))
+                .transpose()
+        };
+        let (rough, smooth) = (limit(EvalMode::Rough)?, limit(EvalMode::Smooth)?);
+        Ok(SearchModels {
+            grid,
+            refine,
+            rough,
+            smooth,
+        })
+    }
+}
+
 /// The subsample problems the candidates are refined on: the model at [`REFINE_TOL`], and
 /// for KBS models its rough approximation (exact in the rough band, and it avoids the
 /// O(√g) series far from the specular peak). The rough approximation depends on σ and T
@@ -113,6 +143,39 @@ struct Refiners<'m> {
 }
 
 impl<'m> Refiners<'m> {
+    /// The refiners of `models` on the start search's subsample of `input` (its size set by
+    /// the fit's `model`), with the fit's residual `floor`; `given[k]` holds a user's
+    /// `--init` or `--fix` value.
+    fn new(
+        models: &'m SearchModels,
+        model: &dyn Model,
+        layout: &ParamLayout,
+        input: &FitInput,
+        config: &FitConfig,
+        floor: f64,
+        given: &[Option<f64>],
+    ) -> Result<Self> {
+        let sigma_k = layout.find("sigma").first().copied();
+        // Layout indices of σ and T (KBS models).
+        let ridge = sigma_k.zip(layout.find("T").first().copied());
+        let sub = grid::search_input(input, grid::search_samples(model));
+        let exact = FitProblem::new(
+            models.refine.as_ref(),
+            layout.clone(),
+            &sub,
+            config.residual,
+            floor,
+        )?;
+        Ok(Refiners {
+            exact,
+            rough: models.rough.as_deref(),
+            smooth: models.smooth.as_deref(),
+            sigma_k,
+            sub,
+            ridge_given: ridge.is_some_and(|(ks, kt)| given[ks].is_some() || given[kt].is_some()),
+        })
+    }
+
     /// The rough approximation's problem on the subsample with σ held at `start`'s value (the
     /// approximation has no gradient along the rough ridge, so a free σ would wander along it,
     /// to σ → 0 as readily as anywhere); None without a rough approximation.
@@ -234,40 +297,15 @@ pub(super) fn starting_point(
     given: &[Option<f64>],
     t0: Instant,
 ) -> Result<Start> {
-    let grid_model = loose_model(model, config, GRID_TOL, None)?;
-    let refine_model = loose_model(model, config, REFINE_TOL, None)?;
-    let sigma_k = layout.find("sigma").first().copied();
-    // Layout indices of σ and T (KBS models).
-    let ridge = sigma_k.zip(layout.find("T").first().copied());
-    // The rough and smooth approximations refine KBS candidates in their bands.
-    let limit = |mode| {
-        sigma_k
-            .map(|_| loose_model(model, config, REFINE_TOL, Some(mode)))
-            .transpose()
-    };
-    let (rough_model, smooth_model) = (limit(EvalMode::Rough)?, limit(EvalMode::Smooth)?);
+    let kbs = !layout.find("sigma").is_empty();
+    let models = SearchModels::new(model, config, kbs)?;
     let bar = search_bar(config.lm.progress);
-    let sub = grid::search_input(input, grid::search_samples(model));
-    let exact = FitProblem::new(
-        refine_model.as_ref(),
-        layout.clone(),
-        &sub,
-        config.residual,
-        floor,
-    )?;
-    let refiners = Refiners {
-        exact,
-        rough: rough_model.as_deref(),
-        smooth: smooth_model.as_deref(),
-        sigma_k,
-        sub,
-        ridge_given: ridge.is_some_and(|(ks, kt)| given[ks].is_some() || given[kt].is_some()),
-    };
+    let refiners = Refiners::new(&models, model, layout, input, config, floor, given)?;
     // The grid runs on (for KBS, at most GRID_SAMPLES of) the refinement's subsample.
     let stop = config.lm.stop.as_ref();
     let mut candidates = grid::initial_values(
         &refiners.exact,
-        grid_model.as_ref(),
+        models.grid.as_ref(),
         &refiners.sub,
         given,
         stop,

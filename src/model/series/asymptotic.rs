@@ -66,6 +66,31 @@ const fn asym_deriv_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
 
 /// Build the table of P_n (see the module doc) at compile time.
 const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
+    let mu = poisson_moments();
+    let c = damped_exp_coefficients(&exp_coefficients());
+    // P_n(b) = Σ_{k=n+1}^{2n} c_k(b) mu[k][k−n], P_0 = 1.
+    let mut p = [[0.0f64; ASYM_DEG]; ASYM_ORDERS + 1];
+    p[0][0] = 1.0;
+    let mut n = 1;
+    while n <= ASYM_ORDERS {
+        let mut k = n + 1;
+        while k <= 2 * n {
+            let w = mu[k][k - n];
+            let mut i = 0;
+            while i < ASYM_K {
+                p[n][i] += c[k][i] * w;
+                i += 1;
+            }
+            k += 1;
+        }
+        n += 1;
+    }
+    p
+}
+
+/// The Poisson central moments as polynomials in g (`mu[k][j]`, the coefficient of g^j in
+/// μ_k), for k < `ASYM_K`.
+const fn poisson_moments() -> [[f64; ASYM_K]; ASYM_K] {
     // Poisson central moments μ_k(g) = Σ_j mu[k][j] g^j: μ0 = 1, μ1 = 0,
     // μ_{k+1} = g (k μ_{k−1} + dμ_k/dg).
     let mut mu = [[0.0f64; ASYM_K]; ASYM_K];
@@ -84,6 +109,12 @@ const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
         }
         k += 1;
     }
+    mu
+}
+
+/// The coefficients in b of the series of exp(b x/(1+x)) in x (`e[k][i]`, the coefficient
+/// of b^i in the x^k term), for k < `ASYM_K`.
+const fn exp_coefficients() -> [[f64; ASYM_K]; ASYM_K] {
     // e_k(b): coefficients of exp(b x/(1+x)) = Σ_k e_k(b) x^k,
     // e_k[i] = (−1)^{k−i} C(k−1, i−1)/i! (k ≥ 1), e_0 = 1.
     let mut e = [[0.0f64; ASYM_K]; ASYM_K];
@@ -111,6 +142,12 @@ const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
         }
         k += 1;
     }
+    e
+}
+
+/// The coefficients in b of the series of (1+x)^{−1} exp(b x/(1+x)) in x, from those of
+/// exp(b x/(1+x)) ([`exp_coefficients`]).
+const fn damped_exp_coefficients(e: &[[f64; ASYM_K]; ASYM_K]) -> [[f64; ASYM_K]; ASYM_K] {
     // c_k(b) = Σ_{j≤k} (−1)^{k−j} e_j(b): the coefficients of (1+x)^{−1} exp(b x/(1+x)).
     let mut c = [[0.0f64; ASYM_K]; ASYM_K];
     let mut k = 0;
@@ -127,24 +164,7 @@ const fn asym_table() -> [[f64; ASYM_DEG]; ASYM_ORDERS + 1] {
         }
         k += 1;
     }
-    // P_n(b) = Σ_{k=n+1}^{2n} c_k(b) mu[k][k−n], P_0 = 1.
-    let mut p = [[0.0f64; ASYM_DEG]; ASYM_ORDERS + 1];
-    p[0][0] = 1.0;
-    let mut n = 1;
-    while n <= ASYM_ORDERS {
-        let mut k = n + 1;
-        while k <= 2 * n {
-            let w = mu[k][k - n];
-            let mut i = 0;
-            while i < ASYM_K {
-                p[n][i] += c[k][i] * w;
-                i += 1;
-            }
-            k += 1;
-        }
-        n += 1;
-    }
-    p
+    c
 }
 
 /// Smallest g for which `auto` tries the asymptotic expansion.
