@@ -10,8 +10,8 @@ use goniofit::design::{self, candidates::Grid, NoiseModel, Request, Scene};
 use goniofit::fit::driver::{self, FitConfig, FitInput};
 use goniofit::fit::problem::{Channels, ResidualKind};
 use goniofit::geometry::{Geometry, PerSample, Quantity, Sample};
+use goniofit::harness::synth::{self, AnglesDeg, Noise, NoiseKind};
 use goniofit::model::{by_name, Model, ModelOptions};
-use goniofit::synth::{self, AnglesDeg, Noise, NoiseKind};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 
@@ -115,7 +115,7 @@ fn sd(x: &[f64]) -> f64 {
 }
 
 /// The standard deviation of ln p̂_j over fits of `DRAWS` measurements at `angles` with
-/// relative noise from `goniofit::synth` (L(1 + εz)).
+/// relative noise from `goniofit::harness::synth` (L(1 + εz)).
 fn realised_log_sd(s: &Scene, angles: &[AnglesDeg], j: usize, seed: u64) -> f64 {
     let samples: Vec<Sample> = angles.iter().map(AnglesDeg::sample).collect();
     let geo = Geometry::new(&samples, &[s.wavelength], s.quantity).unwrap();

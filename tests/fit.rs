@@ -4,8 +4,8 @@
 
 use goniofit::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
 use goniofit::geometry::{Geometry, Quantity};
+use goniofit::harness::synth::{generate, Layout, Noise, NoiseKind};
 use goniofit::model::{by_name, ModelOptions};
-use goniofit::synth::{generate, Layout, Noise, NoiseKind};
 use std::sync::atomic::Ordering::SeqCst;
 
 /// Synthetic data for `model` at `params` on `layout`, with relative noise: one channel of

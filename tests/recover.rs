@@ -1,8 +1,8 @@
 //! A seeded small recovery run: coverage of the reported uncertainties in a sensible band,
 //! and small recovery errors in the quantities the fits say the data determines.
 
+use goniofit::harness::recover::{self, RecoverConfig, Regime};
 use goniofit::lm::Stop;
-use goniofit::recover::{self, RecoverConfig, Regime};
 
 /// Every scored quantity of `r` within `max_rel` of its truth.
 fn assert_within(r: &recover::SceneResult, max_rel: f64, run: &str) {

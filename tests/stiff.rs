@@ -6,9 +6,9 @@
 use goniofit::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
 use goniofit::fit::problem::ResidualKind;
 use goniofit::geometry::{Geometry, Quantity};
+use goniofit::harness::synth::{generate, AnglesDeg, Layout, Noise, NoiseKind};
 use goniofit::lm::LmConfig;
 use goniofit::model::{by_name, ModelOptions};
-use goniofit::synth::{generate, AnglesDeg, Layout, Noise, NoiseKind};
 use std::time::Duration;
 
 /// Angles: every θi with θr in `theta_r` and φr in `phi_r` (degrees).

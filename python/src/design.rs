@@ -5,10 +5,10 @@
 use crate::convert::{json_to_py, to_py_err};
 use crate::{options, run};
 use goniofit::design::{self, candidates::Grid, simulate, NoiseModel, Request, Scene};
+use goniofit::geometry::layout::AnglesDeg;
 use goniofit::geometry::Sample;
 use goniofit::model;
 use goniofit::report::design::{json, Run};
-use goniofit::synth::AnglesDeg;
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

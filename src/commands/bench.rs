@@ -2,8 +2,8 @@
 
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
+use goniofit::harness::workprec::{self, WorkPrecisionConfig};
 use goniofit::io::FileSet;
-use goniofit::workprec::{self, WorkPrecisionConfig};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]

@@ -2,8 +2,8 @@
 //! uncertainties.
 
 use clap::Args;
+use goniofit::harness::recover::{self, RecoverConfig};
 use goniofit::lm::Stop;
-use goniofit::recover::{self, RecoverConfig};
 use std::io::IsTerminal as _;
 use std::time::Duration;
 

@@ -9,10 +9,10 @@ use super::args::{parse_patch, ModeArg, QuantityArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use goniofit::geometry::Quantity;
+use goniofit::harness::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
 use goniofit::io::{self, FileSet};
 use goniofit::model::{by_name, parse_params, Model};
 use goniofit::settings::{self, Front};
-use goniofit::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]

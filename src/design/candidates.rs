@@ -2,7 +2,7 @@
 //! instrument's reach.
 
 use crate::error::{Error, Result};
-use crate::synth::{AnglesDeg, Layout};
+use crate::geometry::layout::{AnglesDeg, Layout};
 use std::path::Path;
 
 /// Most candidates a design considers (a 0.5° hemisphere grid to 85° has 2.6 M: choose a

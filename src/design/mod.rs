@@ -21,9 +21,9 @@ pub mod simulate;
 
 use crate::error::{Error, Result};
 use crate::fit::problem::layout::PER_CHANNEL;
+use crate::geometry::layout::AnglesDeg;
 use crate::geometry::{Geometry, Quantity, Sample};
 use crate::model::Model;
-use crate::synth::AnglesDeg;
 use choose::Criterion;
 pub use describe::{percent, target_label, where_};
 use nalgebra::{DMatrix, DVector};

@@ -10,7 +10,7 @@
 //! ```
 //!
 //! **Angles are kept in degrees**, as they are written to the CSV, and every sample the
-//! model sees is [`Sample::from_degrees`] of exactly those numbers. So a file written with
+//! model sees is [`Sample::from_degrees`](crate::geometry::Sample::from_degrees) of exactly those numbers. So a file written with
 //! [`SynthData::write_csv`] and read back by any reader that parses the degrees and calls
 //! `Sample::from_degrees` evaluates to the `exact` column bit for bit.
 //!
@@ -43,7 +43,7 @@
 //! ```
 //! use goniofit::geometry::Quantity;
 //! use goniofit::model::{by_name, parse_params, ModelOptions};
-//! use goniofit::synth::{generate, Layout, Noise, NoiseKind};
+//! use goniofit::harness::synth::{generate, Layout, Noise, NoiseKind};
 //!
 //! let model = by_name("kbs", &ModelOptions::default())?;
 //! let params = parse_params(model.as_ref(), "sigma=0.3,T=2,scale=1")?;
@@ -55,12 +55,11 @@
 //! # Ok::<(), goniofit::Error>(())
 //! ```
 
-mod layout;
 mod noise;
 mod output;
 #[cfg(test)]
 mod tests;
 
-pub use layout::*;
+pub use crate::geometry::layout::*;
 pub use noise::*;
 pub use output::*;

@@ -1,5 +1,5 @@
 //! Synthetic recovery: draw KBS scenes across regimes, generate seeded noisy data with
-//! [`crate::synth::generate`], fit each with [`crate::fit::driver::fit`] from the default
+//! [`crate::harness::synth::generate`], fit each with [`crate::fit::driver::fit`] from the default
 //! (data-driven) starting values, and compare what the fit reports with the truth.
 //!
 //! For every scene only the quantities the fit says the data determines are scored
@@ -28,11 +28,11 @@ use crate::fit::problem::Channels;
 use crate::fit::stats::adequacy::AdequacyVerdict;
 use crate::geometry::median;
 use crate::geometry::{Geometry, Quantity};
+use crate::harness::synth::{self, Layout, Noise, NoiseKind};
 use crate::lm::{LmConfig, Stop, Termination};
 use crate::model::fresnel::Fresnel;
 use crate::model::shadowing::Shadowing;
 use crate::model::{self, ModelOptions};
-use crate::synth::{self, Layout, Noise, NoiseKind};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;

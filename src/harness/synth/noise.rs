@@ -1,5 +1,5 @@
 //! Seeded, reproducible noise on exact values (the formulas are in the module
-//! documentation of [`crate::synth`]).
+//! documentation of [`crate::harness::synth`]).
 
 use crate::error::{Error, Result};
 use crate::model::domain::short_number;

@@ -1,8 +1,8 @@
 //! A synthetic data set and what is written of it: the CSV table and the truth JSON.
 
-use super::layout::{subsample, AnglesDeg, Layout};
 use super::noise::{add_noise, Noise, Noisy};
 use crate::error::{Error, Result};
+use crate::geometry::layout::{subsample, AnglesDeg, Layout};
 use crate::geometry::{Geometry, Quantity, Sample};
 use crate::model::{EvalMode, Model, ModelOptions};
 use serde::{Deserialize, Serialize};

@@ -1,5 +1,6 @@
-//! Measurement layouts: which directions a synthetic data set has (see the module
-//! documentation of [`crate::synth`] for the table of layouts).
+//! Measurement layouts: which directions a data set is measured at, for synthetic data
+//! sets ([`crate::harness::synth`], whose module documentation has the table of layouts)
+//! and for the candidates of a measurement design ([`crate::design`]).
 
 use crate::error::{Error, Result};
 use crate::geometry::{wrap_phi, Sample};

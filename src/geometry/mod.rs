@@ -4,6 +4,10 @@
 //! Conventions (docs/conventions.md): θi, θr from the surface normal, θi ∈ [0, π/2), θr ∈ [0, π/2];
 //! φr from the plane of incidence, **φr = 0 is the forward (specular) side**. All angles
 //! here are radians. Lengths (σ, T, X, Y, λ) share one unit; only ratios to λ enter.
+//!
+//! Measurement layouts, the sets of directions a data set is measured at, are [`layout`].
+
+pub mod layout;
 
 use crate::error::{Error, Result};
 use nalgebra::Vector3;
