@@ -1,5 +1,6 @@
 //! The one error type of the library. Every variant says what failed, shows the offending
-//! value, and where it came from (file, line, column) when it came from a file.
+//! value, and where it came from (file, line, column) when it came from a file; names and
+//! values from files are printed with [`shown`] and [`shown_text`].
 
 use std::path::PathBuf;
 
@@ -9,9 +10,9 @@ pub enum Error {
     /// A value in an input file could not be used.
     #[error(
         "{}:{line}: column {}: {}",
-        crate::io::shown(path),
-        crate::io::shown_text(column),
-        crate::io::shown_text(message)
+        shown(path),
+        shown_text(column),
+        shown_text(message)
     )]
     Input {
         path: PathBuf,
@@ -29,10 +30,10 @@ pub enum Error {
         message: String,
     },
     /// A whole input file is unusable (empty, header only, missing column, ...).
-    #[error("{}: {}", crate::io::shown(path), crate::io::shown_text(message))]
+    #[error("{}: {}", shown(path), shown_text(message))]
     File { path: PathBuf, message: String },
     /// An I/O failure while reading or writing a file.
-    #[error("{}: {source}", crate::io::shown(path))]
+    #[error("{}: {source}", shown(path))]
     Io {
         path: PathBuf,
         #[source]
@@ -40,7 +41,7 @@ pub enum Error {
     },
     /// Writing an output failed after it started (disk full, I/O error): not the user's
     /// input, exit code 1. (A path that cannot be created is an [`Error::File`].)
-    #[error("{}: writing failed: {source}", crate::io::shown(path))]
+    #[error("{}: writing failed: {source}", shown(path))]
     Write {
         path: PathBuf,
         #[source]
@@ -53,10 +54,10 @@ pub enum Error {
     #[error("parameter {name}: {message}")]
     Param { name: String, message: String },
     /// A usage error: inconsistent options or arguments.
-    #[error("{}", crate::io::shown_text(.0))]
+    #[error("{}", shown_text(.0))]
     Usage(String),
     /// A picture could not be drawn or written.
-    #[error("{}: drawing failed: {message}", crate::io::shown(path))]
+    #[error("{}: drawing failed: {message}", shown(path))]
     Plot { path: PathBuf, message: String },
     /// A stop request (Ctrl-C, SIGTERM, SIGHUP, a time limit) came before any point of the
     /// fit was evaluated on the whole data: there is no fit to report (CLI exit code 3).
@@ -107,3 +108,32 @@ impl Error {
 
 /// Result with [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// `s` as printed in messages and reports: line breaks, tabs and other control characters,
+/// and the bidirectional-text controls (U+061C, U+200E, U+200F, U+202A–U+202E,
+/// U+2066–U+2069) are written as escapes (`\n`, `\u{202e}`), everything else as is; so a
+/// file or group name cannot fake a line of a report or reverse the text after it.
+pub fn shown_text(s: &str) -> std::borrow::Cow<'_, str> {
+    let hostile = |c: char| {
+        c.is_control()
+            || matches!(c, '\u{061c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+    };
+    if !s.chars().any(hostile) {
+        return s.into();
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        if hostile(c) {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out.into()
+}
+
+/// A path as printed in messages and reports: [`shown_text`] of its text (invalid UTF-8
+/// shown as U+FFFD).
+pub fn shown(path: &std::path::Path) -> String {
+    shown_text(&path.to_string_lossy()).into_owned()
+}

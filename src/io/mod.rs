@@ -37,9 +37,10 @@
 //! Where the parts are: `read.rs` the reading of a file or of bytes, `sniff.rs` the format
 //! from the extension and the first bytes, `dataset.rs` the [`Dataset`] and
 //! [`ReadOptions`], `channel.rs` `--channel` on a CSV dataset, `values.rs` numbers, angles
-//! and lengths in files, `text.rs` names as printed and CSV tables written; one file or
-//! folder per format ([`csv`], [`astm`], [`rgl`], [`merl`], [`alta`]; [`arrays`] for arrays
-//! handed over by a program), [`output`] and [`files`] for writing.
+//! and lengths in files, `text.rs` CSV tables written (names as printed, [`shown`] and
+//! [`shown_text`], are the error layer's); one file or folder per format ([`csv`],
+//! [`astm`], [`rgl`], [`merl`], [`alta`]; [`arrays`] for arrays handed over by a program),
+//! [`output`] and [`files`] for writing.
 
 pub mod alta;
 pub mod arrays;
@@ -60,11 +61,12 @@ mod values;
 pub use files::FileSet;
 pub use output::{print_stdout, write_atomic, write_bytes};
 
+pub use crate::error::{shown, shown_text};
 pub use channel::select_csv_channel;
 pub(crate) use dataset::empty_brdf;
 pub use dataset::{Dataset, ReadOptions};
 pub use read::{read_bytes, read_dataset, read_dataset_columns, read_dataset_with, Progress};
 pub use sniff::is_astm;
-pub use text::{csv_field, shown, shown_text, write_csv, write_record};
+pub use text::{csv_field, write_csv, write_record};
 pub(crate) use values::{check_angles, parse_finite};
 pub use values::{format_value, nm_per, parse_length, wavelength_nm_of_channel, LENGTH_UNITS};

@@ -1,5 +1,5 @@
-//! Text in and out: file names and labels as printed in messages and reports, and CSV
-//! tables written with [`super::write_atomic`].
+//! CSV tables written with [`super::write_atomic`], fields quoted so that the readers
+//! return them as written.
 
 use super::write_atomic;
 use crate::error::Result;
@@ -44,33 +44,4 @@ pub fn csv_field(f: &str, first: bool) -> std::borrow::Cow<'_, str> {
     } else {
         f.into()
     }
-}
-
-/// `s` as printed in messages and reports: line breaks, tabs and other control characters,
-/// and the bidirectional-text controls (U+061C, U+200E, U+200F, U+202A–U+202E,
-/// U+2066–U+2069) are written as escapes (`\n`, `\u{202e}`), everything else as is; so a
-/// file or group name cannot fake a line of a report or reverse the text after it.
-pub fn shown_text(s: &str) -> std::borrow::Cow<'_, str> {
-    let hostile = |c: char| {
-        c.is_control()
-            || matches!(c, '\u{061c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
-    };
-    if !s.chars().any(hostile) {
-        return s.into();
-    }
-    let mut out = String::with_capacity(s.len() + 8);
-    for c in s.chars() {
-        if hostile(c) {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
-    out.into()
-}
-
-/// A path as printed in messages and reports: [`shown_text`] of its text (invalid UTF-8
-/// shown as U+FFFD).
-pub fn shown(path: &Path) -> String {
-    shown_text(&path.to_string_lossy()).into_owned()
 }
