@@ -11,13 +11,14 @@
 //! | `max_iter` | any count (0: the report of the starting point, not converged) |
 //! | `tol` | [1e-16, 0.1] |
 //! | `f_scale` | [1e-100, 1e100] (its square, the loss's scale, stays a normal number) |
-//! | `floor` | finite, > 0 (and below the largest measured value: [`check_floor`]) |
+//! | `floor` | finite, > 0 (and below the largest measured value: [`crate::fit::dataset`]) |
 //! | `wavelength`, `patch` half-sizes | [1e-30, 1e30] |
 //! | `scenes` (recover) | 1 ..= 1,000,000 (every scene is drawn, so the count is memory) |
 
 use crate::error::{Error, Result};
+use crate::geometry::LENGTH_RANGE;
 use crate::model::domain::short_number;
-use crate::model::{EvalMode, ModelOptions};
+use crate::model::{EvalMode, ModelOptions, TOL_RANGE};
 use std::time::Duration;
 
 /// Who names the option in messages: the command line (`--f-scale`) or the Python
@@ -99,7 +100,7 @@ pub fn f_scale(front: Front, c: f64) -> Result<f64> {
 }
 
 /// The floor of relative and log residuals: finite and > 0 (None: the default,
-/// 1e-6 × max |L|). [`check_floor`] compares it with the data.
+/// 1e-6 × max |L|). The fit of a dataset compares it with the data ([`crate::fit::dataset`]).
 pub fn floor(front: Front, floor: Option<f64>) -> Result<Option<f64>> {
     match floor {
         Some(f) if !(f.is_finite() && f > 0.0) => Err(front.refuse(
@@ -110,23 +111,6 @@ pub fn floor(front: Front, floor: Option<f64>) -> Result<Option<f64>> {
         f => Ok(f),
     }
 }
-
-/// Refuse a `floor` at or above the largest |value| of the data (`max_abs`): every value
-/// would be raised to it and every residual would be 0.
-pub fn check_floor(floor: f64, max_abs: f64) -> Result<()> {
-    if floor >= max_abs {
-        return Err(Error::Usage(format!(
-            "floor {} is not below the largest measured value ({}): every value would be raised to it and every residual be 0; give a floor well below the data (default 1e-6 × the largest |L|)",
-            short_number(floor),
-            short_number(max_abs)
-        )));
-    }
-    Ok(())
-}
-
-/// The smallest and largest length accepted for a wavelength or a patch half-size (any
-/// unit): beyond them the model's (T/λ)², (σ/λ)² and 4XY/λ² overflow or underflow.
-pub const LENGTH_RANGE: (f64, f64) = (1e-30, 1e30);
 
 /// A length option (`wavelength`, a `patch` half-size) within [`LENGTH_RANGE`].
 pub fn length(front: Front, key: &str, v: f64) -> Result<f64> {
@@ -155,9 +139,6 @@ pub fn scenes(front: Front, n: usize) -> Result<usize> {
     }
     Ok(n)
 }
-
-/// The range of the relative accuracy target of the KBS evaluation.
-pub const TOL_RANGE: (f64, f64) = (1e-16, 0.1);
 
 /// The relative accuracy target of the KBS evaluation: within [`TOL_RANGE`].
 pub fn tol(front: Front, tol: f64) -> Result<f64> {
@@ -209,7 +190,6 @@ mod tests {
             assert!(floor(Front::Cli, Some(v)).is_err());
         }
         assert!(floor(Front::Cli, Some(1e-300)).is_ok());
-        assert!(check_floor(2.0, 2.0).is_err() && check_floor(1.0, 2.0).is_ok());
         assert_eq!(
             timeout(Front::Cli, Some(1e9)).unwrap().unwrap().as_secs(),
             1e9 as u64

@@ -13,6 +13,10 @@ use crate::error::{Error, Result};
 use nalgebra::Vector3;
 use std::sync::{Arc, OnceLock};
 
+/// The smallest and largest length accepted for a wavelength or a patch half-size (any
+/// unit): beyond them the model's (T/λ)², (σ/λ)² and 4XY/λ² overflow or underflow.
+pub const LENGTH_RANGE: (f64, f64) = (1e-30, 1e30);
+
 /// One per-sample column (of a [`Geometry`], or a fit's values), read as a slice. The
 /// storage is shared:
 /// cloning a column or a geometry, or slicing a contiguous range of samples

@@ -109,7 +109,7 @@ pub fn nm_per(unit: &str) -> f64 {
 
 /// A positive length such as `633nm`, `633 nm`, `0.633um`, `0.633µm` or a bare `0.633`:
 /// the number and its unit (`nm`, `µm`; None for a bare number), within
-/// [`crate::settings::LENGTH_RANGE`]. The error says what is accepted.
+/// [`crate::geometry::LENGTH_RANGE`]. The error says what is accepted.
 pub fn parse_length(text: &str) -> Result<(f64, Option<&'static str>)> {
     let t = text.trim();
     let lower = t.to_lowercase();
@@ -123,7 +123,7 @@ pub fn parse_length(text: &str) -> Result<(f64, Option<&'static str>)> {
     } else {
         (lower.clone(), None)
     };
-    let (lo, hi) = crate::settings::LENGTH_RANGE;
+    let (lo, hi) = crate::geometry::LENGTH_RANGE;
     match num.trim().parse::<f64>() {
         Ok(v) if (lo..=hi).contains(&v) => Ok((v, unit)),
         Ok(v) if v.is_finite() && v > 0.0 => Err(Error::Usage(format!(

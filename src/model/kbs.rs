@@ -112,7 +112,7 @@ pub(crate) struct KbsPoint {
 impl Kbs {
     /// A KBS model; `opts.tol` must lie in [1e-16, 0.1], patch sizes must be positive.
     pub fn new(opts: ModelOptions) -> Result<Self> {
-        let (lo, hi) = crate::settings::TOL_RANGE;
+        let (lo, hi) = super::TOL_RANGE;
         if !(lo..=hi).contains(&opts.tol) {
             return Err(Error::Usage(format!(
                 "tolerance {} is outside [1e-16, 0.1]",

@@ -75,6 +75,9 @@ pub enum EvalMode {
     Rough,
 }
 
+/// The range of the relative accuracy target of the KBS evaluation.
+pub const TOL_RANGE: (f64, f64) = (1e-16, 0.1);
+
 /// Options shared by the model constructors.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ModelOptions {

@@ -221,7 +221,7 @@ pub fn fit_input(
         message: "no measured value column (L)".into(),
     })?;
     if let (Some(f), ResidualKind::Relative | ResidualKind::Log) = (floor, residual) {
-        crate::settings::check_floor(f, y.iter().fold(0.0f64, |m, v| m.max(v.abs())))?;
+        check_floor(f, y.iter().fold(0.0f64, |m, v| m.max(v.abs())))?;
     }
     let floor = floor_for(floor, &y);
     let (weight, _) = residual_weights(
@@ -660,4 +660,27 @@ fn joint_narrowing(
             parts.join("; ")
         )
     }))
+}
+
+/// Refuse a `floor` at or above the largest |value| of the data (`max_abs`): every value
+/// would be raised to it and every residual would be 0.
+fn check_floor(floor: f64, max_abs: f64) -> Result<()> {
+    if floor >= max_abs {
+        return Err(Error::Usage(format!(
+            "floor {} is not below the largest measured value ({}): every value would be raised to it and every residual be 0; give a floor well below the data (default 1e-6 × the largest |L|)",
+            short_number(floor),
+            short_number(max_abs)
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::check_floor;
+
+    #[test]
+    fn a_floor_must_lie_below_the_largest_measured_value() {
+        assert!(check_floor(2.0, 2.0).is_err() && check_floor(1.0, 2.0).is_ok());
+    }
 }
