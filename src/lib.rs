@@ -1,11 +1,11 @@
 //! goniofit: fit physical light-scattering models to gonioreflectometer measurements.
 //!
-//! Layers, each using only those before it: [`error`]; [`lm`] (Levenberg–Marquardt as an
-//! argmin solver, on argmin, nalgebra and std alone); [`geometry`] (angles, per-sample
-//! quantities, measurement layouts); [`model`] (one file per model); [`fit`] (the fit
-//! pipeline and its statistics); [`io`] (readers and writers); [`design`] (what to measure
-//! next); [`report`] and [`plot`]; [`harness`] (synthetic data, recovery and
-//! work–precision runs). [`settings`] holds the limits the layers share.
+//! Layers, from the bottom: [`error`]; [`lm`] (Levenberg–Marquardt as an argmin solver,
+//! importing nothing of the rest of the crate); [`geometry`] (angles, per-sample
+//! quantities, measurement layouts); [`io`] (readers and writers); [`model`] (one file per
+//! model); [`fit`] (the fit pipeline and its statistics); [`design`] (what to measure
+//! next); [`plot`] and [`report`]; [`harness`] (synthetic data, recovery and work–precision
+//! runs). [`settings`] validates the numeric options of every command.
 
 pub mod design;
 pub mod error;
