@@ -12,7 +12,8 @@
 //! `cargo bench --bench eval_ratio -- factors` times the lobe with its Fresnel and
 //! shadowing factors against the plain lobe the same way (`auto` mode, hemisphere set, in
 //! pairs: plain, then with the factors; n = 1.5, κ = 2): the target is extended/plain ≤ 1.5
-//! in every regime, for values and with the Jacobian.
+//! in every regime, for values and with the Jacobian. A further argument names the one
+//! combination to time (`-- factors smith`).
 
 mod common;
 
@@ -57,7 +58,8 @@ fn pairs(geo: &Geometry, a: (&Kbs, &[f64]), b: (&Kbs, &[f64]), jac: bool) -> (f6
     (quartiles(ta)[1], quartiles(tb)[1], quartiles(ratio))
 }
 
-/// The factors' cost: plain against dielectric + Smith and conductor + correlated Smith.
+/// The factors' cost: plain against the dielectric factor alone, Smith alone, dielectric +
+/// Smith and conductor + correlated Smith.
 fn factors() {
     let model = |fresnel, shadowing| {
         Kbs::new(ModelOptions {
@@ -71,6 +73,8 @@ fn factors() {
     let geo = geometry(false, 7);
     println!("factors                     g     jac   plain ns  ext ns   ratio: q1  median  q3");
     for (name, fresnel, shadowing) in [
+        ("dielectric", Fresnel::Dielectric, Shadowing::None),
+        ("smith", Fresnel::None, Shadowing::Smith),
         ("dielectric+smith", Fresnel::Dielectric, Shadowing::Smith),
         (
             "conductor+smith-correlated",
@@ -78,6 +82,12 @@ fn factors() {
             Shadowing::SmithCorrelated,
         ),
     ] {
+        if !std::env::args()
+            .skip(1)
+            .all(|a| a == "factors" || a.starts_with('-') || name == a)
+        {
+            continue;
+        }
         let ext = model(fresnel, shadowing);
         for g in [0.01, 1.0, 100.0, 1e4] {
             let sigma = sigma_for(g);

@@ -17,8 +17,8 @@
 //! T/σ 0.5–200; worst measured 5e-16 and 2e-16), and Λ(ν) itself to 1e-15 (1 + Λ) against
 //! a dense 30-digit table of ν from 1e-3 to 6.5 (`tests/ref/lambda_reference.csv`).
 //!
-//! Cost: at most one `exp` per direction (none for ν > 6, where Λ < 1e-17 and
-//! |ν ∂Λ/∂ν| < 2e-17 are taken as 0). Λ = ½ e^{−ν²}(y/√π − erfcx ν) with y = 1/ν, and
+//! Cost: one `exp` per direction and no branch on ν (random geometries cost what ordered
+//! ones do). Λ = ½ e^{−ν²}(y/√π − erfcx ν) with y = 1/ν, and
 //! erfcx ν = e^{ν²} erfc ν from a table of eight polynomial pieces (degree 11, Chebyshev
 //! interpolants from `tests/ref/smith_lambda.py`, summed by Estrin's scheme): in ν below
 //! ν = 1.25, as y·P(y) above (the last piece reaches y = 0). Worst |ΔΛ|/(1 + Λ) of the
@@ -161,20 +161,19 @@ pub fn lambda(nu: f64) -> (f64, f64) {
     lambda_ny(nu, 1.0 / nu)
 }
 
-/// [`lambda`] at ν with y = 1/ν given (ν ≥ 0; y = ∞ at ν = 0 gives Λ = ∞).
+/// [`lambda`] at ν with y = 1/ν given (ν ≥ 0; y = ∞ at ν = 0 gives Λ = ∞). Branch-free
+/// in ν, so that samples of random geometry cost the same: beyond ν = √50 ≈ 7.1 the factor
+/// e^{−ν²} is taken at ν² = 50, which leaves Λ and ν ∂Λ/∂ν below 1e-22 (0 in 1 + Λ, as the
+/// exact values below 1e-23 are).
 #[inline(always)]
 fn lambda_ny(nu: f64, y: f64) -> (f64, f64) {
     const INV_SQRT_PI: f64 = 0.564_189_583_547_756_3;
-    if nu > 6.0 {
-        // Λ < 1e-17 and |ν ∂Λ/∂ν| < 2e-17: 0 to double precision in 1 + Λ, without an exp.
-        return (0.0, 0.0);
-    }
     let k = E_PIECES[1..].iter().filter(|p| nu >= p.nu_lo).count();
     let piece = &E_PIECES[k];
     let erfcx = piece.erfcx(nu, y);
-    let e = (-nu * nu).exp();
+    let e = (-(nu * nu).min(50.0)).exp();
     let first = y * INV_SQRT_PI;
-    (0.5 * e * (first - erfcx), -0.5 * e * first)
+    ((0.5 * e * (first - erfcx)).max(0.0), -0.5 * e * first)
 }
 
 /// cot θ = cos θ/sin θ of a polar angle θ ∈ [0, π/2] (∞ at 0, 0 at π/2 up to rounding,
@@ -342,6 +341,19 @@ const E_PIECES: [EPiece; 8] = [
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lambda_is_negligible_beyond_the_exponential_clamp() {
+        // Beyond ν² = 50 the exact Λ < 1e-23 and |ν ∂Λ/∂ν| < 1e-22: both are 0 in 1 + Λ.
+        for nu in [7.1, 8.0, 30.0, 1e3, 1e150, f64::INFINITY] {
+            let (l, d) = lambda(nu);
+            assert!(
+                (0.0..1e-22).contains(&l) && d.abs() < 1e-22,
+                "ν={nu}: {l:e} {d:e}"
+            );
+        }
+        assert_eq!(lambda(0.0).0, f64::INFINITY);
+    }
 
     #[test]
     fn lambda_derivative_matches_central_differences() {
