@@ -10,9 +10,11 @@
 //! with the Jacobian. The target is auto/rough ≤ 4 in every regime.
 //!
 //! `cargo bench --bench eval_ratio -- factors` times the lobe with its Fresnel and
-//! shadowing factors against the plain lobe the same way (`auto` mode, hemisphere set, in
-//! pairs: plain, then with the factors; n = 1.5, κ = 2): the target is extended/plain ≤ 1.5
-//! in every regime, for values and with the Jacobian. A further argument names the one
+//! shadowing factors against the plain lobe the same way (`auto` mode, in pairs: plain,
+//! then with the factors; n = 1.5, κ = 2), on the hemisphere set (every sample its own
+//! polar angles) and on the angles of a measured file (Cornell's garnet red: 18 distinct
+//! polar angles, over which Smith's Λ is shared): the target is extended/plain ≤ 1.5 in
+//! every regime, for values and with the Jacobian. A further argument names the one
 //! combination to time (`-- factors smith`).
 
 mod common;
@@ -35,13 +37,14 @@ fn quartiles(mut v: Vec<f64>) -> [f64; 3] {
 /// Median time per sample (ns) of `a` and `b` at their parameters on `geo`, each pair timed
 /// back to back, and the quartiles of the per-pair ratio b/a.
 fn pairs(geo: &Geometry, a: (&Kbs, &[f64]), b: (&Kbs, &[f64]), jac: bool) -> (f64, f64, [f64; 3]) {
-    let mut out = vec![0.0; N];
-    let mut j = vec![0.0; 5 * N];
+    let n = geo.len();
+    let mut out = vec![0.0; n];
+    let mut j = vec![0.0; 5 * n];
     let mut time = |(m, p): (&Kbs, &[f64])| {
         let t = Instant::now();
-        let cols = &mut j[..p.len() * N];
+        let cols = &mut j[..p.len() * n];
         m.radiance(geo, p, &mut out, jac.then_some(cols));
-        t.elapsed().as_secs_f64() * 1e9 / N as f64
+        t.elapsed().as_secs_f64() * 1e9 / n as f64
     };
     for _ in 0..5 {
         time(a);
@@ -70,7 +73,30 @@ fn factors() {
         .unwrap()
     };
     let plain = model(Fresnel::None, Shadowing::None);
-    let geo = geometry(false, 7);
+    for (layout, geo) in [
+        ("random", geometry(false, 7)),
+        ("cornell", cornell_layout()),
+    ] {
+        println!("{layout} layout ({} samples)", geo.len());
+        factors_on(&geo, &plain, &model);
+    }
+}
+
+/// The angles of Cornell's garnet red paint (data/cornell/garnet_red.astm, 1439 samples at
+/// 8 incidence and 10 view polar angles), λ = 1.
+fn cornell_layout() -> Geometry {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
+    let opts = goniofit::io::ReadOptions {
+        channel: Some("550nm".into()),
+        ..Default::default()
+    };
+    let ds = goniofit::io::read_dataset(&path, &opts).expect("the bundled Cornell file");
+    Geometry::new(&ds.samples, &[1.0], goniofit::geometry::Quantity::Radiance).unwrap()
+}
+
+/// [`factors`] on one layout.
+fn factors_on(geo: &Geometry, plain: &Kbs, model: &dyn Fn(Fresnel, Shadowing) -> Kbs) {
     println!("factors                     g     jac   plain ns  ext ns   ratio: q1  median  q3");
     for (name, fresnel, shadowing) in [
         ("dielectric", Fresnel::Dielectric, Shadowing::None),
@@ -94,7 +120,7 @@ fn factors() {
             let p = [sigma, 5.0 * sigma, 1.0, 1.5, 2.0];
             let pe = &p[..3 + fresnel.param_count()];
             for jac in [false, true] {
-                let (a, b, [q1, med, q3]) = pairs(&geo, (&plain, &p[..3]), (&ext, pe), jac);
+                let (a, b, [q1, med, q3]) = pairs(geo, (plain, &p[..3]), (&ext, pe), jac);
                 println!(
                     "{name:<27} {g:<6} {:<5} {a:>8.1} {b:>7.1}   {q1:>9.2} {med:>7.2} {q3:>5.2}",
                     if jac { "yes" } else { "no" },

@@ -40,6 +40,10 @@ use crate::error::{Error, Result};
 use crate::geometry::{FactorColumns, Geometry};
 use std::f64::consts::PI;
 
+/// A batch's factor columns, with Smith's (Λ, ν ∂Λ/∂ν) of each distinct polar angle when
+/// the samples share them ([`crate::geometry::PolarAngles`]).
+type Factors<'a> = (&'a FactorColumns, Option<&'a [(f64, f64)]>);
+
 /// The KBS model with a chosen evaluation mode.
 #[derive(Debug, Clone, Copy)]
 pub struct Kbs {
@@ -145,6 +149,16 @@ impl Kbs {
         // What every sample's factors share: 1/σ, 1/T and T/σ.
         let shared = (1.0 / sigma, 1.0 / corr, corr / sigma);
         let fc = self.opts.has_factors().then(|| geo.factor_columns());
+        // Smith's Λ once per distinct polar angle, when the samples share them.
+        let shadowing = self.opts.shadowing;
+        let polar = fc.and_then(|fc| fc.polar.as_ref());
+        let lambdas: Option<Vec<(f64, f64)>> = polar
+            .filter(|_| shadowing != super::shadowing::Shadowing::None)
+            .map(|p| {
+                let dir =
+                    |&(c, s): &(f64, f64)| super::shadowing::Shadowing::direction(c, s, shared.2);
+                p.cos_sin.iter().map(dir).collect()
+            });
         // Inlined into each loop below, so that the values-only loop computes no derivative.
         #[inline(always)]
         fn at(
@@ -153,15 +167,16 @@ impl Kbs {
             i: usize,
             (p, fp, shared): (&[f64], &[f64], (f64, f64, f64)),
             (g, a, q): (&[f64], &[f64], &[series::LnQ]),
-            fc: Option<&FactorColumns>,
+            fc: Option<Factors>,
         ) -> (KbsPoint, f64, f64) {
             let pt = m.point_from(geo, i, p[0], p[1], p[2], g[i], a[i], q[i]);
             match fc {
-                Some(fc) => m.with_factors(geo, fc, i, pt, shared, fp),
+                Some((fc, lambdas)) => m.with_factors(geo, (fc, lambdas), i, pt, shared, fp),
                 None => (pt, 0.0, 0.0),
             }
         }
-        let point = |i: usize| at(self, geo, i, (p, fp, shared), (&g, &a, &q), fc);
+        let factors = fc.map(|fc| (fc, lambdas.as_deref()));
+        let point = |i: usize| at(self, geo, i, (p, fp, shared), (&g, &a, &q), factors);
         match jac {
             None => {
                 for (i, o) in out.iter_mut().enumerate() {
@@ -189,13 +204,14 @@ impl Kbs {
     }
 
     /// The point times the Fresnel and shadowing factors of sample i (`fc`: the batch's
-    /// [`FactorColumns`]; `fp`: the Fresnel parameters; `(1/σ, 1/T, T/σ)` computed once per
-    /// batch), with ∂L/∂n and ∂L/∂κ.
+    /// [`FactorColumns`], with Smith's Λ of each distinct polar angle when it has them;
+    /// `fp`: the Fresnel parameters; `(1/σ, 1/T, T/σ)` computed once per batch), with ∂L/∂n
+    /// and ∂L/∂κ.
     #[inline(always)]
     fn with_factors(
         &self,
         geo: &Geometry,
-        fc: &FactorColumns,
+        (fc, lambdas): Factors,
         i: usize,
         pt: KbsPoint,
         (inv_sigma, inv_corr, t_over_sigma): (f64, f64, f64),
@@ -206,6 +222,9 @@ impl Kbs {
         let f = fresnel.eval(fc.cos_loc[i], fp);
         let sh = if shadowing == Shadowing::None {
             super::shadowing::ShadowValue::ONE
+        } else if let (Some(lam), Some(polar)) = (lambdas, &fc.polar) {
+            let at = |k: &[u32]| lam[k[i] as usize];
+            shadowing.combine(at(&polar.incidence), at(&polar.view))
         } else {
             shadowing.eval_cos_sin(
                 (geo.cos_i[i], fc.sin_i[i]),

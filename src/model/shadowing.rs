@@ -107,9 +107,18 @@ impl Shadowing {
         )
     }
 
-    /// G from Λ and ν ∂Λ/∂ν of both directions (a grazing direction, Λ = ∞, gives G = 0).
+    /// Λ and ν ∂Λ/∂ν ([`lambda`]) of one direction from cos θ and sin θ (≥ 0) and the
+    /// ratio `t_over_sigma` = T/σ, for [`Self::combine`]: ν = (T/2σ) cos θ/sin θ (∞ at
+    /// normal incidence, where Λ = 0; 0 at grazing, where Λ = ∞).
+    #[inline]
+    pub fn direction(cos: f64, sin: f64, t_over_sigma: f64) -> (f64, f64) {
+        lambda(0.5 * t_over_sigma * cos / sin)
+    }
+
+    /// G from Λ and ν ∂Λ/∂ν of both directions ([`Self::direction`]; a grazing direction,
+    /// Λ = ∞, gives G = 0). `None` gives G = 1.
     #[inline(always)]
-    fn combine(self, (li, dli): (f64, f64), (lr, dlr): (f64, f64)) -> ShadowValue {
+    pub fn combine(self, (li, dli): (f64, f64), (lr, dlr): (f64, f64)) -> ShadowValue {
         if li.is_infinite() || lr.is_infinite() {
             // A grazing direction (θ = 90°): nothing is lit or seen, G = 0 for every T/σ.
             return ShadowValue {
