@@ -13,7 +13,9 @@ change the fit). Classes, with best = min(the reference's best cost, goniofit's 
               domain.
 
 Usage: python3 benches/trust.py EXE [--only SUBSTRING] [--notes FILE] [--ref TABLE]
-(standard library only; from the repository root). Prints each case that is not `best`
+[--factors] (standard library only; from the repository root). With --factors the cases
+are those of tests/ref/factors_reference.csv, fitted with kbs+lambert and the lobe's
+factors (`--fresnel dielectric --shadowing smith`). Prints each case that is not `best`
 with its command, goniofit's cost and the reference's, then the counts per class.
 Exit status 1 when there is a LIE or a MISS.
 """
@@ -25,6 +27,9 @@ import sys
 
 TOL = 1e-4
 REF = "tests/ref/trust_reference.csv"
+FACTORS_REF = "tests/ref/factors_reference.csv"
+# The model of the factors table's cases (its rows name no model).
+FACTORS_MODEL = ["kbs+lambert", "--fresnel", "dielectric", "--shadowing", "smith"]
 
 
 def reference(path=REF):
@@ -32,8 +37,13 @@ def reference(path=REF):
         return list(csv.DictReader(l for l in f if not l.startswith("#")))
 
 
+def model_args(row):
+    return [row["model"]] if "model" in row else FACTORS_MODEL
+
+
 def command(row):
-    return ["fit", "--model", row["model"], "--residual", row["residual"], *row["args"].split()]
+    return ["fit", "--model", *model_args(row), "--residual", row["residual"],
+            *row["args"].split()]
 
 
 def run(exe, row):
@@ -67,13 +77,17 @@ def describe(row, fit, cls, why):
     params = {k: v["value"] for k, v in fit["params"].items()} if fit else {}
     gp = ",".join(f"{k}={v:.6g}" for k, v in params.items())
     cmd = "goniofit " + " ".join(command(row))
-    return (f"{cls:10s} {row['dataset']} {row['model']} {row['residual']}: {why}\n"
+    return (f"{cls:10s} {case(row)}: {why}\n"
             f"    {cmd}\n"
             f"    goniofit:  {fit['termination'] if fit else '-'} cost {fit['cost'] if fit else '-'} {gp}\n"
             f"    reference: cost {row['cost_best']} edge {row['edge_best']} "
             f"{row['params_best'].replace(';', ',')}\n"
             f"    reference inside the domain: cost {row['cost_inside']} "
-            f"{row['params_inside'].replace(';', ',')}")
+            f"{row.get('params_inside', '').replace(';', ',')}")
+
+
+def case(row):
+    return f"{row['dataset']} {' '.join(model_args(row))} {row['residual']}"
 
 
 def main():
@@ -82,11 +96,15 @@ def main():
     ap.add_argument("--only", default="", help="cases whose dataset/model/residual contain this")
     ap.add_argument("--notes", help="also write the non-best cases to this file")
     ap.add_argument("--ref", default=REF, help=f"the reference table (default {REF})")
+    ap.add_argument("--factors", action="store_true",
+                    help=f"the factors' cases ({FACTORS_REF}) with {' '.join(FACTORS_MODEL)}")
     a = ap.parse_args()
+    if a.factors:
+        a.ref = FACTORS_REF
     counts = {c: 0 for c in ("best", "degenerate", "LIE", "MISS")}
     lines = []
     for row in reference(a.ref):
-        if a.only not in f"{row['dataset']} {row['model']} {row['residual']}":
+        if a.only not in case(row):
             continue
         fit, err = run(a.exe, row)
         if fit is None:

@@ -6,7 +6,7 @@
 //! forms, scipy least_squares from 84 starts over σ, T and n and from the plain model's
 //! best point). Each case is at the best known optimum, or `degenerate` where that optimum
 //! lies at an edge of the domain (n → 1 among them); the cases where goniofit's fit is
-//! neither (6 of 30) are listed in [`KNOWN_MISSES`], and the test fails when that list is
+//! neither (3 of 30) are listed in [`KNOWN_MISSES`], and the test fails when that list is
 //! not exactly what the fits give (a new miss, or a miss that is no longer one).
 
 mod common;
@@ -18,14 +18,13 @@ use std::collections::{BTreeSet, HashMap};
 const TOL: f64 = 1e-4;
 
 /// (dataset, residual) where goniofit's fit is neither at the best known optimum nor
-/// honestly degenerate: converged inside the domain where the best known point is at the
-/// edge n → 1 (curet/1), or converged 0.2–6 % above the best known cost (relative
-/// residuals; garnet_red 550 nm: a smooth-regime optimum at n ≈ 10.7 that the fit leaves
-/// for the plain lobe's valley at n → ∞ even when started there).
-const KNOWN_MISSES: [(&str, &str); 6] = [
-    ("curet/1", "log"),
-    ("curet/1", "relative"),
-    ("curet/4", "relative"),
+/// honestly degenerate: converged 0.2–3.5 % above the best known cost with relative
+/// residuals, in another valley (garnet red 550 nm: the best is a smooth lobe with
+/// n ≈ 10.7, the fit's index runs to n → ∞; cayman 450 nm: σ = 18 nm and T/σ = 23 where the
+/// best has σ = 50 nm and T/σ = 10) or short of the rough ridge's end (cayman 550 nm:
+/// σ ≈ 1.1 µm where the cost still falls by 0.2 % to the reference's σ cap of 5.5 µm at
+/// the same T/σ).
+const KNOWN_MISSES: [(&str, &str); 3] = [
     ("cornell/cayman/450nm", "relative"),
     ("cornell/cayman/550nm", "relative"),
     ("cornell/garnet_red/550nm", "relative"),

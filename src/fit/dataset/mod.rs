@@ -426,11 +426,32 @@ fn fit_seeded(input: &FitInput, config: &FitConfig, plain: &FitResult) -> Result
         Err(Error::Stopped(_)) => return Ok(own),
         Err(e) => return Err(e),
     };
-    let better = |a: &FitResult, b: &FitResult| {
-        (a.converged(), -a.cost).partial_cmp(&(b.converged(), -b.cost))
-            == Some(std::cmp::Ordering::Greater)
+    Ok(if better_fit(&other, &own) { other } else { own })
+}
+
+/// Whether fit `a` is the better of two fits of one model from different starts. A fit that
+/// ended at an optimum (converged, or `degenerate`: at an edge of the domain or where the
+/// data does not determine a parameter) beats one that did not (stopped, out of
+/// iterations). Between two that did, the lower cost wins, but a converged fit keeps its
+/// place against a degenerate one unless the degenerate cost is lower by more than
+/// [`EDGE_MARGIN`](super::start::EDGE_MARGIN): the same rule as the start search's, under
+/// which the data's best fit is the edge only when it is clearly better than the best
+/// usable optimum.
+fn better_fit(a: &FitResult, b: &FitResult) -> bool {
+    use super::lm::Termination;
+    let ended = |r: &FitResult| {
+        r.is_finite() && (r.converged() || r.termination == Termination::Degenerate)
     };
-    Ok(if better(&other, &own) { other } else { own })
+    match (ended(a), ended(b)) {
+        (true, false) => true,
+        (false, true) => false,
+        (false, false) => a.cost < b.cost,
+        (true, true) => match (a.converged(), b.converged()) {
+            (true, false) => b.cost >= a.cost * (1.0 - super::start::EDGE_MARGIN),
+            (false, true) => a.cost < b.cost * (1.0 - super::start::EDGE_MARGIN),
+            _ => a.cost < b.cost,
+        },
+    }
 }
 
 /// The candidate with the lowest BIC among the usable ones ([`lowest_bic_usable`]), with

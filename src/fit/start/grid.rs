@@ -74,10 +74,16 @@ fn grid_for(name: &str, lambda: f64) -> Vec<f64> {
             .map(|v| v * lambda)
             .collect(),
         "w" => logspace(0.003, 1.2, 30),
-        // The Fresnel factor's index over the range of paints, glasses and ceramics (each
-        // lobe shape keeps its best index): a single start can fall into the plain lobe's
-        // valley at n → ∞, where the factor is 1. A metal's extinction order.
-        "n" => vec![1.5],
+        // The Fresnel factor's index: a paint's or glass's n = 1.5 (its candidates are
+        // picked as every parameter's), then indices that give other grazing rises
+        // F(90°) = 1/R(0) = 1/r₀², r₀ = (n − 1)/(n + 1) = 0.03, 0.1, 0.35, 0.8 (rises of
+        // 1100, 100, 8 and 1.6; n = 1.06, 1.22, 2.08, 9), each the start of one more
+        // candidate where the grid fits it better than n = 1.5 ([`other_indices`]): a
+        // single start falls into whichever valley of n is nearest (n → 1, a high index, or
+        // the plain lobe's at n → ∞, where F = 1). A metal's extinction order.
+        "n" => std::iter::once(PRIMARY_INDEX)
+            .chain([0.03, 0.1, 0.35, 0.8].map(|r0: f64| (1.0 + r0) / (1.0 - r0)))
+            .collect(),
         "kappa" => vec![1.0],
         _ => vec![1.0],
     }
@@ -160,11 +166,47 @@ pub fn initial_values(
         })
         .collect();
     let kbs = grid.sigma_k.zip(layout.find("T").first().copied());
-    let picked = pick_distinct(scored, kbs.filter(|_| is_kbs), &grid.nonlinear);
+    // The Fresnel index, when searched: candidates at n = 1.5 as for any parameter, then
+    // one per other index where the grid fits better.
+    let index = layout
+        .find("n")
+        .first()
+        .copied()
+        .filter(|&k| given[k].is_none());
+    let (primary, others): (Vec<_>, Vec<_>) = match index {
+        Some(k) => scored.into_iter().partition(|s| s.1[k] == PRIMARY_INDEX),
+        None => (scored, Vec::new()),
+    };
+    let mut picked = pick_distinct(primary, kbs.filter(|_| is_kbs), &grid.nonlinear);
+    if let (Some(k), Some(best)) = (index, picked.first().map(|p| p.0)) {
+        picked.extend(other_indices(others, k, best));
+    }
     if picked.is_empty() {
         return fallback();
     }
     picked
+}
+
+/// The Fresnel index the grid's candidates are picked at (a paint's or glass's).
+const PRIMARY_INDEX: f64 = 1.5;
+
+/// Of the grid points at the other indices (`scored`: cost, values, band; the index at
+/// layout index `k`), the lowest-cost one of each index whose cost is below `best`, the
+/// best candidate's at [`PRIMARY_INDEX`]; lowest cost first.
+fn other_indices(scored: Vec<(f64, Vec<f64>, usize)>, k: usize, best: f64) -> Vec<(f64, Vec<f64>)> {
+    let mut lowest: Vec<(f64, Vec<f64>)> = Vec::new();
+    for (cost, p, _) in scored {
+        if cost.is_nan() || cost >= best {
+            continue;
+        }
+        match lowest.iter_mut().find(|(_, q)| q[k] == p[k]) {
+            Some(l) if cost < l.0 => *l = (cost, p),
+            Some(_) => {}
+            None => lowest.push((cost, p)),
+        }
+    }
+    lowest.sort_by(|a, b| a.0.total_cmp(&b.0));
+    lowest
 }
 
 /// `problem`'s layout, residual kind and floor on `input` (a subsample of its data) with

@@ -219,27 +219,46 @@ impl<'m> Refiners<'m> {
     /// from where the lobe settled. From a grid point the lobe's σ and T are off by up to
     /// the grid's step, and a free index then absorbs that misfit: it runs to n → ∞
     /// (where the factor is 1 and the plain lobe's valley lies, a local minimum at
-    /// infinity) while its profile at the settled lobe falls towards the truth.
-    fn run_settled(&self, problem: &FitProblem, start: &[f64], coarse: &LmConfig) -> Run {
+    /// infinity) while its profile at the settled lobe falls towards the truth. Returns the
+    /// run and, when the free index left the held one by more than a factor
+    /// [`FACTOR_RUNAWAY`] (in the factor's shape), the settled point: the subsample cannot tell whether the index
+    /// ran to another valley of the whole data or only past one the subsample does not
+    /// resolve, so the full fit solves from both ([`settled_rival`]).
+    fn run_settled(
+        &self,
+        problem: &FitProblem,
+        start: &[f64],
+        coarse: &LmConfig,
+    ) -> (Run, Option<Vec<f64>>) {
         let specs = problem.model.params();
         let mut layout = problem.layout.clone();
-        let mut held = false;
+        let mut held = Vec::new();
         for (k, fp) in layout.params.iter_mut().enumerate() {
             if fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name) {
                 fp.fixed = Some(start[k]);
-                held = true;
+                held.push(k);
             }
         }
         let (kind, floor) = (problem.kind(), problem.floor);
-        let lobe = held
+        let lobe = (!held.is_empty())
             .then(|| FitProblem::new(problem.model, layout, &self.sub, kind, floor).ok())
             .flatten();
         match lobe {
             Some(lobe) if !stopped(coarse.stop.as_ref()) => {
                 let settled = run_lm(&lobe, start, coarse);
-                run_lm(problem, &settled.values, coarse)
+                let run = run_lm(problem, &settled.values, coarse);
+                let ran_away = held.iter().any(|&k| {
+                    let shape = |v: f64| match specs[problem.layout.params[k].spec].name {
+                        "n" => ((v - 1.0) / (v + 1.0)).abs(),
+                        _ => v.abs(),
+                    };
+                    let ratio = shape(run.values[k]) / shape(settled.values[k]);
+                    let moved = ratio.ln().abs();
+                    moved.is_nan() || moved > FACTOR_RUNAWAY.ln()
+                });
+                (run, ran_away.then_some(settled.values))
             }
-            _ => run_lm(problem, start, coarse),
+            _ => (run_lm(problem, start, coarse), None),
         }
     }
 
@@ -255,6 +274,13 @@ impl<'m> Refiners<'m> {
 
 /// The Fresnel factor's parameters, held while the lobe settles ([`Refiners::run_settled`]).
 const FACTOR_PARAMS: [&str; 2] = ["n", "kappa"];
+
+/// Factor by which a Fresnel parameter freed after the lobe settled must move for the
+/// settled point to be solved on the whole data as well ([`Refiners::run_settled`]), the
+/// index n measured by the factor's shape r₀ = |n − 1|/(n + 1) (the grazing rise is
+/// 1/r₀²), κ as it is: the grid's index steps by about 2 in r₀, so a smaller move stays
+/// in the valley the grid point was in.
+pub const FACTOR_RUNAWAY: f64 = 2.0;
 
 /// The quick refinement's solver settings: loose tolerances, at most 100 iterations.
 fn coarse_config(config: &FitConfig) -> LmConfig {
@@ -371,12 +397,13 @@ fn refine_and_choose(
     show_refining(bar, candidates.len(), refiners.sub.y.len());
     let refined = refine_candidates(refiners, candidates, held, coarse, inside, bar);
     let band = |p: &[f64]| refiners.band(p);
-    let band_only = held.map(|i| refined[i].1.clone());
+    let band_only = held.map(|i| refined[i].values.clone());
     let ridge = refiners
         .sigma_k
         .zip(refiners.exact.layout.find("T").first().copied());
-    choose_refined(
-        &refined,
+    let points: Vec<(f64, Vec<f64>)> = refined.iter().map(|r| (r.cost, r.values.clone())).collect();
+    let mut chosen = choose_refined(
+        &points,
         candidates,
         at_edge,
         coarse.ftol,
@@ -385,7 +412,13 @@ fn refine_and_choose(
             band: &band,
             band_only: band_only.as_deref(),
         },
-    )
+    );
+    let settled = chosen
+        .start
+        .as_ref()
+        .and_then(|(winner, _)| settled_rival(&refined, winner, ridge));
+    chosen.rivals.extend(settled);
+    chosen
 }
 
 /// Refine each candidate with a quick LM on the subsample (in parallel): the grid's best
@@ -394,8 +427,7 @@ fn refine_and_choose(
 /// (median g > [`grid::ROUGH_BAND_G`]) is refined with the rough approximation and its
 /// refined cost then taken with the exact model; candidate `smooth_held` is refined with the
 /// smooth approximation at its σ, and its cost taken the same way.
-/// Returns (cost, values) per candidate;
-/// the cost is infinite for a refined point that is not finite or not inside the domain,
+/// Returns each candidate's [`Refined`]; the cost is infinite for a refined point that is not finite or not inside the domain,
 /// or for a candidate whose refinement was not started before a stop request (the fit's
 /// `coarse.stop`; a refinement under way ends at its last complete point).
 fn refine_candidates(
@@ -405,38 +437,81 @@ fn refine_candidates(
     coarse: &LmConfig,
     inside: &(dyn Fn(&[f64]) -> bool + Sync),
     bar: &indicatif::ProgressBar,
-) -> Vec<(f64, Vec<f64>)> {
+) -> Vec<Refined> {
     candidates
         .par_iter()
         .enumerate()
         .map(|(i, (_, start))| {
             let _done = Done(bar);
             if stopped(coarse.stop.as_ref()) {
-                return (f64::INFINITY, start.clone());
+                return Refined {
+                    cost: f64::INFINITY,
+                    values: start.clone(),
+                    settled: None,
+                };
             }
             let rough_band = refiners.band(start) == Some(2);
             let smooth_band = smooth_held == Some(i);
             let exact_cost = |q: &[f64]| 0.5 * refiners.exact.weighted_residuals(q).norm_squared();
-            let (cost, values) = match (refiners.rough_problem(start), rough_band) {
+            let ((cost, values), settled) = match (refiners.rough_problem(start), rough_band) {
                 (Some(rough), true) => {
-                    let run = refiners.run_settled(&rough, start, coarse);
-                    slide_rough_ridge(refiners, run.values, inside, coarse.stop.as_ref())
+                    let (run, settled) = refiners.run_settled(&rough, start, coarse);
+                    let stop = coarse.stop.as_ref();
+                    (
+                        slide_rough_ridge(refiners, run.values, inside, stop),
+                        settled,
+                    )
                 }
                 _ if smooth_band && refiners.smooth_problem(start).is_some() => {
                     let smooth = refiners.smooth_problem(start).expect("checked");
-                    let run = refiners.run_settled(&smooth, start, coarse);
-                    (exact_cost(&run.values), run.values)
+                    let (run, settled) = refiners.run_settled(&smooth, start, coarse);
+                    ((exact_cost(&run.values), run.values), settled)
                 }
                 _ => {
-                    let run = refiners.run_settled(&refiners.exact, start, coarse);
-                    (run.lm.cost, run.values)
+                    let (run, settled) = refiners.run_settled(&refiners.exact, start, coarse);
+                    ((run.lm.cost, run.values), settled)
                 }
             };
             // A refined start outside the domain (on the full data) does not count.
-            let usable = cost.is_finite() && inside(&values);
-            (if usable { cost } else { f64::INFINITY }, values)
+            let usable = |c: f64, v: &[f64]| {
+                if c.is_finite() && inside(v) {
+                    c
+                } else {
+                    f64::INFINITY
+                }
+            };
+            let settled = settled.map(|v| (usable(exact_cost(&v), &v), v));
+            Refined {
+                cost: usable(cost, &values),
+                values,
+                settled,
+            }
         })
         .collect()
+}
+
+/// A candidate after its refinement on the subsample: the refined point with its exact
+/// cost there (infinite when not usable), and the lobe's settled point when the Fresnel
+/// index ran away from it ([`Refiners::run_settled`]), with its exact cost.
+struct Refined {
+    cost: f64,
+    values: Vec<f64>,
+    settled: Option<(f64, Vec<f64>)>,
+}
+
+/// The settled point of the refinement that won, when the free index ran away from it and
+/// its subsample cost is within [`RIVAL_MARGIN`] of the winner's: a valley the whole data
+/// may prefer (a lobe with an index the subsample's profile falls away from), solved as a
+/// rival.
+fn settled_rival(
+    refined: &[Refined],
+    winner: &[f64],
+    ridge: Option<(usize, usize)>,
+) -> Option<Vec<f64>> {
+    let won = refined.iter().find(|r| r.values == winner)?;
+    let (cost, values) = won.settled.as_ref()?;
+    let close = *cost <= won.cost * (1.0 + RIVAL_MARGIN);
+    (close && !same_optimum((*cost, values), (won.cost, winner), ridge)).then(|| values.clone())
 }
 
 /// The start search's line on standard error while it runs (`show`: the fit's progress
