@@ -438,7 +438,7 @@ fn fit_seeded(input: &FitInput, config: &FitConfig, plain: &FitResult) -> Result
 /// which the data's best fit is the edge only when it is clearly better than the best
 /// usable optimum.
 fn better_fit(a: &FitResult, b: &FitResult) -> bool {
-    use super::lm::Termination;
+    use crate::lm::Termination;
     let ended = |r: &FitResult| {
         r.is_finite() && (r.converged() || r.termination == Termination::Degenerate)
     };
