@@ -597,26 +597,20 @@ fn print_reports(
         .zip(infos)
         .map(|(o, i)| report::summary::row(&o.label, &o.result, &i.setting.units))
         .collect();
-    if args.json {
-        let values: Vec<serde_json::Value> = outcomes
-            .iter()
-            .zip(infos)
-            .map(|(o, i)| report::outcome::to_json(o, i, &replay_args()))
-            .collect();
-        let v = if single {
-            values.into_iter().next().expect("one outcome")
-        } else {
-            serde_json::json!({
-                "fits": values,
-                "datasets": outcomes.len(),
-                "not_converged": rows.iter().filter(|r| !r.converged).count(),
-                "not_fitted": skipped,
-                "seconds": wall,
-                "threads": threads,
-                "summary": summary_json(&rows),
-            })
-        };
+    if args.json && single {
+        let v = report::outcome::to_json(&outcomes[0], &infos[0], &replay_args());
         io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&v)?))?;
+    } else if args.json {
+        let head = serde_json::json!({
+            "fits": FITS_MARK,
+            "datasets": outcomes.len(),
+            "not_converged": rows.iter().filter(|r| !r.converged).count(),
+            "not_fitted": skipped,
+            "seconds": wall,
+            "threads": threads,
+            "summary": summary_json(&rows),
+        });
+        print_batch_json(&head, outcomes, infos)?;
     } else {
         let mut text: String = outcomes
             .iter()
@@ -655,6 +649,45 @@ fn print_reports(
             threads
         );
     }
+    Ok(())
+}
+
+/// Stands for the batch report's `fits` array in [`print_batch_json`]'s head.
+const FITS_MARK: &str = "\u{1}fits\u{1}";
+
+/// The batch's JSON report on standard output, the bytes `serde_json::to_string_pretty`
+/// gives of the whole object, written as it is produced: `head` (every key, with `fits`
+/// standing for the array) around each fit's object serialised and written in turn, so
+/// that a batch of many fits never holds its whole report in memory.
+fn print_batch_json(
+    head: &serde_json::Value,
+    outcomes: &[Outcome],
+    infos: &[RunInfo],
+) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(head)?;
+    let mark = serde_json::to_string(FITS_MARK)?;
+    let (before, after) = text
+        .split_once(&mark)
+        .ok_or_else(|| anyhow::anyhow!("the batch report's head has no fits"))?;
+    let replay = replay_args();
+    io::write_atomic(Path::new("-"), |w| {
+        w.write_all(before.as_bytes())?;
+        if outcomes.is_empty() {
+            w.write_all(b"[]")?;
+        }
+        for (k, (o, i)) in outcomes.iter().zip(infos).enumerate() {
+            let fit = report::outcome::to_json(o, i, &replay);
+            let fit = serde_json::to_string_pretty(&fit).map_err(std::io::Error::other)?;
+            // Two levels deeper than alone: JSON strings hold no raw line breaks.
+            w.write_all(if k == 0 { b"[\n    " } else { b",\n    " })?;
+            w.write_all(fit.replace('\n', "\n    ").as_bytes())?;
+        }
+        if !outcomes.is_empty() {
+            w.write_all(b"\n  ]")?;
+        }
+        w.write_all(after.as_bytes())?;
+        w.write_all(b"\n")
+    })?;
     Ok(())
 }
 
