@@ -612,16 +612,17 @@ fn print_reports(
         });
         print_batch_json(&head, outcomes, infos)?;
     } else {
-        let mut text: String = outcomes
-            .iter()
-            .zip(infos)
-            .map(|(o, i)| report::outcome::to_text(o, i))
-            .collect();
+        // Each report written as it is rendered (a big batch never holds all its text).
         let joint = outcomes.iter().any(|o| o.input.channel_names.len() > 1);
-        if !single || joint {
-            text += &report::summary::table(&rows);
-        }
-        io::print_stdout(&text)?;
+        io::write_atomic(Path::new("-"), |w| {
+            for (o, i) in outcomes.iter().zip(infos) {
+                w.write_all(report::outcome::to_text(o, i).as_bytes())?;
+            }
+            if !single || joint {
+                w.write_all(report::summary::table(&rows).as_bytes())?;
+            }
+            Ok(())
+        })?;
     }
     if let Some(path) = &args.summary {
         io::write_csv(
