@@ -321,19 +321,16 @@ fn fit_columns(py: Python<'_>, out: &Bound<'_, PyDict>, outcomes: &[Outcome]) ->
             .map(|o| r(o).converged())
             .collect::<Vec<_>>(),
     )?;
-    let info = empty_info();
-    let reports: Vec<Value> = outcomes
-        .iter()
-        .map(|o| report::json::to_json(r(o), &info))
-        .collect();
-    let json_text = |key: &str| {
-        reports
-            .iter()
-            .map(|v| v[key].as_str().unwrap_or_default().to_string())
-            .collect::<Vec<String>>()
+    // As the JSON report spells them (report::json).
+    out.set_item(
+        "termination",
+        text(&|o| report::json::termination_name(r(o).termination)),
+    )?;
+    let verdict = |o: &Outcome| match serde_json::to_value(r(o).verdict) {
+        Ok(Value::String(s)) => s,
+        _ => String::new(),
     };
-    out.set_item("termination", json_text("termination"))?;
-    out.set_item("verdict", json_text("verdict"))?;
+    out.set_item("verdict", text(&verdict))?;
     out.set_item(
         "adequacy",
         text(&|o| r(o).adequacy.verdict.name().to_string()),
@@ -412,9 +409,4 @@ fn quantity_columns(
     out.set_item(format!("{name}_stderr"), stderr.into_pyarray(py))?;
     out.set_item(format!("{name}_determined"), determined)?;
     Ok(())
-}
-
-/// Run info for a report whose run fields are not read.
-fn empty_info() -> RunInfo {
-    RunInfo::default()
 }

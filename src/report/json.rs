@@ -5,6 +5,11 @@ use crate::fit::driver::FitResult;
 use crate::fit::stats::profile::LEVELS;
 use serde_json::{json, Map, Value};
 
+/// The solver's termination as the report spells it (`ftol`, `degenerate`, …).
+pub fn termination_name(t: crate::lm::Termination) -> String {
+    format!("{t:?}").to_lowercase()
+}
+
 /// Finite numbers as numbers, the rest as null (JSON has no NaN).
 fn num(v: f64) -> Value {
     if v.is_finite() {
@@ -54,7 +59,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "bic": num(r.bic),
         "n": r.n,
         "n_free": r.n_free,
-        "termination": format!("{:?}", r.termination).to_lowercase(),
+        "termination": termination_name(r.termination),
         "converged": r.converged(),
         "iterations": r.iterations,
         "evaluations": r.evaluations,
