@@ -20,7 +20,7 @@ use super::problem::edges::at_kbs_edge;
 pub use super::problem::FitInput;
 use super::problem::FitProblem;
 use super::problem::ParamLayout;
-pub use super::result::{Derived, FitResult, ParamResult, StageSeconds, Verdict};
+pub use super::result::{base_name, Derived, FitResult, ParamResult, StageSeconds, Verdict};
 pub use super::start::{GRID_TOL, REFINE_TOL};
 use super::{accept, assemble, identify, reduce, solve, start};
 use crate::error::{Error, Result};

@@ -204,7 +204,59 @@ pub struct SampleVectors {
     sample_modes: Vec<Mode>,
 }
 
+/// A parameter's name without its `[channel]` suffix.
+pub fn base_name(name: &str) -> &str {
+    name.split('[').next().unwrap_or(name)
+}
+
 impl FitResult {
+    /// For a BRDF (`quantity`), the reflectance factor π·s of every Lambertian term
+    /// (`scale` of `lambert` and `lambert-specular`, `scale_d` of `kbs+lambert`, per
+    /// channel), added to the derived quantities with the standard error scaled alike. A
+    /// radiance has no reflectance factor without the irradiance, so nothing is added then.
+    pub fn add_reflectance_factors(&mut self, quantity: crate::geometry::Quantity) {
+        if quantity != crate::geometry::Quantity::Brdf {
+            return;
+        }
+        let lambert_term = match self.model.as_str() {
+            "lambert" | "lambert-specular" => "scale",
+            "kbs+lambert" => "scale_d",
+            _ => return,
+        };
+        let pi = std::f64::consts::PI;
+        let added: Vec<Derived> = self
+            .params
+            .iter()
+            .filter(|p| base_name(&p.name) == lambert_term)
+            .map(|p| Derived {
+                name: p.name.replacen(lambert_term, "reflectance_factor", 1),
+                value: pi * p.value,
+                stderr: p.stderr.map(|s| pi * s),
+                determined: p.determined || p.fixed,
+                doc: format!("π·{lambert_term}, the Lambertian term as a reflectance factor"),
+            })
+            .collect();
+        self.derived.extend(added);
+    }
+
+    /// Standard errors from the stated uncertainties as they are (scipy's
+    /// `curve_fit(absolute_sigma=True)`): the fit's covariance s²(JᵀJ)⁺ with
+    /// s² = 2·cost/(n − p) (the reduced χ² for the linear loss) becomes (JᵀJ)⁺, so every
+    /// standard error is divided by s. Correlations do not change.
+    pub fn use_absolute_sigma(&mut self) {
+        let dof = self.n.saturating_sub(self.n_free).max(1) as f64;
+        let s = (2.0 * self.cost / dof).sqrt();
+        if !(s.is_finite() && s > 0.0) {
+            return;
+        }
+        for p in &mut self.params {
+            p.stderr = p.stderr.map(|e| e / s);
+        }
+        for d in &mut self.derived {
+            d.stderr = d.stderr.map(|e| e / s);
+        }
+    }
+
     /// The model's name with its factor options (`kbs+lambert --fresnel dielectric
     /// --shadowing smith`): what tells two candidates of one model apart.
     pub fn full_model(&self) -> String {

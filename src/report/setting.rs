@@ -56,10 +56,7 @@ impl Units {
     }
 }
 
-/// A parameter's name without its `[channel]` suffix.
-pub fn base_name(name: &str) -> &str {
-    name.split('[').next().unwrap_or(name)
-}
+pub use crate::fit::driver::base_name;
 
 /// The input file as fitted.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]

@@ -17,7 +17,6 @@ use crate::geometry::{Geometry, Quantity};
 use crate::io::{self, Dataset};
 use crate::lm::Stop;
 use crate::model::{self, domain::short_number, ModelOptions};
-use crate::report;
 
 pub use intervals::{profile_intervals, MAX_PROFILED};
 
@@ -521,15 +520,9 @@ fn finish_result(
     result: &mut FitResult,
 ) -> Result<()> {
     if spec.absolute_sigma {
-        report::use_absolute_sigma(result);
+        result.use_absolute_sigma();
     }
-    report::add_reflectance_factors(
-        result,
-        &report::Units {
-            quantity: spec.quantity,
-            ..Default::default()
-        },
-    );
+    result.add_reflectance_factors(spec.quantity);
     if input.channel_names.len() > 1 && !stop.is_requested() {
         if let Some(note) = joint_narrowing(spec, ds, result, stop)? {
             result.notes.push(note);
