@@ -354,7 +354,7 @@ fn fresnel_reach(
     let largest = geo
         .h
         .iter()
-        .map(|&h| crate::model::fresnel::cos_local(h).acos().to_degrees())
+        .map(|&h| crate::geometry::cos_local(h).acos().to_degrees())
         .fold(0.0f64, f64::max);
     if largest >= FRESNEL_MIN_LOCAL_DEG {
         return;

@@ -407,6 +407,13 @@ impl Columns {
     }
 }
 
+/// cos θ_loc = √(h/2), the cosine of the local incidence angle on the specular facet, of
+/// a sample from the geometry column h = 1 + ŝ·k̂₂ (clamped to [0, 1] against rounding).
+#[inline]
+pub fn cos_local(h: f64) -> f64 {
+    (0.5 * h).sqrt().min(1.0)
+}
+
 /// Wrap an angle in radians to (−π, π].
 pub fn wrap_phi(phi: f64) -> f64 {
     let two_pi = 2.0 * std::f64::consts::PI;
@@ -540,11 +547,7 @@ impl Geometry {
                 (&cos_r, &sin_r),
             );
             Arc::new(FactorColumns {
-                cos_loc: self
-                    .h
-                    .iter()
-                    .map(|&h| crate::model::fresnel::cos_local(h))
-                    .collect(),
+                cos_loc: self.h.iter().map(|&h| cos_local(h)).collect(),
                 sin_i,
                 cos_r,
                 sin_r,

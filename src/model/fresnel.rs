@@ -113,12 +113,7 @@ pub struct FresnelValue {
     pub d_kappa: f64,
 }
 
-/// cos θ_loc = √(h/2) of a sample from the geometry column h = 1 + ŝ·k̂₂ (clamped to
-/// [0, 1] against rounding).
-#[inline]
-pub fn cos_local(h: f64) -> f64 {
-    (0.5 * h).sqrt().min(1.0)
-}
+pub use crate::geometry::cos_local;
 
 /// Unpolarised Fresnel reflectance of the index η = n + iκ at incidence cos θ = `c`
 /// (0 ≤ c ≤ 1), divided by its value at normal incidence, with ∂/∂n and ∂/∂κ (module doc).
