@@ -137,3 +137,30 @@ pub fn shown_text(s: &str) -> std::borrow::Cow<'_, str> {
 pub fn shown(path: &std::path::Path) -> String {
     shown_text(&path.to_string_lossy()).into_owned()
 }
+
+/// A number as printed compactly in titles, legends and messages (at most 4 significant
+/// digits: `5`, `0.125`, `12.35`, `2.5e-7`).
+pub fn fmt_num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if (1e-3..1e5).contains(&a) {
+        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        // Mantissa with trailing zeros trimmed: 1e-6, 2.5e-7.
+        let s = format!("{v:.3e}");
+        match s.split_once('e') {
+            Some((m, e)) if m.contains('.') => {
+                format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+            }
+            _ => s,
+        }
+    }
+}

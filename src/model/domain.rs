@@ -81,9 +81,9 @@ pub fn check_finite(
                 } else {
                     "it overflows"
                 },
-                crate::plot::fmt_num(geo.theta_i[i].to_degrees()),
-                crate::plot::fmt_num(geo.theta_r[i].to_degrees()),
-                crate::plot::fmt_num(geo.phi_r[i].to_degrees()),
+                crate::error::fmt_num(geo.theta_i[i].to_degrees()),
+                crate::error::fmt_num(geo.theta_r[i].to_degrees()),
+                crate::error::fmt_num(geo.phi_r[i].to_degrees()),
                 short_number(geo.wavelength[i]),
                 describe_params(model, params),
             )))

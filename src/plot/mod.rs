@@ -238,31 +238,7 @@ pub fn heat_color(t: f64) -> RGBColor {
     RGBColor(mix(0), mix(1), mix(2))
 }
 
-/// Format a number compactly for titles and legends (at most 4 significant digits).
-pub fn fmt_num(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let a = v.abs();
-    if (1e-3..1e5).contains(&a) {
-        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
-        let s = format!("{v:.digits$}");
-        if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        }
-    } else {
-        // Mantissa with trailing zeros trimmed: 1e-6, 2.5e-7.
-        let s = format!("{v:.3e}");
-        match s.split_once('e') {
-            Some((m, e)) if m.contains('.') => {
-                format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
-            }
-            _ => s,
-        }
-    }
-}
+pub use crate::error::fmt_num;
 
 /// A tick label on a linear axis: like [`fmt_num`], but rounding noise around zero
 /// (|v| < 1e-9) shows as 0.
