@@ -243,3 +243,36 @@ fn check_ties(v: &serde_json::Value) {
         ),
     }
 }
+
+#[test]
+fn summary_to_standard_output_replaces_the_text_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("groups.csv");
+    let rows = lambertian(1.0);
+    let labels: Vec<&str> = (0..rows.len()).map(|i| ["a", "b"][i % 2]).collect();
+    write_rows(&path, &rows, Some(&labels));
+    let fit = |extra: &[&str]| {
+        goniofit()
+            .args(["fit", "--model", "lambert", "--by-group", "--quiet"])
+            .args(extra)
+            .arg(&path)
+            .output()
+            .unwrap()
+    };
+    let out = fit(&["--summary", "-"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(lines[0].starts_with("group,n,converged,"), "{text}");
+    assert!(lines[1].contains("[a]") && lines[2].contains("[b]"));
+    // The same rows as a --summary file beside the text reports.
+    let file = dir.path().join("s.csv");
+    let beside = fit(&["--summary", file.to_str().unwrap()]);
+    assert!(String::from_utf8(beside.stdout)
+        .unwrap()
+        .contains("[[goniofit"));
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), text);
+    let both = fit(&["--summary", "-", "--json"]);
+    assert_eq!(both.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&both.stderr).contains("--summary -"));
+}

@@ -308,10 +308,18 @@ def fit_frame(
     The result (indexed by the group labels, sorted as ``df.groupby(by)`` sorts them) has
     columns ``model``, ``samples``, ``converged``, ``termination``, ``verdict``, ``adequacy``
     (``adequate``, ``misfit``, ``noise`` or ``not_computed``), ``adequacy_reasons`` (the
-    reason codes, comma-separated), ``cost``, ``reduced_chi2``, ``r2``, ``iterations`` and
-    for every parameter and derived quantity ``NAME``, ``NAME_stderr`` (NaN when not
-    determined or fixed) and ``NAME_determined``.
+    reason codes, comma-separated), ``cost``, ``reduced_chi2``, ``r2``, ``iterations``,
+    ``start_from`` (``search``, or ``neighbour``) and for every parameter and derived
+    quantity ``NAME``, ``NAME_stderr`` (NaN when not determined or fixed) and
+    ``NAME_determined``.
     Deterministic: the same frame gives the same bits on any machine and thread count.
+
+    ``warm_start=True`` (the CLI's ``--warm-start``) starts each group's fit at the
+    optimum of the group before it in that order (a neighbouring texel), keeping it when
+    it converges to an optimum that describes the data as well as the neighbour's did, and
+    searching as usual otherwise: much faster on many similar small fits. The groups then
+    run in a few chains per thread, so the results depend on the thread count to the
+    solver's tolerance (the same optima, not the same bits).
     """
     import pandas as pd
 

@@ -27,7 +27,7 @@ use std::sync::Arc;
 pub const PY: Front = Front::Python;
 
 /// The option names the fit functions take (besides the four sample arrays).
-pub const OPTION_NAMES: [&str; 26] = [
+pub const OPTION_NAMES: [&str; 27] = [
     "model",
     "wavelength",
     "quantity",
@@ -47,6 +47,7 @@ pub const OPTION_NAMES: [&str; 26] = [
     "timeout",
     "reduce",
     "threads",
+    "warm_start",
     "absolute_sigma",
     "wavelength_unit",
     "intervals",
@@ -85,6 +86,8 @@ pub struct FitOptions {
     pub reduce: bool,
     /// Threads for parallel group fits (None: all cores).
     pub threads: Option<usize>,
+    /// Groups started at their neighbour's optimum (the CLI's `--warm-start`).
+    pub warm_start: bool,
     /// Standard errors from `sigma_L` as stated (scipy's `absolute_sigma=True`).
     pub absolute_sigma: bool,
     /// Whether `quantity` was given (the report says where the quantity came from).
@@ -123,6 +126,7 @@ impl Default for FitOptions {
             timeout: None,
             reduce: true,
             threads: None,
+            warm_start: false,
             absolute_sigma: false,
             quantity_given: false,
             intervals: None,
@@ -358,6 +362,7 @@ impl FitOptions {
                 }
                 self.threads = Some(n);
             }
+            "warm_start" => self.warm_start = v.extract()?,
             "absolute_sigma" => self.absolute_sigma = v.extract()?,
             "intervals" => self.intervals = Some(v.extract()?),
             "loss" => self.loss = loss(&v.extract::<String>()?)?,

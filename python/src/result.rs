@@ -300,8 +300,9 @@ fn r(o: &Outcome) -> &goniofit::fit::driver::FitResult {
 
 /// Sets the per-fit columns of [`summary_columns`] on `out`, in this order: `model`,
 /// `samples`, `converged`, `termination`, `verdict` (as the JSON report spells them),
-/// `adequacy`, `adequacy_reasons`, `cost`, `reduced_chi2`, `r2`, `iterations`; one entry
-/// per outcome each.
+/// `adequacy`, `adequacy_reasons`, `cost`, `reduced_chi2`, `r2`, `iterations`,
+/// `start_from` (`search`, or `neighbour` for a kept warm start); one entry per outcome
+/// each.
 fn fit_columns(py: Python<'_>, out: &Bound<'_, PyDict>, outcomes: &[Outcome]) -> PyResult<()> {
     let text = |f: &dyn Fn(&Outcome) -> String| outcomes.iter().map(f).collect::<Vec<String>>();
     out.set_item("model", text(&|o| r(o).full_model()))?;
@@ -354,6 +355,11 @@ fn fit_columns(py: Python<'_>, out: &Bound<'_, PyDict>, outcomes: &[Outcome]) ->
             .collect::<Vec<_>>()
             .into_pyarray(py),
     )?;
+    let start = |o: &Outcome| match r(o).started_near {
+        true => "neighbour".to_string(),
+        false => "search".to_string(),
+    };
+    out.set_item("start_from", text(&start))?;
     Ok(())
 }
 

@@ -4,13 +4,12 @@
 
 use crate::convert::{to_py_err, to_py_err_in};
 use crate::options::FitOptions;
-use goniofit::fit::dataset::{fit_dataset, Outcome};
+use goniofit::fit::dataset::{batch, fit_dataset_near, Outcome};
 use goniofit::geometry::Geometry;
 use goniofit::io::Dataset;
 use goniofit::model::{domain, Model};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use rayon::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
@@ -205,19 +204,18 @@ pub fn fit_all(
     let spec = o.dataset_fit(single);
     let interrupt = spec.config.lm.interrupt.clone();
     let stop = interrupt.clone();
+    let warm = o.warm_start && !single;
     let results = interruptible(py, interrupt, o.threads, move || {
-        Ok(jobs
-            .into_par_iter()
-            .map(|(label, ds)| {
-                // After Ctrl-C the jobs not yet started are skipped (the call raises
-                // KeyboardInterrupt and drops every result).
-                if stop.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
-                    return Err((label, goniofit::Error::Usage("interrupted".into())));
-                }
-                let r = fit_dataset(&spec, label.clone(), ds);
-                r.map_err(|e| (label, e))
-            })
-            .collect::<Vec<_>>())
+        Ok(batch::in_chains(jobs, warm, |(label, ds), previous| {
+            // After Ctrl-C the jobs not yet started are skipped (the call raises
+            // KeyboardInterrupt and drops every result).
+            if stop.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
+                return Err((label, goniofit::Error::Usage("interrupted".into())));
+            }
+            let near = previous.and_then(|r: &Result<Outcome, _>| r.as_ref().ok());
+            let r = fit_dataset_near(&spec, label.clone(), ds, near);
+            r.map_err(|e| (label, e))
+        }))
     })?;
     results
         .into_iter()

@@ -45,3 +45,20 @@ def test_fit_frame_columns_and_group_labels():
     assert {"model", "samples", "converged", "termination", "verdict", "adequacy", "adequacy_reasons",
             "cost", "reduced_chi2", "r2",
             "iterations", "sigma", "sigma_stderr", "sigma_determined", "T/sigma"} <= set(table.columns)
+
+
+def test_fit_frame_warm_start_ends_at_the_searched_optima_as_the_cli_does(cli_json, tmp_path):
+    df = texel_frame(40)
+    path = tmp_path / "texels.csv"
+    write_csv(df, path)
+    cold = goniofit.fit_frame(df, by="group", wavelength=1.0, threads=2)
+    warm = goniofit.fit_frame(df, by="group", wavelength=1.0, threads=2, warm_start=True)
+    cli = cli_json("--wavelength", "1", "--by-group", "--warm-start", "--threads", "2", path)
+    assert set(cold["start_from"]) == {"search"}
+    assert (warm["start_from"] == "neighbour").sum() >= 20
+    assert (warm["converged"] == cold["converged"]).all()
+    assert (warm["cost"] <= cold["cost"] * (1 + 1e-6)).all()
+    assert np.allclose(warm["T/sigma"], cold["T/sigma"], rtol=1e-4)
+    for k, c in enumerate(cli["fits"]):
+        assert c["start_from"] == warm.loc[k, "start_from"]
+        assert c["cost"] == warm.loc[k, "cost"]

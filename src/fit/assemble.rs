@@ -111,6 +111,7 @@ pub(super) fn assemble(
         layout: layout.clone(),
         values: p.clone(),
         start: start.grid_start,
+        started_near: false,
     };
     checked(result, &problem, input, config)
 }

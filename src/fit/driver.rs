@@ -49,7 +49,63 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
         },
         || start::starting_point(model, &layout, input, config, floor, &given, t0),
     );
-    let (problem, start) = (problem?, start?);
+    finish(model, input, config, (problem?, start?), t0)
+}
+
+/// A fit started at the optimum of a neighbouring dataset's fit `near` of the same model
+/// (a texel beside this one): no start search, the solve on the whole data from `near`'s
+/// values (every parameter by name; `--fix` values held). None when `near` does not name
+/// every parameter of this fit or its point lies outside the model's domain on this data.
+/// The caller judges the result against a searched fit ([`crate::fit::dataset`]'s warm
+/// start): a start is only as good as the valley it lies in.
+pub fn fit_near(
+    input: &FitInput,
+    config: &FitConfig,
+    near: &FitResult,
+) -> Result<Option<FitResult>> {
+    let t0 = Instant::now();
+    let model = model::by_name(&config.model, &config.model_opts)?;
+    let model = model.as_ref();
+    let config = &with_stop(config);
+    let (layout, _) = prepare(model, input, config)?;
+    let Some(p0) = near_point(&layout, near) else {
+        return Ok(None);
+    };
+    if !input.in_domain(model, &layout, &p0) {
+        return Ok(None);
+    }
+    let floor = residual_floor(config, &input.y);
+    let problem =
+        FitProblem::new(model, layout, input, config.residual, floor)?.with_loss(config.loss);
+    let start = start::Start::given(p0, t0);
+    let mut result = finish(model, input, config, (problem, start), t0)?;
+    result.started_near = true;
+    Ok(Some(result))
+}
+
+/// `near`'s values in `layout`'s order, matched by parameter name (a held parameter keeps
+/// its held value); None when a parameter of `layout` is not among `near`'s.
+fn near_point(layout: &ParamLayout, near: &FitResult) -> Option<Vec<f64>> {
+    layout
+        .params
+        .iter()
+        .map(|fp| {
+            fp.fixed.or_else(|| {
+                let k = near.layout.params.iter().position(|q| q.name == fp.name)?;
+                near.values.get(k).copied().filter(|v| v.is_finite())
+            })
+        })
+        .collect()
+}
+
+/// The fit from its start on: solve → identify → reduce → accept → assemble.
+fn finish(
+    model: &dyn Model,
+    input: &FitInput,
+    config: &FitConfig,
+    (problem, start): (FitProblem, start::Start),
+    t0: Instant,
+) -> Result<FitResult> {
     check_series_cost(config, input, &problem.layout, &start.p0)?;
     let run = solve_checked(&problem, input, &start, config);
     let solved_at = t0.elapsed().as_secs_f64();

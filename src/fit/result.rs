@@ -192,8 +192,12 @@ pub struct FitResult {
     /// Full parameter values in layout order (for plotting per channel).
     pub layout: ParamLayout,
     pub values: Vec<f64>,
-    /// The grid point (layout order) whose quick refinement won, before any LM iteration.
+    /// The grid point (layout order) whose quick refinement won, before any LM iteration;
+    /// for a fit started at a neighbour's optimum, that optimum.
     pub start: Vec<f64>,
+    /// Whether the fit started at a neighbouring dataset's optimum (`--warm-start`) instead
+    /// of the start search, and was kept as the fit (see [`crate::fit::dataset`]).
+    pub started_near: bool,
 }
 
 /// A fit's per-sample vectors, moved out of a [`FitResult`] and back.

@@ -68,6 +68,7 @@ pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
         "interval_seconds": info.interval_seconds,
         "init_seconds": r.init_seconds,
         "start_seconds": r.start_seconds,
+        "start_from": if r.started_near { "neighbour" } else { "search" },
         "modes": r.modes,
         "fitted_computed": r.fitted_computed,
         "g_range": r.g_range.map(|(a, b)| vec![num(a), num(b)]),

@@ -400,13 +400,21 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         "    evaluations     = {} (+{} Jacobians)",
         r.evaluations, r.jacobian_evaluations
     );
-    let _ = writeln!(
-        s,
-        "    run time        = {:.4} s (grid search for starting values {:.4} s, their refinement {:.4} s)",
-        r.seconds,
-        r.start_seconds,
-        r.init_seconds - r.start_seconds
-    );
+    if r.started_near {
+        let _ = writeln!(
+            s,
+            "    run time        = {:.4} s (started at the previous dataset's optimum: --warm-start)",
+            r.seconds
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "    run time        = {:.4} s (grid search for starting values {:.4} s, their refinement {:.4} s)",
+            r.seconds,
+            r.start_seconds,
+            r.init_seconds - r.start_seconds
+        );
+    }
     if !info.intervals.is_empty() {
         let _ = writeln!(
             s,

@@ -7,6 +7,7 @@
 //! This is the one path from measured samples to a finished [`Outcome`]; the reporters in
 //! [`crate::report::outcome`] turn an outcome into the text report and the JSON object.
 
+pub mod batch;
 pub mod intervals;
 
 use super::driver::{self, FitConfig, FitInput, FitResult};
@@ -283,7 +284,20 @@ pub fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
 /// `spec.config.lm`): once it fires, the running fit ends at its best point, and candidates
 /// not yet started are skipped (named in a note). Errors: the dataset's own (no wavelength
 /// for a KBS model, values that would overflow) and the fit's.
-pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<Outcome> {
+pub fn fit_dataset(spec: &DatasetFit, label: String, ds: Dataset) -> Result<Outcome> {
+    fit_dataset_near(spec, label, ds, None)
+}
+
+/// [`fit_dataset`], each candidate model first started at its optimum in `near` (the fit
+/// of a neighbouring dataset, e.g. the texel before this one) and kept when that is an
+/// optimum as good as a search would find ([`fit_near_or_search`]); otherwise searched as
+/// by [`fit_dataset`].
+pub fn fit_dataset_near(
+    spec: &DatasetFit,
+    label: String,
+    mut ds: Dataset,
+    near: Option<&Outcome>,
+) -> Result<Outcome> {
     let t0 = std::time::Instant::now();
     let candidates = spec.candidates()?;
     let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
@@ -309,7 +323,7 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
     };
     let uncertainties = ds.sigma_l.is_some();
     let (mut results, not_fitted) =
-        fit_candidates(spec, &input, &candidates, uncertainties, &stop)?;
+        fit_candidates(spec, &input, (&candidates, near), uncertainties, &stop)?;
     let mut result = chosen(&mut results, &not_fitted);
     finish_result(spec, &ds, &input, &stop, &mut result)?;
     let t_intervals = std::time::Instant::now();
@@ -329,13 +343,14 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, mut ds: Dataset) -> Result<
     })
 }
 
-/// Fit every candidate model in turn, sharing `stop`: the results, and the names of the
-/// candidates a stop kept from a result (not started, or cut in their first evaluation;
-/// the first candidate's stop is an error: there is nothing to report).
+/// Fit every candidate model in turn (each first from its optimum in `near`, when given),
+/// sharing `stop`: the results, and the names of the candidates a stop kept from a result
+/// (not started, or cut in their first evaluation; the first candidate's stop is an error:
+/// there is nothing to report).
 fn fit_candidates<'c>(
     spec: &DatasetFit,
     input: &FitInput,
-    candidates: &'c [String],
+    (candidates, near): (&'c [String], Option<&Outcome>),
     uncertainties: bool,
     stop: &Stop,
 ) -> Result<(Vec<FitResult>, Vec<&'c str>)> {
@@ -348,9 +363,13 @@ fn fit_candidates<'c>(
         }
         let mut config = spec.config_for(m, uncertainties);
         config.lm.stop = Some(stop.clone());
-        let fitted = match seed_of(&results, &config) {
+        let search = || match seed_of(&results, &config) {
             Some(seed) => fit_seeded(input, &config, seed),
             None => fit_with_factors(input, &config),
+        };
+        let fitted = match near.and_then(|o| near_fit(o, &config)) {
+            Some(near) => fit_near_or_search(input, &config, near, search),
+            None => search(),
         };
         match fitted {
             Err(Error::Stopped(_)) if !results.is_empty() => not_fitted.push(m.as_str()),
@@ -358,6 +377,67 @@ fn fit_candidates<'c>(
         }
     }
     Ok((results, not_fitted))
+}
+
+/// The fraction of the data's variance a fit leaves unexplained (1 − R² in the fitted
+/// space), relative to the neighbour's, beyond which a fit started at the neighbour's
+/// optimum is searched again ([`fit_near_or_search`]). The fraction does not change with
+/// the texel's brightness; between neighbouring texels of the benchmark batch (σ, T/σ and
+/// scale drawn anew per texel) the ratio is 0.15–3.8 (1st to 99th percentile 0.2–3.75),
+/// while a valley that is not the texel's optimum leaves a misfit many times the noise.
+pub const NEAR_UNEXPLAINED_RATIO: f64 = 4.0;
+
+/// `near`'s fit of `config`'s model (with the same factors) when it converged: a start
+/// worth taking for the next dataset.
+fn near_fit<'o>(near: &'o Outcome, config: &FitConfig) -> Option<&'o FitResult> {
+    let factors = config.model_opts.factors_label();
+    near.candidates
+        .iter()
+        .find(|r| r.model == config.model && r.factors == factors)
+        .filter(|r| r.converged())
+}
+
+/// The fit started at `near`'s optimum ([`driver::fit_near`]), kept when it converged with
+/// an adequacy verdict no worse than `near`'s (adequate, then noise, then misfit) and an
+/// unexplained fraction of the data within [`NEAR_UNEXPLAINED_RATIO`] of `near`'s;
+/// otherwise the searched fit (`search`), or the near-started one where it is the better
+/// ([`better_fit`]). A texel whose optimum lies in another valley than its neighbour's
+/// leaves a misfit there, and is searched.
+fn fit_near_or_search(
+    input: &FitInput,
+    config: &FitConfig,
+    near: &FitResult,
+    search: impl FnOnce() -> Result<FitResult>,
+) -> Result<FitResult> {
+    let warm = match driver::fit_near(input, config, near) {
+        Ok(Some(w)) => w,
+        Ok(None) | Err(Error::Stopped(_)) => return search(),
+        Err(e) => return Err(e),
+    };
+    if near_kept(&warm, near) || config.lm.stop.as_ref().is_some_and(Stop::is_requested) {
+        return Ok(warm);
+    }
+    let searched = search()?;
+    Ok(if better_fit(&warm, &searched) {
+        warm
+    } else {
+        searched
+    })
+}
+
+/// Whether `warm`, started at `near`'s optimum, is kept without a search (see
+/// [`fit_near_or_search`]): it converged, it leaves at most [`NEAR_UNEXPLAINED_RATIO`]
+/// times the fraction of the data `near` left unexplained, and its residuals do not run
+/// in long stretches of one sign along the scans (the adequacy's runs test: the mark of a
+/// lobe of the wrong shape) unless `near`'s did too.
+fn near_kept(warm: &FitResult, near: &FitResult) -> bool {
+    let systematic = |r: &FitResult| r.adequacy.reasons.iter().any(|x| x.code == "runs");
+    let unexplained = |r: &FitResult| Some(1.0 - r.r2).filter(|u| *u >= 0.0);
+    let within = match (unexplained(warm), unexplained(near)) {
+        (Some(w), Some(n)) => w <= NEAR_UNEXPLAINED_RATIO * n,
+        _ => false,
+    };
+    warm.converged() && within && (systematic(near) || !systematic(warm))
 }
 
 /// For a candidate with factors on its lobe: the converged fit of the same model without

@@ -91,6 +91,22 @@ pub(super) struct Start {
     pub rivals: Vec<Vec<f64>>,
 }
 
+impl Start {
+    /// A start at `p0` (layout order) without a search: no alternatives or rivals, the
+    /// search's times those of the call (from the fit's start `t0`).
+    pub fn given(p0: Vec<f64>, t0: Instant) -> Start {
+        let now = t0.elapsed().as_secs_f64();
+        Start {
+            grid_start: p0.clone(),
+            p0,
+            start_seconds: now,
+            init_seconds: now,
+            alternatives: Vec::new(),
+            rivals: Vec::new(),
+        }
+    }
+}
+
 /// The models the start search evaluates, each at the accuracy its stage needs: the
 /// grid's ([`GRID_TOL`]), the refinement's ([`REFINE_TOL`]) and, for KBS models, the rough
 /// and smooth approximations that refine candidates in their bands (at [`REFINE_TOL`]).
