@@ -163,6 +163,7 @@ def _meta(ddf: Any, keys: List[str], fit_options: Dict[str, Any]) -> Any:
         "reduced_chi2": [0.0],
         "r2": [0.0],
         "iterations": np.zeros(1, dtype=np.uint64),
+        "start_from": ["search"],
     }
     for name in _quantities(fit_options):
         cols[name] = [0.0]

@@ -444,7 +444,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
             &outcomes,
         );
     }
-    Ok(exit_code(&outcomes, &skipped, &stop))
+    let code = exit_code(&outcomes, &skipped, &stop);
+    // The process ends with this command: its memory goes back to the system at once,
+    // while freeing a big batch's results vector by vector takes a tenth of its fits' time.
+    std::mem::forget((outcomes, infos));
+    Ok(code)
 }
 
 /// 0 when every fit converged with its uncertainties and intervals computed, nothing was
@@ -479,13 +483,20 @@ fn read_jobs(
     for file in &args.file {
         // The raw rows are kept only for the residuals file (which passes them through).
         let bar = reading_bar(file, args.show_progress());
-        let ds = io::read_dataset_with(file, opts, args.residuals.is_some(), &|done| {
-            bar.set_position(done);
-            stop.requested().map_or(Ok(()), |why| Err(why.describe()))
-        })?;
+        // The file's checksum is taken on another thread while it is parsed.
+        let (ds, info) = rayon::join(
+            || {
+                io::read_dataset_with(file, opts, args.residuals.is_some(), &|done| {
+                    bar.set_position(done);
+                    stop.requested().map_or(Ok(()), |why| Err(why.describe()))
+                })
+            },
+            || input_info(file),
+        );
+        let ds = ds?;
         bar.finish_and_clear();
         goniofit::fit::dataset::check_magnitudes(&ds)?;
-        files.push((file.clone(), input_info(file)?));
+        files.push((file.clone(), info?));
         if !args.by_group {
             jobs.push((io::shown(file), ds));
             continue;
@@ -498,13 +509,13 @@ fn read_jobs(
             ))
             .into());
         }
+        // Each group's dataset without the labels (the groups hold them).
+        let mut ds = ds;
+        ds.channel = None;
+        let shown = io::shown(file);
         for (name, idx) in groups {
-            let mut sub = ds.subset(&idx);
-            sub.channel = None;
-            jobs.push((
-                format!("{} [{}]", io::shown(file), io::shown_text(&name)),
-                sub,
-            ));
+            let label = format!("{shown} [{}]", io::shown_text(&name));
+            jobs.push((label, ds.subset(&idx)));
         }
     }
     Ok((jobs, files))
