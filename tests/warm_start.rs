@@ -111,8 +111,8 @@ fn texture(dir: &std::path::Path, model: &str, extra: &str) -> std::path::PathBu
     path
 }
 
-/// The batch's fits (cost, converged, start) in the texture's order.
-fn batch(path: &std::path::Path, args: &[&str]) -> Vec<(f64, bool, String)> {
+/// The batch's fits (cost, converged, start, chosen model) in the texture's order.
+fn batch(path: &std::path::Path, args: &[&str]) -> Vec<(f64, bool, String, String)> {
     let out = goniofit()
         .args([
             "fit",
@@ -136,17 +136,19 @@ fn batch(path: &std::path::Path, args: &[&str]) -> Vec<(f64, bool, String)> {
         .map(|f| {
             let cost = f["cost"].as_f64().unwrap();
             let start = f["start_from"].as_str().unwrap().to_string();
-            (cost, f["converged"].as_bool().unwrap(), start)
+            let model = format!("{}{}", f["model"], f["factors"]);
+            (cost, f["converged"].as_bool().unwrap(), start, model)
         })
         .collect()
 }
 
-/// Every texel's warm-started fit ends at a cost no higher than the searched one's (to
-/// 1e-6 relative) and converges where it does; most texels keep their warm start.
-fn check(model: &str, extra: &str, args: &[&str]) {
+/// Every texel's warm-started fit of `fit_model` (on a texture of `model`) chooses the
+/// searched fit's model, ends at a cost no higher than the searched one's (to 1e-6
+/// relative) and converges where it does; most texels keep their warm start.
+fn check((model, fit_model): (&str, &str), extra: &str, args: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let path = texture(dir.path(), model, extra);
-    let mut base = vec!["--model", model];
+    let mut base = vec!["--model", fit_model];
     base.extend_from_slice(args);
     let searched = batch(&path, &base);
     base.push("--warm-start");
@@ -160,32 +162,42 @@ fn check(model: &str, extra: &str, args: &[&str]) {
         );
         assert!(
             w.0 <= s.0 * (1.0 + 1e-6),
-            "{model} {args:?} t{k:02}: warm cost {} above the searched {} (start {})",
+            "{fit_model} {args:?} t{k:02}: warm cost {} above the searched {} (start {})",
             w.0,
             s.0,
             w.2
         );
         assert_eq!(
             w.1, s.1,
-            "{model} {args:?} t{k:02}: converged differs (start {})",
+            "{fit_model} {args:?} t{k:02}: converged differs (start {})",
             w.2
         );
     }
     let near = warm.iter().filter(|w| w.2 == "neighbour").count();
     assert!(
         2 * near >= n,
-        "{model} {args:?}: only {near} of {n} fits kept their warm start"
+        "{fit_model} {args:?}: only {near} of {n} fits kept their warm start"
     );
 }
 
 #[test]
 fn warm_started_kbs_fits_end_where_the_search_does_for_every_residual_kind() {
     for residual in ["absolute", "relative", "log"] {
-        check("kbs", "", &["--residual", residual]);
+        check(("kbs", "kbs"), "", &["--residual", residual]);
     }
 }
 
 #[test]
 fn warm_started_fits_with_a_diffuse_term_end_where_the_search_does() {
-    check("kbs+lambert", ",scale_d=0.02", &["--residual", "relative"]);
+    let model = ("kbs+lambert", "kbs+lambert");
+    check(model, ",scale_d=0.02", &["--residual", "relative"]);
+}
+
+#[test]
+fn warm_started_auto_fits_choose_the_searched_model() {
+    check(
+        ("kbs+lambert", "auto"),
+        ",scale_d=0.02",
+        &["--residual", "relative"],
+    );
 }

@@ -388,8 +388,14 @@ fn fit_candidates<'c>(
 pub const NEAR_UNEXPLAINED_RATIO: f64 = 4.0;
 
 /// `near`'s fit of `config`'s model (with the same factors) when it converged: a start
-/// worth taking for the next dataset.
+/// worth taking for the next dataset. None for a lobe with factors, which is always
+/// searched: the Fresnel index has valleys that a neighbour's optimum does not tell apart
+/// (on the benchmark batch with `--model auto`, one texel started at its neighbour's kept
+/// a converged extended fit above the searched one's cost, and the chosen model changed).
 fn near_fit<'o>(near: &'o Outcome, config: &FitConfig) -> Option<&'o FitResult> {
+    if config.model_opts.has_factors() {
+        return None;
+    }
     let factors = config.model_opts.factors_label();
     near.candidates
         .iter()
