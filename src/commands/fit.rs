@@ -416,18 +416,16 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat))?;
     let wall = t0.elapsed().as_secs_f64();
     heartbeat.stage("writing the reports and outputs");
-    let infos: Vec<RunInfo> = outcomes
-        .iter()
-        .map(|o| run_info(&args, o, &files))
-        .collect();
-    print_reports(
-        &args,
-        &outcomes,
-        &infos,
-        &skipped,
-        wall,
-        pool.current_num_threads(),
-    )?;
+    // The reports' parts of a big batch are built on the fit's threads.
+    use rayon::prelude::*;
+    let infos: Vec<RunInfo> = pool.install(|| {
+        outcomes
+            .par_iter()
+            .map(|o| run_info(&args, o, &files))
+            .collect()
+    });
+    let threads = pool.current_num_threads();
+    pool.install(|| print_reports(&args, &outcomes, &infos, &skipped, wall, threads))?;
     if single {
         super::fit_outputs::write_single_outputs(&args, &outcomes[0], &infos[0])?;
     } else {
@@ -617,8 +615,9 @@ fn print_reports(
 ) -> anyhow::Result<()> {
     // One dataset to fit (a batch with all but one not fitted is still a batch).
     let single = outcomes.len() == 1 && skipped.is_empty();
+    use rayon::prelude::*;
     let rows: Vec<report::summary::Row> = outcomes
-        .iter()
+        .par_iter()
         .zip(infos)
         .map(|(o, i)| report::summary::row(&o.label, &o.result, &i.setting.units))
         .collect();

@@ -223,7 +223,8 @@ pub fn csv_header() -> Vec<String> {
 
 /// The rows as CSV fields (full precision; empty fields where the model has no σ or T).
 pub fn csv_rows(rows: &[Row]) -> Vec<Vec<String>> {
-    rows.iter()
+    use rayon::prelude::*;
+    rows.par_iter()
         .map(|r| CSV_COLUMNS.iter().map(|c| (c.1)(r)).collect())
         .collect()
 }
