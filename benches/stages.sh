@@ -18,16 +18,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 repeats=${1:-5}
 texels=${2:-2000}
-if [ -z "${NEW:-}" ]; then
-  cargo build --release --quiet
-  NEW=${CARGO_TARGET_DIR:-$PWD/target}/release/goniofit
-fi
-dir=${TEXELS_DIR:-/tmp/goniofit-texels}
-mkdir -p "$dir"
-data=$dir/texels-$texels.csv
-if [ ! -s "$data" ]; then
-  python3 benches/texels.py gen --goniofit "$NEW" --texels "$texels" --out "$data"
-fi
+source benches/texel_batch.sh
 bins=("new=$NEW")
 [ -n "${BASE:-}" ] && bins=("base=$BASE" "${bins[@]}")
 python3 - "$data" "$repeats" "${THREADS:-2}" "${bins[@]}" <<'PY'

@@ -21,17 +21,7 @@ cd "$(dirname "$0")/.."
 repeats=${1:-5}
 texels=${2:-2000}
 threads=${THREADS:-1 2}
-# NEW=path measures another binary instead of building this tree's.
-if [ -z "${NEW:-}" ]; then
-  cargo build --release --quiet
-  NEW=$PWD/target/release/goniofit
-fi
-dir=${TEXELS_DIR:-/tmp/goniofit-texels}
-mkdir -p "$dir"
-data=$dir/texels-$texels.csv
-if [ ! -s "$data" ]; then
-  python3 benches/texels.py gen --goniofit "$NEW" --texels "$texels" --out "$data"
-fi
+source benches/texel_batch.sh
 truth=${data%.csv}.truth.csv
 bins=("new=$NEW")
 [ -n "${BASE:-}" ] && bins=("base=$BASE" "${bins[@]}")
