@@ -377,6 +377,13 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // From the start Ctrl-C, SIGTERM and SIGHUP stop the command instead of ending the
     // process, and `--timeout` counts from here: reading stops within a MiB (nothing
     // fitted, exit 3), a fit reports its best point (exit 3).
+    // Refused before any file is read.
+    if args.json && summary_on_stdout(&args) {
+        return Err(Error::Usage(
+            "--json and --summary - both write standard output; give --summary a file".into(),
+        )
+        .into());
+    }
     let config = fit_config(&args, &args.model, false)?;
     let stop = Stop::new(config.lm.timeout, None);
     let (threads, note) = settings::threads(CLI, args.threads)?;
@@ -395,12 +402,6 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         true => format!("fitting {} (model {})", jobs[0].0, args.model),
         false => format!("fitting {} datasets (model {})", jobs.len(), args.model),
     });
-    if args.json && summary_on_stdout(&args) {
-        return Err(Error::Usage(
-            "--json and --summary - both write standard output; give --summary a file".into(),
-        )
-        .into());
-    }
     if !single && args.residuals.is_some() {
         return Err(Error::Usage(
             "--residuals takes one dataset; fit several files or groups one at a time for it"
