@@ -175,9 +175,10 @@ pub struct FitArgs {
     pub by_group: bool,
     /// With several datasets (groups, files): start each fit at the optimum of the one
     /// before it in the input's order (a neighbouring texel of a spatially varying
-    /// measurement), keeping it when it converges to an optimum that describes the data at
-    /// a cost per degree of freedom within twice the neighbour's, and searching for the
-    /// start as usual otherwise. Much faster on many similar small fits.
+    /// measurement), keeping it when it converges, leaves at most 4 times the fraction of
+    /// the data its neighbour left unexplained and shows no runs of one sign the
+    /// neighbour's did not; searching for the start as usual otherwise (always for a lobe
+    /// with Fresnel or shadowing factors). Much faster on many similar small fits.
     #[arg(long)]
     pub warm_start: bool,
     /// Threads (default: all cores): datasets are fitted in parallel, and one dataset's
@@ -357,9 +358,8 @@ pub fn input_of(args: &FitArgs, ds: &Dataset, needs_wavelength: bool) -> anyhow:
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC among the usable fits.
-/// Every fit shares `stop` (the command's `--timeout` and signals).
-/// Fit one dataset; `near`: the fit of its neighbour in the input (`--warm-start`), whose
-/// optima each candidate model is first started at.
+/// Every fit shares `stop` (the command's `--timeout` and signals); `near`: the fit of its
+/// neighbour in the input (`--warm-start`), whose optima each candidate is first started at.
 fn fit_one(
     args: &FitArgs,
     (label, ds): (String, Dataset),
@@ -374,9 +374,6 @@ fn fit_one(
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<u8> {
-    // From the start Ctrl-C, SIGTERM and SIGHUP stop the command instead of ending the
-    // process, and `--timeout` counts from here: reading stops within a MiB (nothing
-    // fitted, exit 3), a fit reports its best point (exit 3).
     // Refused before any file is read.
     if args.json && summary_on_stdout(&args) {
         return Err(Error::Usage(
@@ -384,6 +381,9 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         )
         .into());
     }
+    // From the start Ctrl-C, SIGTERM and SIGHUP stop the command instead of ending the
+    // process, and `--timeout` counts from here: reading stops within a MiB (nothing
+    // fitted, exit 3), a fit reports its best point (exit 3).
     let config = fit_config(&args, &args.model, false)?;
     let stop = Stop::new(config.lm.timeout, None);
     let (threads, note) = settings::threads(CLI, args.threads)?;
@@ -445,7 +445,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     }
     let code = exit_code(&outcomes, &skipped, &stop);
     // The process ends with this command: its memory goes back to the system at once,
-    // while freeing a big batch's results vector by vector takes a tenth of its fits' time.
+    // while freeing a big batch's results vector by vector is serial work at the end.
     std::mem::forget((outcomes, infos));
     Ok(code)
 }

@@ -382,16 +382,17 @@ fn fit_candidates<'c>(
 /// The fraction of the data's variance a fit leaves unexplained (1 − R² in the fitted
 /// space), relative to the neighbour's, beyond which a fit started at the neighbour's
 /// optimum is searched again ([`fit_near_or_search`]). The fraction does not change with
-/// the texel's brightness; between neighbouring texels of the benchmark batch (σ, T/σ and
-/// scale drawn anew per texel) the ratio is 0.15–3.8 (1st to 99th percentile 0.2–3.75),
-/// while a valley that is not the texel's optimum leaves a misfit many times the noise.
+/// the texel's brightness; between neighbouring texels of the benchmark batch
+/// (benches/texels.py: σ, T/σ and scale drawn anew per texel) the ratio has median 1, and
+/// 99 % of pairs lie below 3.8, while a valley that is not the texel's optimum leaves a
+/// misfit many times the noise.
 pub const NEAR_UNEXPLAINED_RATIO: f64 = 4.0;
 
 /// `near`'s fit of `config`'s model (with the same factors) when it converged: a start
 /// worth taking for the next dataset. None for a lobe with factors, which is always
-/// searched: the Fresnel index has valleys that a neighbour's optimum does not tell apart
-/// (on the benchmark batch with `--model auto`, one texel started at its neighbour's kept
-/// a converged extended fit above the searched one's cost, and the chosen model changed).
+/// searched: the Fresnel index has valleys that a neighbour's optimum does not tell apart,
+/// and a warm start can converge in one above the searched fit's cost, passing the
+/// acceptance of [`near_kept`] (tests/warm_start.rs checks `auto` against the search).
 fn near_fit<'o>(near: &'o Outcome, config: &FitConfig) -> Option<&'o FitResult> {
     if config.model_opts.has_factors() {
         return None;
@@ -403,11 +404,9 @@ fn near_fit<'o>(near: &'o Outcome, config: &FitConfig) -> Option<&'o FitResult> 
         .filter(|r| r.converged())
 }
 
-/// The fit started at `near`'s optimum ([`driver::fit_near`]), kept when it converged with
-/// an adequacy verdict no worse than `near`'s (adequate, then noise, then misfit) and an
-/// unexplained fraction of the data within [`NEAR_UNEXPLAINED_RATIO`] of `near`'s;
-/// otherwise the searched fit (`search`), or the near-started one where it is the better
-/// ([`better_fit`]). A texel whose optimum lies in another valley than its neighbour's
+/// The fit started at `near`'s optimum ([`driver::fit_near`]), kept when [`near_kept`]
+/// accepts it; otherwise the searched fit (`search`), or the near-started one where it is
+/// the better ([`better_fit`]). A texel whose optimum lies in another valley than its neighbour's
 /// leaves a misfit there, and is searched.
 fn fit_near_or_search(
     input: &FitInput,
