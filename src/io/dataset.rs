@@ -123,6 +123,25 @@ impl Dataset {
         }
     }
 
+    /// `other`'s samples (read with the same columns, its lines numbered from 1 where
+    /// line `first_line` of this dataset's file is) appended after this dataset's.
+    pub(crate) fn append_from_line(&mut self, other: Dataset, first_line: usize) {
+        fn extend<T>(a: &mut Option<Vec<T>>, b: Option<Vec<T>>) {
+            if let (Some(a), Some(b)) = (a.as_mut(), b) {
+                a.extend(b);
+            }
+        }
+        self.rows.extend(other.rows);
+        let shift = first_line - 1;
+        self.lines.extend(other.lines.iter().map(|l| l + shift));
+        self.samples.extend(other.samples);
+        extend(&mut self.value, other.value);
+        extend(&mut self.weight, other.weight);
+        extend(&mut self.sigma_l, other.sigma_l);
+        extend(&mut self.wavelength, other.wavelength);
+        extend(&mut self.channel, other.channel);
+    }
+
     /// Release the per-sample vectors' spare capacity (after reading).
     pub fn shrink_to_fit(&mut self) {
         self.rows.shrink_to_fit();

@@ -17,13 +17,28 @@ use std::path::Path;
 
 /// The dataset of a plain table (see the module docs) read from `reader` (a UTF-8
 /// byte-order mark at its start is skipped), or None when the text is not plain or holds
-/// an error. `keep_rows` and `rows_hint` as for [`super::parse_reader`].
+/// an error. `keep_rows` and `rows_hint` as for [`super::parse_reader`]. On a pool of more
+/// than one thread the records are read in pieces of [`PIECE_BYTES`] parsed side by side,
+/// a few pieces at a time (the text held is bounded, as in one thread's streaming).
 pub(crate) fn parse_plain(
     path: &Path,
     reader: impl BufRead,
     opts: &ReadOptions,
     keep_rows: bool,
     rows_hint: usize,
+) -> Option<Dataset> {
+    let pieces = (rayon::current_num_threads() > 1).then_some(PIECE_BYTES);
+    parse_plain_by(path, reader, opts, (keep_rows, rows_hint), pieces)
+}
+
+/// [`parse_plain`], its records read in pieces of `piece_bytes` when given, else one by
+/// one.
+fn parse_plain_by(
+    path: &Path,
+    reader: impl BufRead,
+    opts: &ReadOptions,
+    (keep_rows, rows_hint): (bool, usize),
+    piece_bytes: Option<usize>,
 ) -> Option<Dataset> {
     let mut lines = Lines::new(reader);
     let (header_line, headers) = {
@@ -32,27 +47,112 @@ pub(crate) fn parse_plain(
     };
     let table = Table::of(path, header_line, &headers, opts).ok()?;
     let mut ds = table.empty_dataset(path, keep_rows, rows_hint);
-    let mut rows = 0usize;
-    let mut spare: Vec<&str> = Vec::with_capacity(headers.len());
-    while let Some((line, record)) = lines.next().ok()? {
-        if record.len() > headers.len() {
-            return None;
-        }
-        let mut fields = emptied(std::mem::take(&mut spare));
-        fields.extend(record.iter());
-        if rows == 0 {
-            table.check(path, &joined(&fields), opts).ok()?;
-        }
-        table
-            .push_record(path, opts, (line, &fields), &mut ds, keep_rows)
-            .ok()?;
-        rows += 1;
-        spare = emptied(fields);
-    }
-    if rows == 0 {
-        return None;
-    }
+    let read = Reading {
+        path,
+        opts,
+        table: &table,
+        keep_rows,
+    };
+    let first = match piece_bytes {
+        Some(bytes) => read.in_pieces(lines, bytes, &mut ds)?,
+        None => read.records(&mut lines, &mut ds)?,
+    };
+    // The first record is checked as a whole (e.g. a decimal comma) before it counts.
+    table.check(path, &first?, opts).ok()?;
     table.finish(path, opts, ds).ok()
+}
+
+/// Bytes of text in one piece of a table parsed on its own (the last line completed).
+pub const PIECE_BYTES: usize = 1 << 20;
+
+/// What reading a plain table's records needs.
+struct Reading<'a> {
+    path: &'a Path,
+    opts: &'a ReadOptions,
+    table: &'a Table<'a>,
+    keep_rows: bool,
+}
+
+impl Reading<'_> {
+    /// The records of `lines` into `ds`: None when the text is not plain or holds an
+    /// error; otherwise the first record's text (None for no record).
+    fn records<R: BufRead>(
+        &self,
+        lines: &mut Lines<R>,
+        ds: &mut Dataset,
+    ) -> Option<Option<String>> {
+        let width = self.table.headers.len();
+        let mut first = None;
+        let mut spare: Vec<&str> = Vec::with_capacity(width);
+        while let Some((line, record)) = lines.next().ok()? {
+            if record.len() > width {
+                return None;
+            }
+            let mut fields = emptied(std::mem::take(&mut spare));
+            fields.extend(record.iter());
+            if first.is_none() {
+                first = Some(joined(&fields));
+            }
+            self.table
+                .push_record(self.path, self.opts, (line, &fields), ds, self.keep_rows)
+                .ok()?;
+            spare = emptied(fields);
+        }
+        Some(first)
+    }
+
+    /// [`Self::records`] of `lines` read in pieces of `bytes`, each piece's records parsed into a
+    /// dataset of its own on the pool's threads (while the next pieces are read) and
+    /// appended to `ds` in order.
+    fn in_pieces<R: BufRead>(
+        &self,
+        mut lines: Lines<R>,
+        bytes: usize,
+        ds: &mut Dataset,
+    ) -> Option<Option<String>> {
+        let batch = 2 * rayon::current_num_threads();
+        let mut first: Option<String> = None;
+        let mut line = lines.line;
+        let mut parsed = Vec::new();
+        let mut pieces = lines.pieces(batch, bytes).ok()?;
+        while !pieces.is_empty() || !parsed.is_empty() {
+            let mut now = Vec::new();
+            let (next, appended) = rayon::in_place_scope(|scope| {
+                scope.spawn(|_| now = self.parse_pieces(&pieces));
+                let mut appended = Some(());
+                for part in std::mem::take(&mut parsed) {
+                    let Some((part, part_first, count)) = part else {
+                        appended = None;
+                        break;
+                    };
+                    first = first.take().or(part_first);
+                    ds.append_from_line(part, line);
+                    line += count;
+                }
+                (lines.pieces(batch, bytes), appended)
+            });
+            appended?;
+            (parsed, pieces) = (now, next.ok()?);
+        }
+        Some(first)
+    }
+
+    /// Each piece's dataset (its lines numbered from 1), first record's text and line
+    /// count; None for a piece that is not plain or holds an error.
+    #[allow(clippy::type_complexity)]
+    fn parse_pieces(&self, pieces: &[Vec<u8>]) -> Vec<Option<(Dataset, Option<String>, usize)>> {
+        use rayon::prelude::*;
+        pieces
+            .par_iter()
+            .map(|text| {
+                let rows = text.len() / 32;
+                let mut part = self.table.empty_dataset(self.path, self.keep_rows, rows);
+                let mut lines = Lines::at(&text[..], 1);
+                let first = self.records(&mut lines, &mut part)?;
+                Some((part, first, lines.line - 1))
+            })
+            .collect()
+    }
 }
 
 /// `v` emptied, its allocation kept for slices of another lifetime.
@@ -113,12 +213,46 @@ struct Lines<R> {
 impl<R: BufRead> Lines<R> {
     fn new(mut input: R) -> Self {
         super::records::skip_bom(&mut input);
+        Lines::at(input, 1)
+    }
+
+    /// The records of `input`, whose first line is line `line` of the file.
+    fn at(input: R, line: usize) -> Self {
         Lines {
             input,
             buf: Vec::with_capacity(256),
             ranges: Vec::new(),
-            line: 1,
+            line,
         }
+    }
+
+    /// The next `count` pieces of the text (fewer at its end, none after it), each `bytes`
+    /// and the rest of the line it ends in. Err when the input fails or a line runs past
+    /// [`MAX_LINE_BYTES`].
+    fn pieces(&mut self, count: usize, bytes: usize) -> Result<Vec<Vec<u8>>, NotPlain> {
+        let mut pieces = Vec::with_capacity(count);
+        while pieces.len() < count {
+            let mut text = Vec::with_capacity(bytes + 256);
+            (&mut self.input)
+                .take(bytes as u64)
+                .read_to_end(&mut text)
+                .map_err(|_| NotPlain)?;
+            if text.is_empty() {
+                break;
+            }
+            if text.last() != Some(&b'\n') {
+                let cut = text.len();
+                (&mut self.input)
+                    .take(MAX_LINE_BYTES as u64)
+                    .read_until(b'\n', &mut text)
+                    .map_err(|_| NotPlain)?;
+                if text.len() - cut == MAX_LINE_BYTES && text.last() != Some(&b'\n') {
+                    return Err(NotPlain);
+                }
+            }
+            pieces.push(text);
+        }
+        Ok(pieces)
     }
 
     /// The next record (its line number and fields), None at the end of the input.
@@ -214,6 +348,54 @@ fn trimmed_range(text: &str, a: usize, b: usize) -> (usize, usize) {
 mod tests {
     use super::*;
 
+    /// Record by record, and in pieces of 1 byte (a line each), 7 and 64 bytes and more
+    /// than the text.
+    const PIECES: [Option<usize>; 5] = [None, Some(1), Some(7), Some(64), Some(1 << 20)];
+
+    /// A table of many records read in pieces is the table read record by record: every
+    /// sample, value, group and line number, wherever the pieces' ends fall (in comments,
+    /// blank lines and `\r\n` line ends among them); an error in any piece gives None.
+    #[test]
+    fn pieces_read_the_records_of_one_by_one() {
+        let path = Path::new("t.csv");
+        let opts = ReadOptions::default();
+        let mut text = String::from("theta_i,theta_r,phi_r,L,group\r\n");
+        for i in 0..400 {
+            let extra = match i % 37 {
+                0 => "# a comment, with a comma\r\n",
+                1 => "\r\n",
+                2 => ",,,,\r\n",
+                _ => "",
+            };
+            let row = format!(
+                "{}, {},{},{:e},g{}\r\n",
+                i % 80,
+                (i * 7) % 85,
+                i % 360,
+                1.0 + i as f64,
+                i % 3
+            );
+            text.push_str(extra);
+            text.push_str(&row);
+        }
+        let whole = parse_plain_by(path, text.as_bytes(), &opts, (true, 0), None).unwrap();
+        assert_eq!(whole.len(), 400);
+        for bytes in [1, 7, 64, 100, 1000, 1 << 20] {
+            let pieces = parse_plain_by(path, text.as_bytes(), &opts, (true, 0), Some(bytes));
+            assert_eq!(
+                format!("{:?}", pieces.unwrap()),
+                format!("{whole:?}"),
+                "{bytes}"
+            );
+        }
+        let bad = text.replacen("g1\r\n", "g1,extra\r\n", 50);
+        let bad = bad.replacen("g1,extra", "g1", 49);
+        for bytes in [7, 64, 1000] {
+            let pieces = parse_plain_by(path, bad.as_bytes(), &opts, (false, 0), Some(bytes));
+            assert!(pieces.is_none(), "{bytes}");
+        }
+    }
+
     /// Every text the plain reader takes gives the general reader's dataset (samples,
     /// lines, values, groups, rows); every other gives None.
     #[test]
@@ -226,10 +408,17 @@ mod tests {
             "theta_i,theta_r,phi_r,L\n# a \"quoted\" comment\n10,20,0,1\n",
         ];
         for text in plain_texts {
-            let plain = parse_plain(path, text.as_bytes(), &opts, true, 0).expect(text);
             let general =
                 super::super::parse(path, text.trim_start_matches('\u{feff}'), &opts).expect(text);
-            assert_eq!(format!("{plain:?}"), format!("{general:?}"), "{text:?}");
+            for pieces in PIECES {
+                let plain = parse_plain_by(path, text.as_bytes(), &opts, (true, 0), pieces);
+                let plain = plain.expect(text);
+                assert_eq!(
+                    format!("{plain:?}"),
+                    format!("{general:?}"),
+                    "{text:?} {pieces:?}"
+                );
+            }
         }
         let not_plain = [
             "theta_i,theta_r,phi_r,L\n10,20,0,\"1\"\n",
@@ -240,10 +429,10 @@ mod tests {
             "theta_i,theta_r,phi_r,L\n",
         ];
         for text in not_plain {
-            assert!(
-                parse_plain(path, text.as_bytes(), &opts, false, 0).is_none(),
-                "{text:?}"
-            );
+            for pieces in PIECES {
+                let plain = parse_plain_by(path, text.as_bytes(), &opts, (false, 0), pieces);
+                assert!(plain.is_none(), "{text:?} {pieces:?}");
+            }
         }
         let wide = format!(
             "theta_i,theta_r,phi_r,L{}\n10,20,0,1\n",
