@@ -3,8 +3,10 @@
 # (σ = 0.25 λ, T = 2.5 λ, 1 % noise, `goniofit synth`, seed 1) fitted with
 # `goniofit fit --model kbs --wavelength 1 --json`, measured with `/usr/bin/time -v`
 # (wall time, peak resident set size, bytes per row = peak RSS / rows), and the time outside
-# the fit: wall minus the report's `seconds` (reading, intervals, the report's figures,
-# outputs). FIT_ARGS adds options to the fit (e.g. FIT_ARGS=--no-intervals).
+# the fit: wall minus the report's `seconds` (the fit: start, solve, uncertainty, fitted
+# values and adequacy tests) and `interval_seconds` (the profile intervals), i.e. starting
+# the process, reading the file, preparing the samples and writing the report. FIT_ARGS
+# adds options to the fit (e.g. FIT_ARGS=--no-intervals).
 #
 # With BASE=path/to/goniofit the baseline binary runs too, alternated run by run with this
 # tree's binary; medians and ratios are printed. Data files go to $BIG_DIR (default
@@ -46,7 +48,7 @@ def run(binary):
     rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr).group(1)) * 1024
     m = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (?:(\d+):)?(\d+):([\d.]+)", p.stderr)
     wall = int(m.group(1) or 0) * 3600 + int(m.group(2)) * 60 + float(m.group(3))
-    return {"wall": wall, "fit_s": d["seconds"], "rss": rss, "sigma": d["params"]["sigma"]["value"],
+    return {"wall": wall, "fit_s": d["seconds"], "int_s": d.get("interval_seconds", 0.0), "rss": rss, "sigma": d["params"]["sigma"]["value"],
             "T": d["params"]["T"]["value"], "converged": d["converged"], "cost": d["cost"]}
 res = {name: [] for name, _ in bins}
 for _ in range(repeats):
@@ -56,12 +58,13 @@ print(f"{rows} rows ({data}), {repeats} runs each (alternated)")
 med = {}
 for name, _ in bins:
     rs = res[name]
-    m = {k: statistics.median(r[k] for r in rs) for k in ("wall", "fit_s", "rss")}
+    m = {k: statistics.median(r[k] for r in rs) for k in ("wall", "fit_s", "int_s", "rss")}
     med[name] = m
     r = rs[-1]
     runs = ", ".join("%.2f s/%.0f" % (x["wall"], x["rss"] / rows) for x in rs)
-    print(f"  {name:4}  wall {m['wall']:6.2f} s (fit {m['fit_s']:.2f} s, outside it "
-          f"{statistics.median(r['wall'] - r['fit_s'] for r in rs):.2f} s)  peak RSS {m['rss'] / 2**20:7.1f} MiB"
+    outside = statistics.median(r['wall'] - r['fit_s'] - r['int_s'] for r in rs)
+    print(f"  {name:4}  wall {m['wall']:6.2f} s (fit {m['fit_s']:.2f} s, intervals {m['int_s']:.2f} s, "
+          f"outside them {outside:.2f} s)  peak RSS {m['rss'] / 2**20:7.1f} MiB"
           f" = {m['rss'] / rows:6.1f} bytes/row  (runs: {runs})"
           f"  sigma {r['sigma']:.6f} T {r['T']:.5f} converged {r['converged']} cost {r['cost']:.9e}")
 if "base" in med:

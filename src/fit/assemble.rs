@@ -118,11 +118,14 @@ pub(super) fn assemble(
 
 /// How many samples each evaluation mode served, keyed by the mode's name.
 fn mode_counts(sample_modes: &[crate::model::Mode]) -> BTreeMap<String, usize> {
-    let mut modes = BTreeMap::new();
+    let mut counts: BTreeMap<&'static str, usize> = BTreeMap::new();
     for m in sample_modes {
-        *modes.entry(m.name().to_string()).or_insert(0) += 1;
+        *counts.entry(m.name()).or_insert(0) += 1;
     }
-    modes
+    counts
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
 }
 
 /// The model's factor flags as the report prints them (empty for a model without options).
@@ -166,20 +169,14 @@ fn fitted_at_point(
 ) -> (Goodness, Vec<crate::model::Mode>, bool) {
     let stop = config.lm.stop.as_ref().filter(|_| !quick(lm));
     let n_free = problem.layout.free().len();
-    let weights_are_uncertainties = config.weights_are_uncertainties;
-    let gof = goodness(problem, input, p, n_free, weights_are_uncertainties, stop);
-    let sample_modes = gof.as_ref().and_then(|_| problem.modes_until(p, stop));
-    match (gof, sample_modes) {
-        (Some(g), Some(m)) => (g, m, true),
-        (gof, _) => {
-            notes.push(if gof.is_some() {
-                SAMPLES_NOT_COMPUTED.to_string()
-            } else {
-                FITTED_NOT_COMPUTED.to_string()
-            });
-            let mut g = gof.unwrap_or_else(|| from_cost(problem, lm.cost, n_free));
-            (g.fitted, g.residuals, g.std_residuals) = (Vec::new(), Vec::new(), Vec::new());
-            (g, Vec::new(), false)
+    match problem.values_modes_until(p, stop) {
+        Some((fitted, modes)) => {
+            let unc = config.weights_are_uncertainties;
+            (goodness(problem, input, fitted, n_free, unc), modes, true)
+        }
+        None => {
+            notes.push(FITTED_NOT_COMPUTED.to_string());
+            (from_cost(problem, lm.cost, n_free), Vec::new(), false)
         }
     }
 }
@@ -189,13 +186,9 @@ fn fitted_at_point(
 /// [`QUICK_EVALUATION_SECONDS`] checks the stop between blocks of samples there).
 pub const FITTED_NOT_COMPUTED: &str = "the fit was stopped before its fitted values at the reported point were evaluated on the whole data: the cost is the solver's at that point, and the rms and max |residual|, R² (and χ² under a robust loss) were not computed, nor the residuals file and pictures";
 
-/// The note of a fit whose stop request cut the evaluation modes of its samples (after its
-/// fitted values).
-pub const SAMPLES_NOT_COMPUTED: &str = "the fit was stopped before the evaluation modes of its samples were found: the residuals file and pictures were not written";
-
 /// The mean seconds of one of the solver's evaluations at most which the fitted values and
 /// modes at the reported point are evaluated to the end after a stop request too (they cost
-/// about two evaluations: a quick fit stopped keeps its residuals file and pictures).
+/// about one evaluation: a quick fit stopped keeps its residuals file and pictures).
 pub const QUICK_EVALUATION_SECONDS: f64 = 0.25;
 
 /// Whether the solver's evaluations took at most [`QUICK_EVALUATION_SECONDS`] each.
@@ -235,21 +228,18 @@ fn information_criteria(objective: f64, nf: f64, n_free: usize) -> (f64, f64) {
     )
 }
 
-/// Residuals, cost, χ², rms, R², AIC and BIC at `p`; None when `stop` was requested before
-/// the model values on every sample were evaluated. Under a robust loss the
+/// Residuals, cost, χ², rms, R², AIC and BIC of the model values `fitted`. Under a robust loss the
 /// standardized residuals and AIC/BIC use the robust objective 2·cost = Σ C²ρ in place of
 /// χ² (the quantity the fit minimised, and the s² of its covariance), so that a few outliers
 /// neither inflate s nor decide a model comparison.
 fn goodness(
     problem: &FitProblem,
     input: &FitInput,
-    p: &[f64],
+    fitted: Vec<f64>,
     n_free: usize,
     weights_are_uncertainties: bool,
-    stop: Option<&crate::lm::Stop>,
-) -> Option<Goodness> {
+) -> Goodness {
     let n = problem.len();
-    let (fitted, _) = problem.model_values_until(p, false, stop)?;
     let residuals = problem.raw_residuals(&fitted);
     let sw = problem.sqrt_weight();
     let chi2: f64 = residuals
@@ -284,7 +274,7 @@ fn goodness(
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     let r2 = r_squared(problem, input, &fitted);
     let (aic, bic) = information_criteria(objective, n as f64, n_free);
-    Some(Goodness {
+    Goodness {
         fitted,
         residuals,
         std_residuals,
@@ -296,7 +286,7 @@ fn goodness(
         r2,
         aic,
         bic,
-    })
+    }
 }
 
 /// Weighted R² in the space the residuals live in: the data itself, or ln y for log

@@ -139,8 +139,9 @@ fn finish(
         assemble: 0.0,
     };
     let mut result = assemble::assemble(model, input, config, solved, seconds, start);
+    result.seconds = t0.elapsed().as_secs_f64();
     result.stage_seconds = StageSeconds {
-        assemble: t0.elapsed().as_secs_f64() - seconds,
+        assemble: result.seconds - seconds,
         ..stages
     };
     Ok(result)

@@ -36,7 +36,7 @@ pub struct ParamResult {
 }
 
 /// Wall seconds of each stage of one fit, in the order they run (their sum is the fit's
-/// `seconds` plus `assemble`, to the clock's resolution). Not part of the reports: the
+/// `seconds`, to the clock's resolution). Not part of the reports: the
 /// timing a benchmark asks for (`GONIOFIT_STAGES`, benches/stages.sh).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageSeconds {
@@ -168,7 +168,9 @@ pub struct FitResult {
     pub evaluations: u64,
     pub jacobian_evaluations: u64,
     pub termination: Termination,
-    /// Wall time of the whole fit (starting values, refinement, LM, verdict).
+    /// Wall time of the whole fit: starting values, refinement, LM, uncertainty and verdict,
+    /// the fitted values and the adequacy tests (not the profile intervals, which
+    /// [`crate::fit::dataset`] times apart).
     pub seconds: f64,
     /// Of which: up to the end of the starting-value refinement.
     pub init_seconds: f64,

@@ -393,9 +393,13 @@ struct Columns {
 }
 
 impl Columns {
-    fn with_capacity(n: usize) -> Self {
-        let v = || Vec::with_capacity(n);
-        Columns {
+    /// The columns of `samples`, computed in parts on the pool's threads.
+    fn of(samples: &[Sample]) -> Self {
+        use rayon::prelude::*;
+        const PART: usize = 1 << 13;
+        let n = samples.len();
+        let v = || vec![0.0; n];
+        let mut g = Columns {
             theta_i: v(),
             theta_r: v(),
             phi_r: v(),
@@ -403,7 +407,35 @@ impl Columns {
             c: v(),
             h: v(),
             vxy2: v(),
-        }
+        };
+        let parts = (
+            samples.par_chunks(PART),
+            g.theta_i.par_chunks_mut(PART),
+            g.theta_r.par_chunks_mut(PART),
+            g.phi_r.par_chunks_mut(PART),
+            g.cos_i.par_chunks_mut(PART),
+            g.c.par_chunks_mut(PART),
+            g.h.par_chunks_mut(PART),
+            g.vxy2.par_chunks_mut(PART),
+        );
+        parts
+            .into_par_iter()
+            .for_each(|(part, ti, tr, ph, ci, c, h, v)| {
+                for (j, s) in part.iter().enumerate() {
+                    let phi = wrap_phi(s.phi_r);
+                    let (sin_i, cos_i) = s.theta_i.sin_cos();
+                    let (sin_r, cos_r) = s.theta_r.sin_cos();
+                    let half_sin2 = (0.5 * phi).sin().powi(2);
+                    let half_sum_cos = (0.5 * (s.theta_i + s.theta_r)).cos();
+                    (ti[j], tr[j], ph[j], ci[j]) = (s.theta_i, s.theta_r, phi, cos_i);
+                    c[j] = cos_i + cos_r;
+                    // 1 + cos(θi+θr) + 2 sinθi sinθr sin²(φ/2), both terms ≥ 0.
+                    h[j] = 2.0 * half_sum_cos * half_sum_cos + 2.0 * sin_i * sin_r * half_sin2;
+                    // (sinθi − sinθr)² + 4 sinθi sinθr sin²(φ/2): exact zero at the mirror.
+                    v[j] = (sin_i - sin_r).powi(2) + 4.0 * sin_i * sin_r * half_sin2;
+                }
+            });
+        g
     }
 }
 
@@ -447,24 +479,7 @@ impl Geometry {
                 .map_err(|m| Error::Usage(format!("sample {}: {m}", i + 1)))?;
         }
         let n = samples.len();
-        let mut g = Columns::with_capacity(n);
-        for s in samples {
-            let phi = wrap_phi(s.phi_r);
-            let (sin_i, cos_i) = s.theta_i.sin_cos();
-            let (sin_r, cos_r) = s.theta_r.sin_cos();
-            let half_sin2 = (0.5 * phi).sin().powi(2);
-            let half_sum_cos = (0.5 * (s.theta_i + s.theta_r)).cos();
-            g.theta_i.push(s.theta_i);
-            g.theta_r.push(s.theta_r);
-            g.phi_r.push(phi);
-            g.cos_i.push(cos_i);
-            g.c.push(cos_i + cos_r);
-            // 1 + cos(θi+θr) + 2 sinθi sinθr sin²(φ/2), both terms ≥ 0.
-            g.h.push(2.0 * half_sum_cos * half_sum_cos + 2.0 * sin_i * sin_r * half_sin2);
-            // (sinθi − sinθr)² + 4 sinθi sinθr sin²(φ/2): exact zero at the mirror.
-            g.vxy2
-                .push((sin_i - sin_r).powi(2) + 4.0 * sin_i * sin_r * half_sin2);
-        }
+        let g = Columns::of(samples);
         Ok(Geometry {
             theta_i: g.theta_i.into(),
             theta_r: g.theta_r.into(),

@@ -142,10 +142,43 @@ impl Kbs {
         out: &mut [f64],
         jac: Option<(&mut [f64], &mut [f64])>,
     ) {
+        let batch = self.batch_ln_q(geo, p[0], p[1]);
+        self.lobe_from(geo, p, &batch, out, jac);
+    }
+
+    /// [`Self::lobe`]'s values with the evaluation mode of each sample, from one evaluation
+    /// of ln Q.
+    pub(crate) fn lobe_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
+        let batch = self.batch_ln_q(geo, p[0], p[1]);
+        self.lobe_from(geo, p, &batch, out, None);
+        match self.forced_mode() {
+            Some(m) => vec![m; geo.len()],
+            None => batch.2.iter().map(|q| q.mode).collect(),
+        }
+    }
+
+    /// The mode every sample is evaluated in when the options force one.
+    fn forced_mode(&self) -> Option<Mode> {
+        match self.opts.mode {
+            EvalMode::Series => Some(Mode::Series),
+            EvalMode::Smooth => Some(Mode::Smooth),
+            EvalMode::Rough => Some(Mode::Rough),
+            EvalMode::Auto => None,
+        }
+    }
+
+    /// [`Self::lobe`] from the batch's g, a and ln Q ([`Self::batch_ln_q`]).
+    fn lobe_from(
+        &self,
+        geo: &Geometry,
+        p: &[f64],
+        (g, a, q): &(Vec<f64>, Vec<f64>, Vec<series::LnQ>),
+        out: &mut [f64],
+        jac: Option<(&mut [f64], &mut [f64])>,
+    ) {
         let (sigma, corr) = (p[0], p[1]);
         let fp = &p[3..];
         let n = geo.len();
-        let (g, a, q) = self.batch_ln_q(geo, sigma, corr);
         // What every sample's factors share: 1/σ, 1/T and T/σ.
         let shared = (1.0 / sigma, 1.0 / corr, corr / sigma);
         let fc = self.opts.has_factors().then(|| geo.factor_columns());
@@ -176,7 +209,7 @@ impl Kbs {
             }
         }
         let factors = fc.map(|fc| (fc, lambdas.as_deref()));
-        let point = |i: usize| at(self, geo, i, (p, fp, shared), (&g, &a, &q), factors);
+        let point = |i: usize| at(self, geo, i, (p, fp, shared), (g, a, q), factors);
         match jac {
             None => {
                 for (i, o) in out.iter_mut().enumerate() {
@@ -378,16 +411,14 @@ impl Model for Kbs {
         Some(self.opts)
     }
 
+    fn radiance_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
+        self.lobe_modes(geo, p, out)
+    }
+
     fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
         // A forced mode is every sample's: nothing to evaluate (a forced series on rough
         // data costs a whole evaluation, after a time limit too).
-        let forced = match self.opts.mode {
-            EvalMode::Series => Some(Mode::Series),
-            EvalMode::Smooth => Some(Mode::Smooth),
-            EvalMode::Rough => Some(Mode::Rough),
-            EvalMode::Auto => None,
-        };
-        if let Some(m) = forced {
+        if let Some(m) = self.forced_mode() {
             return vec![m; geo.len()];
         }
         self.batch_ln_q(geo, p[0], p[1])

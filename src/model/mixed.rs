@@ -52,6 +52,16 @@ impl KbsLambert {
     }
 }
 
+/// The KBS lobe's parameters within the model's `p` (σ, T, s, then the Fresnel ones, which
+/// follow s_d in `p`), and how many Fresnel parameters there are.
+fn lobe_params(p: &[f64]) -> ([f64; 5], usize) {
+    let mut kp = [0.0; 5];
+    kp[..3].copy_from_slice(&p[..3]);
+    let nf = p.len() - 4;
+    kp[3..3 + nf].copy_from_slice(&p[4..]);
+    (kp, nf)
+}
+
 impl Model for KbsLambert {
     fn name(&self) -> &'static str {
         "kbs+lambert"
@@ -67,11 +77,7 @@ impl Model for KbsLambert {
 
     fn radiance(&self, geo: &Geometry, p: &[f64], out: &mut [f64], jac: Option<&mut [f64]>) {
         let n = geo.len();
-        // The KBS part's parameters: σ, T, s, then the Fresnel ones (after s_d here).
-        let mut kp = [0.0; 5];
-        kp[..3].copy_from_slice(&p[..3]);
-        let nf = p.len() - 4;
-        kp[3..3 + nf].copy_from_slice(&p[4..]);
+        let (kp, nf) = lobe_params(p);
         let kp = &kp[..3 + nf];
         match jac {
             None => self.kbs.lobe(geo, kp, out, None),
@@ -93,5 +99,14 @@ impl Model for KbsLambert {
 
     fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
         self.kbs.modes(geo, &p[..3])
+    }
+
+    fn radiance_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
+        let (kp, nf) = lobe_params(p);
+        let modes = self.kbs.lobe_modes(geo, &kp[..3 + nf], out);
+        for (o, c) in out.iter_mut().zip(&geo.cos_i) {
+            *o += p[3] * c;
+        }
+        modes
     }
 }

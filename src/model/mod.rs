@@ -188,6 +188,24 @@ pub trait Model: Send + Sync {
         vec![Mode::Closed; geo.len()]
     }
 
+    /// [`Self::radiance`]'s values and [`Self::modes`] from one evaluation (a model whose
+    /// modes cost an evaluation of their own shares it).
+    fn radiance_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
+        self.radiance(geo, p, out, None);
+        self.modes(geo, p)
+    }
+
+    /// [`Self::eval`]'s values (no Jacobian) and each sample's evaluation mode.
+    fn eval_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
+        let modes = self.radiance_modes(geo, p, out);
+        if geo.quantity != crate::geometry::Quantity::Radiance {
+            for (i, v) in out.iter_mut().enumerate() {
+                *v *= geo.out_factor(i);
+            }
+        }
+        modes
+    }
+
     /// The measured quantity (radiance or BRDF, per `geo.quantity`) and its Jacobian.
     fn eval(&self, geo: &Geometry, p: &[f64], out: &mut [f64], jac: Option<&mut [f64]>) {
         let n = geo.len();

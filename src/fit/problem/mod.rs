@@ -97,6 +97,41 @@ struct Block {
     /// Global sample indices.
     idx: Rows,
     channel: usize,
+    /// The largest c/λ and v_xy²/λ² of the block's samples: g and a of every sample are at
+    /// most (2πσ c/λ)² and (2πT)² v_xy²/(4λ²) of these.
+    reach: (f64, f64),
+}
+
+impl Block {
+    fn new(geo: Geometry, idx: Rows, channel: usize) -> Block {
+        let reach = (0..geo.len()).fold((0.0f64, 0.0f64), |(g, a), i| {
+            let l = geo.wavelength[i];
+            (g.max((geo.c[i] / l).abs()), a.max(geo.vxy2[i] / (l * l)))
+        });
+        Block {
+            geo,
+            idx,
+            channel,
+            reach,
+        }
+    }
+
+    /// Whether every sample stays within the fit's limits of g and a at σ, T: decided from
+    /// [`Self::reach`] unless the bound lies within rounding of a limit, then sample by
+    /// sample (the same answer as [`sample_in_domain`] on each).
+    fn in_domain(&self, (sigma, corr): (f64, f64)) -> bool {
+        const ROUNDING: f64 = 1e-12;
+        let tau = 2.0 * std::f64::consts::PI;
+        let g = (tau * sigma * self.reach.0).powi(2);
+        let a = (tau * corr).powi(2) * self.reach.1 * 0.25;
+        if g * (1.0 + ROUNDING) <= G_FIT_MAX && a * (1.0 + ROUNDING) <= A_FIT_MAX {
+            return true;
+        }
+        if g * (1.0 - ROUNDING) > G_FIT_MAX || a * (1.0 - ROUNDING) > A_FIT_MAX {
+            return false;
+        }
+        (0..self.geo.len()).all(|i| sample_in_domain(&self.geo, i, (sigma, corr)))
+    }
 }
 
 /// The global indices of a block's samples: a run of consecutive samples (a one-channel
@@ -196,11 +231,7 @@ impl<'a> FitProblem<'a> {
                 .step_by(BLOCK)
                 .map(|first| {
                     let run = first..(first + BLOCK).min(n);
-                    Block {
-                        geo: geo.slice(run.clone()),
-                        idx: Rows::Run(run),
-                        channel: 0,
-                    }
+                    Block::new(geo.slice(run.clone()), Rows::Run(run), 0)
                 })
                 .collect()
         } else {
@@ -208,11 +239,7 @@ impl<'a> FitProblem<'a> {
             for c in 0..n_ch {
                 let idx: Vec<usize> = (0..n).filter(|&i| channel[i] == c).collect();
                 for chunk in idx.chunks(BLOCK) {
-                    blocks.push(Block {
-                        geo: geo.subset(chunk),
-                        idx: Rows::List(chunk.to_vec()),
-                        channel: c,
-                    });
+                    blocks.push(Block::new(geo.subset(chunk), Rows::List(chunk.to_vec()), c));
                 }
             }
             blocks
@@ -354,36 +381,37 @@ impl<'a> FitProblem<'a> {
         complete.then_some((f, jac))
     }
 
-    /// Per-sample evaluation modes at full parameters `p`.
-    pub fn modes(&self, p: &[f64]) -> Vec<Mode> {
-        self.modes_until(p, None)
-            .expect("modes without a stop request are never cut")
-    }
-
-    /// [`Self::modes`], or None when `stop` was requested before every block's modes were
-    /// found (a block that starts after the request is skipped: in `auto` mode finding a
-    /// sample's mode costs about an evaluation).
-    pub fn modes_until(&self, p: &[f64], stop: Option<&Stop>) -> Option<Vec<Mode>> {
-        let parts: Vec<Option<Vec<Mode>>> = self
+    /// Model values and each sample's evaluation mode at full parameters `p` (one
+    /// evaluation), or None when `stop` was requested before every block was evaluated (a
+    /// block that starts after the request is skipped).
+    pub fn values_modes_until(
+        &self,
+        p: &[f64],
+        stop: Option<&Stop>,
+    ) -> Option<(Vec<f64>, Vec<Mode>)> {
+        let parts: Vec<Option<(Vec<f64>, Vec<Mode>)>> = self
             .blocks
             .par_iter()
             .map(|b| {
                 if stop.is_some_and(Stop::is_requested) {
                     return None;
                 }
-                Some(
-                    self.model
-                        .modes(&b.geo, &self.layout.model_params(p, b.channel)),
-                )
+                let mut f = vec![0.0; b.geo.len()];
+                let mp = self.layout.model_params(p, b.channel);
+                let modes = self.model.eval_modes(&b.geo, &mp, &mut f);
+                Some((f, modes))
             })
             .collect();
+        let mut values = vec![0.0; self.n];
         let mut modes = vec![Mode::Closed; self.n];
         for (b, part) in self.blocks.iter().zip(parts) {
-            for (m, i) in part?.into_iter().zip(b.idx.iter()) {
-                modes[i] = m;
+            let (f, m) = part?;
+            for (r, i) in b.idx.iter().enumerate() {
+                values[i] = f[r];
+                modes[i] = m[r];
             }
         }
-        Some(modes)
+        Some((values, modes))
     }
 
     /// Unweighted residuals rᵢ of the chosen kind for model values f.
@@ -529,11 +557,7 @@ impl FitProblem<'_> {
         if !width_resolved(&self.layout, self.w_floor, p) {
             return false;
         }
-        sc.is_empty()
-            || self
-                .blocks
-                .iter()
-                .all(|b| (0..b.geo.len()).all(|i| sample_in_domain(&b.geo, i, sc[b.channel])))
+        sc.is_empty() || self.blocks.iter().all(|b| b.in_domain(sc[b.channel]))
     }
 
     /// Weighted residuals and their Jacobian with respect to the solver variables x, in one
@@ -735,5 +759,70 @@ impl LeastSquaresProblem for FitProblem<'_> {
             }
         }
         self.evaluate(x, None).step
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{sample_in_domain, Block, Rows, A_FIT_MAX, G_FIT_MAX};
+    use crate::geometry::{Geometry, Quantity, Sample};
+
+    /// Samples from normal incidence to 89.9°, in and out of plane, at two wavelengths.
+    fn block() -> Block {
+        let mut samples = Vec::new();
+        let mut wavelength = Vec::new();
+        for (k, deg) in [0.0, 10.0, 45.0, 70.0, 89.9].iter().enumerate() {
+            for phi in [0.0, 1.0, std::f64::consts::PI] {
+                let t = f64::to_radians(*deg);
+                samples.push(Sample {
+                    theta_i: t,
+                    theta_r: 0.5 * t,
+                    phi_r: phi,
+                });
+                wavelength.push(if k % 2 == 0 { 0.5 } else { 0.9 });
+            }
+        }
+        let geo = Geometry::new(&samples, &wavelength, Quantity::Radiance).unwrap();
+        let n = geo.len();
+        Block::new(geo, Rows::Run(0..n), 0)
+    }
+
+    #[test]
+    fn block_domain_check_agrees_with_each_sample_at_the_limits() {
+        let b = block();
+        let each = |sc: (f64, f64)| (0..b.geo.len()).all(|i| sample_in_domain(&b.geo, i, sc));
+        // σ and T that put the block's largest g or a at the limit, then a relative step of
+        // 1e-15 … 1e-3 either side of it: the bound and the per-sample check agree at each.
+        let g_max = (0..b.geo.len())
+            .map(|i| b.geo.g(i, 1.0))
+            .fold(0.0, f64::max);
+        let a_max = (0..b.geo.len())
+            .map(|i| b.geo.a(i, 1.0))
+            .fold(0.0, f64::max);
+        let sigma_edge = (G_FIT_MAX / g_max).sqrt();
+        let corr_edge = (A_FIT_MAX / a_max).sqrt();
+        let mut checked = (0, 0);
+        for step in [0.0, 1e-15, 1e-13, 1e-11, 1e-6, 1e-3] {
+            for sign in [-1.0, 1.0] {
+                let f = 1.0 + sign * step;
+                for sc in [
+                    (sigma_edge * f, 1.0),
+                    (1e-3, corr_edge * f),
+                    (sigma_edge * f, corr_edge * f),
+                ] {
+                    let inside = each(sc);
+                    assert_eq!(b.in_domain(sc), inside, "σ, T = {sc:?}");
+                    if inside {
+                        checked.0 += 1
+                    } else {
+                        checked.1 += 1
+                    }
+                }
+            }
+        }
+        assert!(
+            checked.0 > 5 && checked.1 > 5,
+            "both sides reached: {checked:?}"
+        );
     }
 }

@@ -2,6 +2,8 @@
 //! binomial tail, the Wald–Wolfowitz runs count, Spearman's rank correlation and R².
 //! Pure functions of numbers: no fit, no geometry.
 
+use rayon::prelude::*;
+
 /// Upper tail of the standard normal, P(Z ≥ z) = erfc(z/√2)/2 (to ~1e-15 relative; libm).
 pub fn normal_sf(z: f64) -> f64 {
     0.5 * libm::erfc(z / std::f64::consts::SQRT_2)
@@ -130,17 +132,17 @@ impl Runs {
 
 /// Ranks 1..n of `v` (ties get their mean rank).
 fn ranks(v: &[f64]) -> Vec<f64> {
-    let mut idx: Vec<usize> = (0..v.len()).collect();
-    idx.sort_by(|&a, &b| v[a].total_cmp(&v[b]));
+    let mut sorted: Vec<(f64, usize)> = v.iter().copied().zip(0..).collect();
+    sorted.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
     let mut r = vec![0.0; v.len()];
     let mut i = 0;
-    while i < idx.len() {
+    while i < sorted.len() {
         let mut j = i;
-        while j + 1 < idx.len() && v[idx[j + 1]] == v[idx[i]] {
+        while j + 1 < sorted.len() && sorted[j + 1].0 == sorted[i].0 {
             j += 1;
         }
         let mean = 0.5 * (i + j) as f64 + 1.0;
-        for &k in &idx[i..=j] {
+        for &(_, k) in &sorted[i..=j] {
             r[k] = mean;
         }
         i = j + 1;
@@ -152,7 +154,7 @@ fn ranks(v: &[f64]) -> Vec<f64> {
 /// their ranks (ties at mean ranks). Under independence √(n − 1)·ρ is asymptotically
 /// N(0, 1). NaN for fewer than two pairs or a constant variable.
 pub fn spearman(x: &[f64], y: &[f64]) -> f64 {
-    let (rx, ry) = (ranks(x), ranks(y));
+    let (rx, ry) = rayon::join(|| ranks(x), || ranks(y));
     pearson(&rx, &ry)
 }
 

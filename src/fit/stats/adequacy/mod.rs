@@ -32,7 +32,8 @@ use crate::fit::problem::channels::Channels;
 use crate::fit::problem::ResidualKind;
 use crate::geometry::{Geometry, PerSample};
 use distributions::{chi2_sf, normal_sf, sign_test, slope, spearman, Runs};
-use std::collections::BTreeMap;
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 
 /// Family-wise significance level of the adequacy tests (Bonferroni-corrected).
 pub const ALPHA: f64 = 1e-3;
@@ -324,10 +325,10 @@ fn chi2_test(fr: &FitResiduals, w: &Weighted, out: &mut Adequacy) -> Option<Outc
     })
 }
 
-/// The samples grouped into scans (channel, θi, φ-plane), each ordered by signed θr.
+/// The samples grouped into scans (channel, θi, φ-plane), each ordered by signed θr; the
+/// scans in the order of their keys.
 fn scans(geo: &Geometry, channel: &Channels, used: &[bool]) -> Vec<Vec<usize>> {
-    let mut groups: BTreeMap<(usize, i64, i64), Vec<(f64, usize)>> = BTreeMap::new();
-    for i in (0..geo.len()).filter(|&i| used[i]) {
+    let scan_of = |i: usize| {
         let phi = geo.phi_r[i].to_degrees();
         let plane = phi.rem_euclid(180.0);
         let key = (
@@ -341,19 +342,89 @@ fn scans(geo: &Geometry, channel: &Channels, used: &[bool]) -> Vec<Vec<usize>> {
         } else {
             -1.0
         };
-        groups
-            .entry(key)
-            .or_default()
-            .push((side * geo.theta_r[i], i));
-    }
-    groups
-        .into_values()
-        .filter(|g| g.len() > 1)
-        .map(|mut g| {
-            g.sort_by(|a, b| a.0.total_cmp(&b.0));
-            g.into_iter().map(|(_, i)| i).collect()
+        (key, (side * geo.theta_r[i], i))
+    };
+    // Contiguous parts of the samples gathered on the pool's threads, joined in order.
+    let keyed = (0..geo.len())
+        .into_par_iter()
+        .with_min_len(1 << 15)
+        .filter(|&i| used[i])
+        .fold(Keyed::default, |mut k, i| {
+            let (key, item) = scan_of(i);
+            k.push(key, item);
+            k
         })
+        .reduce(Keyed::default, Keyed::append);
+    let mut groups: Vec<Vec<(f64, usize)>> = keyed
+        .into_sorted()
+        .into_iter()
+        .filter(|g| g.len() > 1)
+        .collect();
+    groups
+        .par_iter_mut()
+        .for_each(|g| g.sort_by(|a, b| a.0.total_cmp(&b.0)));
+    groups
+        .into_iter()
+        .map(|g| g.into_iter().map(|(_, i)| i).collect())
         .collect()
+}
+
+/// Items gathered into groups by a key, each group in the order its items came; a run of
+/// items of one key (the usual order of a measurement's file) finds its group without a
+/// lookup.
+struct Keyed<K, T> {
+    index: FxHashMap<K, usize>,
+    groups: Vec<(K, Vec<T>)>,
+    last: Option<(K, usize)>,
+}
+
+impl<K, T> Default for Keyed<K, T> {
+    fn default() -> Self {
+        Keyed {
+            index: FxHashMap::default(),
+            groups: Vec::new(),
+            last: None,
+        }
+    }
+}
+
+impl<K: Copy + Ord + std::hash::Hash, T> Keyed<K, T> {
+    /// The index of `key`'s group, numbered in the order the keys first came.
+    fn group(&mut self, key: K) -> usize {
+        match self.last {
+            Some((k, g)) if k == key => g,
+            _ => {
+                let groups = &mut self.groups;
+                let g = *self.index.entry(key).or_insert_with(|| {
+                    groups.push((key, Vec::new()));
+                    groups.len() - 1
+                });
+                self.last = Some((key, g));
+                g
+            }
+        }
+    }
+
+    /// `item` added to `key`'s group.
+    fn push(&mut self, key: K, item: T) {
+        let g = self.group(key);
+        self.groups[g].1.push(item);
+    }
+
+    /// `self` followed by `other`: each of `other`'s groups after `self`'s group of its key.
+    fn append(mut self, other: Keyed<K, T>) -> Keyed<K, T> {
+        for (key, items) in other.groups {
+            let g = self.group(key);
+            self.groups[g].1.extend(items);
+        }
+        self
+    }
+
+    /// The groups in the order of their keys.
+    fn into_sorted(mut self) -> Vec<Vec<T>> {
+        self.groups.sort_by_key(|a| a.0);
+        self.groups.into_iter().map(|(_, g)| g).collect()
+    }
 }
 
 /// The runs test of the residual signs along the scans.
@@ -439,6 +510,7 @@ fn region_tests(fr: &FitResiduals, w: &Weighted, out: &mut Adequacy) -> Vec<Outc
         .map(|i| geo.theta_i[i].max(geo.theta_r[i]) > GRAZING_DEG.to_radians())
         .collect();
     let far: Vec<bool> = (0..n)
+        .into_par_iter()
         .map(|i| mirror_distance(geo, i) > FAR_DEG.to_radians())
         .collect();
     let peak = lobe_core(fr);
@@ -490,14 +562,21 @@ fn lobe_core(fr: &FitResiduals) -> Vec<bool> {
             (geo.theta_i[i].to_degrees() * 100.0).round() as i64,
         )
     };
-    let mut peak: BTreeMap<(usize, i64), f64> = BTreeMap::new();
-    for i in 0..geo.len() {
-        let m = peak.entry(key(i)).or_insert(f64::NEG_INFINITY);
-        *m = m.max(fr.fitted[i]);
-    }
+    let mut keyed: Keyed<(usize, i64), ()> = Keyed::default();
+    let mut top: Vec<f64> = Vec::new();
+    let group: Vec<usize> = (0..geo.len())
+        .map(|i| {
+            let g = keyed.group(key(i));
+            if g == top.len() {
+                top.push(f64::NEG_INFINITY);
+            }
+            top[g] = top[g].max(fr.fitted[i]);
+            g
+        })
+        .collect();
     (0..geo.len())
         .map(|i| {
-            let top = peak[&key(i)];
+            let top = top[group[i]];
             top > 0.0 && fr.fitted[i] >= 0.5 * top
         })
         .collect()
