@@ -124,22 +124,44 @@ impl Dataset {
     }
 
     /// `other`'s samples (read with the same columns, its lines numbered from 1 where
-    /// line `first_line` of this dataset's file is) appended after this dataset's.
-    pub(crate) fn append_from_line(&mut self, other: Dataset, first_line: usize) {
-        fn extend<T>(a: &mut Option<Vec<T>>, b: Option<Vec<T>>) {
-            if let (Some(a), Some(b)) = (a.as_mut(), b) {
-                a.extend(b);
+    /// line `first_line` of this dataset's file is) moved after this dataset's; `other` is
+    /// left empty with its allocations.
+    pub(crate) fn append_from_line(&mut self, other: &mut Dataset, first_line: usize) {
+        fn extend<T>(a: &mut Option<Vec<T>>, b: &mut Option<Vec<T>>) {
+            if let (Some(a), Some(b)) = (a.as_mut(), b.as_mut()) {
+                a.append(b);
             }
         }
-        self.rows.extend(other.rows);
+        self.rows.append(&mut other.rows);
         let shift = first_line - 1;
-        self.lines.extend(other.lines.iter().map(|l| l + shift));
-        self.samples.extend(other.samples);
-        extend(&mut self.value, other.value);
-        extend(&mut self.weight, other.weight);
-        extend(&mut self.sigma_l, other.sigma_l);
-        extend(&mut self.wavelength, other.wavelength);
-        extend(&mut self.channel, other.channel);
+        self.lines.extend(other.lines.drain(..).map(|l| l + shift));
+        self.samples.append(&mut other.samples);
+        extend(&mut self.value, &mut other.value);
+        extend(&mut self.weight, &mut other.weight);
+        extend(&mut self.sigma_l, &mut other.sigma_l);
+        extend(&mut self.wavelength, &mut other.wavelength);
+        extend(&mut self.channel, &mut other.channel);
+    }
+
+    /// No samples, every per-sample vector's allocation kept.
+    pub(crate) fn clear(&mut self) {
+        self.rows.clear();
+        self.lines.clear();
+        self.samples.clear();
+        for v in [
+            &mut self.value,
+            &mut self.weight,
+            &mut self.sigma_l,
+            &mut self.wavelength,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            v.clear();
+        }
+        if let Some(c) = self.channel.as_mut() {
+            c.clear();
+        }
     }
 
     /// Release the per-sample vectors' spare capacity (after reading).

@@ -103,7 +103,9 @@ impl Reading<'_> {
 
     /// [`Self::records`] of `lines` read in pieces of `bytes`, each piece's records parsed into a
     /// dataset of its own on the pool's threads (while the next pieces are read) and
-    /// appended to `ds` in order.
+    /// appended to `ds` in order. The pieces' texts and datasets are two sets of buffers
+    /// used in turn (one parsed while the other is read or appended), so reading holds a
+    /// fixed amount of memory beside `ds` and allocates it once.
     fn in_pieces<R: BufRead>(
         &self,
         mut lines: Lines<R>,
@@ -113,46 +115,66 @@ impl Reading<'_> {
         let batch = 2 * rayon::current_num_threads();
         let mut first: Option<String> = None;
         let mut line = lines.line;
-        let mut parsed = Vec::new();
-        let mut pieces = lines.pieces(batch, bytes).ok()?;
-        while !pieces.is_empty() || !parsed.is_empty() {
+        let (mut texts, mut spare_texts) = (Vec::new(), Vec::new());
+        let (mut parts, mut parsed_parts) = (Vec::new(), Vec::new());
+        let mut parsed: Vec<Option<Piece>> = Vec::new();
+        lines.pieces(&mut texts, batch, bytes).ok()?;
+        while !texts.is_empty() || !parsed.is_empty() {
             let mut now = Vec::new();
-            let (next, appended) = rayon::in_place_scope(|scope| {
-                scope.spawn(|_| now = self.parse_pieces(&pieces));
+            let (read, appended) = rayon::in_place_scope(|scope| {
+                scope.spawn(|_| now = self.parse_pieces(&texts, &mut parts));
                 let mut appended = Some(());
-                for part in std::mem::take(&mut parsed) {
-                    let Some((part, part_first, count)) = part else {
+                for (piece, part) in parsed.drain(..).zip(parsed_parts.iter_mut()) {
+                    let Some(piece) = piece else {
                         appended = None;
                         break;
                     };
-                    first = first.take().or(part_first);
+                    first = first.take().or(piece.first);
                     ds.append_from_line(part, line);
-                    line += count;
+                    line += piece.lines;
                 }
-                (lines.pieces(batch, bytes), appended)
+                (lines.pieces(&mut spare_texts, batch, bytes), appended)
             });
             appended?;
-            (parsed, pieces) = (now, next.ok()?);
+            read.ok()?;
+            parsed = now;
+            std::mem::swap(&mut texts, &mut spare_texts);
+            std::mem::swap(&mut parts, &mut parsed_parts);
         }
         Some(first)
     }
 
-    /// Each piece's dataset (its lines numbered from 1), first record's text and line
-    /// count; None for a piece that is not plain or holds an error.
-    #[allow(clippy::type_complexity)]
-    fn parse_pieces(&self, pieces: &[Vec<u8>]) -> Vec<Option<(Dataset, Option<String>, usize)>> {
+    /// Each piece's records parsed into the dataset of `parts` at its index (emptied first;
+    /// added while there are fewer), its lines numbered from 1: the first record's text and
+    /// the piece's line count, or None for a piece that is not plain or holds an error.
+    fn parse_pieces(&self, texts: &[Vec<u8>], parts: &mut Vec<Dataset>) -> Vec<Option<Piece>> {
         use rayon::prelude::*;
-        pieces
+        while parts.len() < texts.len() {
+            let rows = texts[parts.len()].len() / 32;
+            parts.push(self.table.empty_dataset(self.path, self.keep_rows, rows));
+        }
+        texts
             .par_iter()
-            .map(|text| {
-                let rows = text.len() / 32;
-                let mut part = self.table.empty_dataset(self.path, self.keep_rows, rows);
+            .zip(parts.par_iter_mut())
+            .map(|(text, part)| {
+                part.clear();
                 let mut lines = Lines::at(&text[..], 1);
-                let first = self.records(&mut lines, &mut part)?;
-                Some((part, first, lines.line - 1))
+                let first = self.records(&mut lines, part)?;
+                Some(Piece {
+                    first,
+                    lines: lines.line - 1,
+                })
             })
             .collect()
     }
+}
+
+/// What parsing one piece of a table found beside its records.
+struct Piece {
+    /// The text of its first record, if any.
+    first: Option<String>,
+    /// Its number of lines.
+    lines: usize,
 }
 
 /// `v` emptied, its allocation kept for slices of another lifetime.
@@ -226,33 +248,39 @@ impl<R: BufRead> Lines<R> {
         }
     }
 
-    /// The next `count` pieces of the text (fewer at its end, none after it), each `bytes`
-    /// and the rest of the line it ends in. Err when the input fails or a line runs past
-    /// [`MAX_LINE_BYTES`].
-    fn pieces(&mut self, count: usize, bytes: usize) -> Result<Vec<Vec<u8>>, NotPlain> {
-        let mut pieces = Vec::with_capacity(count);
-        while pieces.len() < count {
-            let mut text = Vec::with_capacity(bytes + 256);
+    /// The next `count` pieces of the text into `texts` (fewer at its end, none after it),
+    /// each `bytes` and the rest of the line it ends in, reusing the buffers `texts` holds.
+    /// Err when the input fails or a line runs past [`MAX_LINE_BYTES`].
+    fn pieces(
+        &mut self,
+        texts: &mut Vec<Vec<u8>>,
+        count: usize,
+        bytes: usize,
+    ) -> Result<(), NotPlain> {
+        texts.resize_with(count, || Vec::with_capacity(bytes + 256));
+        for k in 0..count {
+            let text = &mut texts[k];
+            text.clear();
             (&mut self.input)
                 .take(bytes as u64)
-                .read_to_end(&mut text)
+                .read_to_end(text)
                 .map_err(|_| NotPlain)?;
             if text.is_empty() {
+                texts.truncate(k);
                 break;
             }
             if text.last() != Some(&b'\n') {
                 let cut = text.len();
                 (&mut self.input)
                     .take(MAX_LINE_BYTES as u64)
-                    .read_until(b'\n', &mut text)
+                    .read_until(b'\n', text)
                     .map_err(|_| NotPlain)?;
                 if text.len() - cut == MAX_LINE_BYTES && text.last() != Some(&b'\n') {
                     return Err(NotPlain);
                 }
             }
-            pieces.push(text);
         }
-        Ok(pieces)
+        Ok(())
     }
 
     /// The next record (its line number and fields), None at the end of the input.
