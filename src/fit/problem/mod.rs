@@ -688,9 +688,11 @@ impl FitProblem<'_> {
     }
 
     /// Weighted residuals at solver variables `x` (the Jacobian is kept for the solver's
-    /// next request at `x`), cut short once `stop` is requested: then some rows are NaN and
-    /// the solver rejects the point.
+    /// next request at `x`, the one kept before dropped first: a big fit holds one
+    /// `n × p` matrix, not two), cut short once `stop` is requested: then some rows are
+    /// NaN and the solver rejects the point.
     pub fn residuals_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DVector<f64> {
+        self.forget_cached();
         let e = self.evaluate(x, stop);
         if let Ok(mut c) = self.cache.lock() {
             *c = Some(Cached {

@@ -246,7 +246,12 @@ impl Restricted<'_, '_> {
 }
 
 impl LeastSquaresProblem for Restricted<'_, '_> {
+    /// The residuals at `z`, their Jacobian kept for the solver's next request (the one
+    /// kept before dropped first: one `m × n` matrix held, not two).
     fn residuals(&self, z: &DVector<f64>) -> DVector<f64> {
+        if let Ok(mut c) = self.cache.lock() {
+            *c = None;
+        }
         let (r, j) = self.eval(z);
         if let Ok(mut c) = self.cache.lock() {
             *c = Some((z.clone(), j));
