@@ -129,10 +129,11 @@ fn canonicalise(problem: &FitProblem, lm: &mut lm::LmReport) {
 }
 
 /// Median g up to which the first solve follows the rough ridge: the fit's own limit
-/// ([`super::problem::G_FIT_MAX`]). A tighter cap (1e3 was tried: Cornell acryl_blue 440 nm
-/// follows the ridge to σ ~ 70 λ in 95 iterations and 6 s, the series costing O(√g) per
-/// sample) stops noiseless synthetic rough data short of its σ, where the O(1/g) correction
-/// still determines it, and the rejected steps end the solve without convergence.
+/// ([`super::problem::G_FIT_MAX`]). The ridge can be long (Cornell acryl_blue 440 nm
+/// follows it to σ ~ 70 λ in 95 iterations and 6 s, the series costing O(√g) per sample),
+/// but a tighter cap such as g = 1e3 stops noiseless synthetic rough data short of its σ,
+/// where the O(1/g) correction still determines it, and the rejected steps end the solve
+/// without convergence.
 pub const RIDGE_G: f64 = super::problem::G_FIT_MAX;
 
 /// Median g below which the first solve does not follow the smooth ridge (σ → 0 at fixed
