@@ -148,17 +148,7 @@ impl Dataset {
         self.rows.clear();
         self.lines.clear();
         self.samples.clear();
-        for v in [
-            &mut self.value,
-            &mut self.weight,
-            &mut self.sigma_l,
-            &mut self.wavelength,
-        ]
-        .into_iter()
-        .flatten()
-        {
-            v.clear();
-        }
+        self.numbers().for_each(Vec::clear);
         if let Some(c) = self.channel.as_mut() {
             c.clear();
         }
@@ -169,7 +159,15 @@ impl Dataset {
         self.rows.shrink_to_fit();
         self.lines.shrink_to_fit();
         self.samples.shrink_to_fit();
-        for v in [
+        self.numbers().for_each(Vec::shrink_to_fit);
+        if let Some(c) = self.channel.as_mut() {
+            c.shrink_to_fit();
+        }
+    }
+
+    /// The per-sample number columns the file has (value, weight, σ_L, wavelength).
+    fn numbers(&mut self) -> impl Iterator<Item = &mut Vec<f64>> {
+        [
             &mut self.value,
             &mut self.weight,
             &mut self.sigma_l,
@@ -177,12 +175,6 @@ impl Dataset {
         ]
         .into_iter()
         .flatten()
-        {
-            v.shrink_to_fit();
-        }
-        if let Some(c) = self.channel.as_mut() {
-            c.shrink_to_fit();
-        }
     }
 
     /// Indices of the samples with channel label `name`.
