@@ -59,10 +59,8 @@ pub(super) fn assemble(
     let dof = (n - n_free).max(1) as f64;
     let (gof, sample_modes, fitted_computed) =
         fitted_at_point(&problem, input, &run.lm, p, config, &mut notes);
-    let mut params = param_results(layout, specs, p, &unc, verdict, &mut notes);
-    fresnel_reach(&mut params, &input.geo, &mut notes);
+    let params = param_results(layout, specs, p, (&unc, verdict), &input.geo, &mut notes);
     let derived = derived_quantities(layout, specs, p, &unc, verdict);
-    let modes = mode_counts(&sample_modes);
     notes.extend(termination_note(run.lm.termination));
     let result = FitResult {
         model: model.name().to_string(),
@@ -101,7 +99,7 @@ pub(super) fn assemble(
         init_seconds: start.init_seconds,
         start_seconds: start.start_seconds,
         stage_seconds: StageSeconds::default(),
-        modes,
+        modes: mode_counts(&sample_modes),
         g_range: g_range(layout, input, p),
         fitted_computed,
         fitted: gof.fitted,
@@ -366,13 +364,15 @@ fn fresnel_reach(
 /// Every layout parameter with its standard error (delta method through the transform)
 /// and whether the data determines it: free, not reduced away by the verdict, outside the
 /// Jacobian's null space, a log standard error at most [`DETERMINED_MAX_LOG_SE`], not at a
-/// lower bound. A note is added for each parameter at its lower bound.
+/// lower bound, and for the Fresnel index one sample at least reaching the local incidence
+/// angle where it matters ([`fresnel_reach`]). A note is added for each parameter at its
+/// lower bound or out of reach.
 fn param_results(
     layout: &ParamLayout,
     specs: &[ParamSpec],
     p: &[f64],
-    unc: &covariance::Uncertainty,
-    verdict: Verdict,
+    (unc, verdict): (&covariance::Uncertainty, Verdict),
+    geo: &crate::geometry::Geometry,
     notes: &mut Vec<String>,
 ) -> Vec<ParamResult> {
     let free = layout.free();
@@ -416,6 +416,7 @@ fn param_results(
             unit: spec.unit.to_string(),
         });
     }
+    fresnel_reach(&mut params, geo, notes);
     params
 }
 

@@ -400,6 +400,36 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
         "    evaluations     = {} (+{} Jacobians)",
         r.evaluations, r.jacobian_evaluations
     );
+    run_time_lines(&mut s, r, info);
+    if r.loss.is_linear() {
+        let _ = writeln!(s, "    cost ½Σwr²      = {:.7e}", r.cost);
+    } else {
+        let _ = writeln!(
+            s,
+            "    cost ½ΣC²ρ      = {:.7e} ({} loss)",
+            r.cost, r.loss.kind
+        );
+        if let Some(k) = r.beyond_f_scale {
+            let _ = writeln!(
+                s,
+                "    beyond f_scale  = {k} of {} samples ({:.1} %: |√w r| > C, down-weighted as outliers)",
+                r.n,
+                100.0 * k as f64 / r.n.max(1) as f64
+            );
+        }
+    }
+    goodness_lines(&mut s, r);
+    variable_lines(&mut s, r, &info.setting.units);
+    interval_lines(&mut s, r, info);
+    identifiability_lines(&mut s, r);
+    validity_lines(&mut s, r);
+    correlation_lines(&mut s, r);
+    s
+}
+
+/// The fit's run time: from the start search (or the warm start) to the result, then the
+/// profile intervals'.
+fn run_time_lines(s: &mut String, r: &FitResult, info: &RunInfo) {
     if r.started_near {
         let _ = writeln!(
             s,
@@ -422,26 +452,11 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
             info.interval_seconds
         );
     }
-    if r.loss.is_linear() {
-        let _ = writeln!(s, "    cost ½Σwr²      = {:.7e}", r.cost);
-    } else {
-        let _ = writeln!(
-            s,
-            "    cost ½ΣC²ρ      = {:.7e} ({} loss)",
-            r.cost, r.loss.kind
-        );
-        if let Some(k) = r.beyond_f_scale {
-            let _ = writeln!(
-                s,
-                "    beyond f_scale  = {k} of {} samples ({:.1} %: |√w r| > C, down-weighted as outliers)",
-                r.n,
-                100.0 * k as f64 / r.n.max(1) as f64
-            );
-        }
-    }
-    goodness_lines(&mut s, r);
-    variable_lines(&mut s, r, &info.setting.units);
-    interval_lines(&mut s, r, info);
+}
+
+/// The `[[Identifiability]]` block: the verdict, the Jacobian's singular values and
+/// condition, and the fit's notes.
+fn identifiability_lines(s: &mut String, r: &FitResult) {
     let _ = writeln!(s, "[[Identifiability]]");
     let _ = writeln!(s, "    verdict         = {}", r.verdict.describe());
     let sv: Vec<String> = r.singular_values.iter().map(|v| sci(*v)).collect();
@@ -460,13 +475,8 @@ pub fn render(r: &FitResult, info: &RunInfo) -> String {
     for note in &r.notes {
         let _ = writeln!(s, "    note: {note}");
     }
-    validity_lines(&mut s, r);
-    correlation_lines(&mut s, r);
-    s
 }
 
-/// The `[[Validity]]` lines of a KBS fit: each of the paper's assumptions at the fitted
-/// surface, satisfied, violated or not determined (warnings, not failures).
 /// The adequacy verdict beside `converged`, its reasons below it, wrapped.
 fn adequacy_lines(s: &mut String, r: &FitResult) {
     let a = &r.adequacy;
@@ -486,6 +496,8 @@ fn adequacy_lines(s: &mut String, r: &FitResult) {
     }
 }
 
+/// The `[[Validity]]` lines of a KBS fit: each of the paper's assumptions at the fitted
+/// surface, satisfied, violated or not determined (warnings, not failures).
 fn validity_lines(s: &mut String, r: &FitResult) {
     let Some(v) = &r.validity else {
         return;
