@@ -19,7 +19,7 @@ pub enum Command {
     Eval(commands::eval::EvalArgs),
     /// Fit a model to a measurement file (CSV, ASTM E1392, RGL `.bsdf`, MERL `.binary`, ALTA
     /// data) and report parameters with uncertainties, what the data determines, and residual statistics.
-    Fit(Box<commands::fit::FitArgs>),
+    Fit(Box<commands::fit_args::FitArgs>),
     /// Write the samples `fit` would fit, from any format goniofit reads (CSV, ASTM E1392,
     /// RGL `.bsdf`, MERL `.binary`, ALTA data), as a CSV table: theta_i, theta_r, phi_r (degrees), L, the channel.
     Convert(commands::convert::ConvertArgs),

@@ -2,7 +2,7 @@
 //! ([`goniofit::design`]), from a fit's report or a model with parameter values.
 
 use super::args::{parse_wavelength, QuantityArg, Wavelength};
-use super::fit::ResidualArg;
+use super::fit_args::ResidualArg;
 use super::plot::{read_saved_fit, SavedFit};
 use anyhow::Context;
 use clap::Args;

@@ -2,7 +2,7 @@
 //! `--plot` pictures, for one fit (one page, one folder of pictures) and for a batch (one
 //! page with every fit, one folder per fit).
 
-use super::fit::{fit_config, wavelength_unit, FitArgs};
+use super::fit_args::{fit_config, wavelength_unit, FitArgs};
 use goniofit::fit::dataset::Outcome;
 use goniofit::fit::driver::{FitConfig, FitResult};
 use goniofit::io::{self, Dataset};

@@ -9,6 +9,7 @@ pub mod design;
 pub mod eval;
 pub mod figures;
 pub mod fit;
+pub mod fit_args;
 pub mod fit_outputs;
 pub mod heartbeat;
 pub mod plot;

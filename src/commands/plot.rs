@@ -2,7 +2,8 @@
 //! --json > fit.json`), without fitting again: the report carries the fit's arguments and
 //! the fitted values.
 
-use super::fit::{fit_config, input_of};
+use super::fit::input_of;
+use super::fit_args::fit_config;
 use crate::cli::{Cli, Command};
 use anyhow::Context;
 use clap::{Args, Parser};
@@ -115,7 +116,7 @@ pub fn read_saved_fit(report: &Path) -> anyhow::Result<SavedFit> {
     if layout.len() != values.len() {
         return Err(bad("parameter count does not match the model").into());
     }
-    let unit = super::fit::wavelength_unit(&fa, &ds);
+    let unit = super::fit_args::wavelength_unit(&fa, &ds);
     Ok(SavedFit {
         json,
         model,

@@ -1,0 +1,288 @@
+//! The `fit` command's options (`goniofit fit --help`) and what they set: the library's
+//! fit configuration and the unit of the fitted lengths.
+
+use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
+use clap::{Args, ValueEnum};
+use goniofit::fit::driver::FitConfig;
+use goniofit::fit::problem::loss::Loss;
+use goniofit::fit::problem::ResidualKind;
+use goniofit::geometry::Quantity;
+use goniofit::io::{self, Dataset, FileSet, ReadOptions};
+use goniofit::lm::LmConfig;
+use goniofit::model::parse_assignments;
+use goniofit::settings::{self, Front};
+use std::path::PathBuf;
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ResidualArg {
+    Absolute,
+    Relative,
+    Log,
+}
+
+impl From<ResidualArg> for ResidualKind {
+    fn from(r: ResidualArg) -> Self {
+        match r {
+            ResidualArg::Absolute => ResidualKind::Absolute,
+            ResidualArg::Relative => ResidualKind::Relative,
+            ResidualArg::Log => ResidualKind::Log,
+        }
+    }
+}
+
+/// Options are named as the command line spells them.
+pub(super) const CLI: Front = Front::Cli;
+
+/// Examples shown by `goniofit fit --help`.
+const FIT_EXAMPLES: &str = "\
+Examples:
+  goniofit fit --model kbs+lambert --channel 550nm --residual log data/cornell/garnet_red.astm
+      one channel of a Cornell paint BRDF (λ = 550 nm from the channel name; σ, T in nm)
+  goniofit fit --model kbs+lambert --channel all --residual log data/cornell/garnet_red.astm
+      every channel jointly: shared σ, T, one scale per channel
+  goniofit fit --model kbs+lambert --by-group --summary fits.csv data/cornell/garnet_red.astm
+      every channel on its own, with a one-line-per-fit table
+  goniofit fit --model lambert --channel 0.633 data/nist-ptfe/PTFE.data.csv
+      the 633 nm rows of a CSV with a wavelength column (its unit, µm here)
+  goniofit fit --model kbs --wavelength 633nm --json data/synthetic/kbs_hemisphere.csv > fit.json
+      a CSV without a wavelength column; the report as JSON (goniofit plot fit.json redraws it)
+  goniofit fit --model auto --wavelength 1 data/synthetic/kbs_hemisphere.csv
+      compare lambert, lambert-specular, kbs and kbs+lambert by BIC";
+
+#[derive(Debug, Args)]
+#[command(after_help = FIT_EXAMPLES)]
+pub struct FitArgs {
+    /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
+    /// (fits lambert, lambert-specular, kbs, kbs+lambert and kbs+lambert with --fresnel
+    /// dielectric --shadowing smith, and keeps the lowest BIC).
+    #[arg(long, default_value = "kbs")]
+    pub model: String,
+    /// Whether the measured value is a radiance L (eq. 28) or a BRDF (L / cos θi). Default:
+    /// what the file states (ASTM `MEAS_NAME BRDF`, NIST PTFE `f_r11`), else radiance. A
+    /// reflectance factor is a BRDF × π.
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Wavelength, with its unit (633nm, 0.633um) or as a bare number (then σ and T are in
+    /// that number's unknown unit); σ and T are reported in this unit. Required for KBS
+    /// models unless a `wavelength` column or an ASTM channel name gives it.
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_wavelength)]
+    pub wavelength: Option<super::args::Wavelength>,
+    /// One channel: an ASTM channel (e.g. 550nm); for CSV a `group` label, or a wavelength
+    /// (0.532 in the file's unit, or 532nm) selecting the rows of that wavelength. `all`: a
+    /// joint fit over every channel (CSV without a group column: every wavelength) with
+    /// shared σ, T and per-channel scales.
+    #[arg(long)]
+    pub channel: Option<String>,
+    /// MERL tables: fit every K-th θd and φd cell (K² fewer samples; default all).
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=90))]
+    pub subsample: usize,
+    /// CSV angles are in radians (default degrees).
+    #[arg(long)]
+    pub radians: bool,
+    /// In-plane CSV with signed θr: θr < 0 means the back side (φr = 180°).
+    #[arg(long)]
+    pub signed_theta_r: bool,
+    /// Map column roles to other header names: theta_i=ti,L=brdf,...
+    #[arg(long)]
+    pub columns: Option<String>,
+    /// Residual: absolute f − y, relative (f − y)/|y|, or log ln f − ln y (values below
+    /// the floor are raised to it).
+    #[arg(long, value_enum, default_value = "absolute")]
+    pub residual: ResidualArg,
+    /// Robust loss on the weighted residuals f = √w r (scipy's `least_squares` losses):
+    /// the fit minimises ½ Σ C² ρ(f²/C²), C = --f-scale. Use it when a few samples are
+    /// gross outliers (a saturated pixel, a stray reflection); see docs/conventions.md.
+    #[arg(long, value_enum, default_value = "linear")]
+    pub loss: LossArg,
+    /// The loss scale C: residuals |f| well below C count as in least squares, beyond it
+    /// as outliers (with --residual relative and no weights, 0.03 = 3 %). Finite, > 0.
+    #[arg(long, default_value_t = 1.0)]
+    pub f_scale: f64,
+    /// Floor for relative/log residuals (default 1e-6 × max |L|).
+    #[arg(long)]
+    pub floor: Option<f64>,
+    /// Starting values, name=value,... (overrides the automatic ones).
+    #[arg(long)]
+    pub init: Option<String>,
+    /// Parameters held fixed, name=value,...
+    #[arg(long)]
+    pub fix: Option<String>,
+    /// KBS evaluation: auto picks per sample the cheapest evaluation meeting --tol.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub mode: ModeArg,
+    /// Relative accuracy target of the KBS evaluation.
+    #[arg(long, default_value = "1e-10")]
+    pub tol: f64,
+    /// Patch half-sizes X,Y (unit of λ): include the coherent term.
+    #[arg(long)]
+    pub patch: Option<String>,
+    /// Fresnel and shadowing factors on the KBS lobe.
+    #[command(flatten)]
+    pub factors: super::args::FactorArgs,
+    /// Do not reduce the fit when the data determines only parameter combinations.
+    #[arg(long)]
+    pub no_reduce: bool,
+    /// Maximum solver iterations.
+    #[arg(long, default_value_t = 500)]
+    pub max_iter: u64,
+    /// Stop the whole command after this many seconds of wall time (counted from its start:
+    /// reading, fitting, writing); exit 3 with what exists (see docs/guide.md, "Stopping a fit").
+    #[arg(long)]
+    pub timeout: Option<f64>,
+    /// Show progress on standard error (reading, datasets done of total with the time
+    /// left, solver iterations). This is the default on a terminal; when standard error is
+    /// not a terminal, a run longer than 2 s prints one line every 5 s instead.
+    #[arg(long)]
+    pub progress: bool,
+    /// No progress display and no summary line on standard error.
+    #[arg(long, conflicts_with = "progress")]
+    pub quiet: bool,
+    /// Standard errors and intervals from `sigma_L` as stated (a true standard
+    /// uncertainty), not rescaled by the residual scatter (scipy's `absolute_sigma=True`).
+    #[arg(long)]
+    pub absolute_sigma: bool,
+    /// Skip the profile-likelihood intervals (they refit the data a few dozen times per
+    /// quantity).
+    #[arg(long)]
+    pub no_intervals: bool,
+    /// Also write the report as one self-contained HTML page (tables, the pictures inline,
+    /// the command that reproduces it). Several fits (`--by-group`, several files): one
+    /// page with the sortable summary table, an overview, and a section per fit.
+    #[arg(long)]
+    pub html: Option<PathBuf>,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the input rows with L_fit, residual, std_residual, mode.
+    #[arg(long)]
+    pub residuals: Option<PathBuf>,
+    /// Write the fit's pictures (PNG and SVG) into this folder; several fits: one folder
+    /// per fit inside it (numbered in the summary's order).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Also write the one-line-per-fit summary (group, n, converged, cost, R², σ, T, T/σ,
+    /// verdict) to this CSV file; `-` writes it to standard output in place of the text
+    /// reports (a big batch's natural output).
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+    /// Fit each group on its own: each ASTM channel, each label of a `group` column, or
+    /// (CSV without one) each wavelength.
+    #[arg(long)]
+    pub by_group: bool,
+    /// With several datasets (groups, files): start each fit at the optimum of the one
+    /// before it in the input's order (a neighbouring texel of a spatially varying
+    /// measurement), keeping it when it converges, leaves at most 4 times the fraction of
+    /// the data its neighbour left unexplained and shows no runs of one sign the
+    /// neighbour's did not; searching for the start as usual otherwise (always for a lobe
+    /// with Fresnel or shadowing factors). Much faster on many similar small fits.
+    #[arg(long)]
+    pub warm_start: bool,
+    /// Threads (default: all cores): datasets are fitted in parallel, and one dataset's
+    /// evaluations are split over the threads.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// The measurement files (CSV or ASTM E1392); several files are fitted in parallel.
+    #[arg(required = true, num_args = 1..)]
+    pub file: Vec<PathBuf>,
+}
+
+impl FitArgs {
+    /// The measurement files; the report on standard output, `--residuals`, `--html`,
+    /// `--summary` and the pictures in the `--plot` folder.
+    pub fn files(&self) -> FileSet {
+        let mut set = FileSet::new();
+        for f in &self.file {
+            set = set.input("input", f);
+        }
+        set = set
+            .stdout()
+            .output_opt("--residuals", self.residuals.as_deref())
+            .output_opt("--html", self.html.as_deref())
+            .output_opt("--summary", self.summary.as_deref());
+        match &self.plot {
+            Some(dir) => set.pictures("--plot", dir, &goniofit::plot::fit::PICTURES),
+            None => set,
+        }
+    }
+
+    /// Whether progress is drawn: on a terminal unless `--quiet` (indicatif draws nothing
+    /// when standard error is not a terminal, so `--progress` cannot force it there).
+    pub fn show_progress(&self) -> bool {
+        !self.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr())
+    }
+
+    /// How the input files are read (`--radians`, `--signed-theta-r`, `--columns`,
+    /// `--channel`); values are required.
+    pub fn read_options(&self) -> anyhow::Result<ReadOptions> {
+        // --by-group needs every channel (ASTM) or every wavelength (CSV) read.
+        let channel = match (&self.channel, self.by_group) {
+            (None, true) => Some("all".to_string()),
+            (c, _) => c.clone(),
+        };
+        Ok(ReadOptions {
+            radians: self.radians,
+            signed_theta_r: self.signed_theta_r,
+            columns: io::csv::parse_columns(self.columns.as_deref().unwrap_or(""))?,
+            require_value: true,
+            channel,
+            subsample: self.subsample,
+        })
+    }
+
+    /// The measured quantity for a dataset and where it came from: `--quantity`, what the
+    /// file states, or radiance by default.
+    pub fn quantity_for(&self, ds: &Dataset) -> (Quantity, &'static str) {
+        match (self.quantity, ds.quantity) {
+            (Some(q), _) => (q.into(), "--quantity"),
+            (None, Some(q)) => (q, "stated by the file"),
+            (None, None) => (Quantity::Radiance, "default"),
+        }
+    }
+
+    /// The wavelength given on the command line, as a number.
+    pub fn wavelength_value(&self) -> Option<f64> {
+        self.wavelength.map(|w| w.0)
+    }
+}
+
+/// The fit configuration from the arguments, for a given model name; every numeric option
+/// checked ([`goniofit::settings`], as the Python package checks its keywords).
+pub fn fit_config(
+    args: &FitArgs,
+    model: &str,
+    weights_are_uncertainties: bool,
+) -> anyhow::Result<FitConfig> {
+    let lm = LmConfig {
+        max_iters: args.max_iter,
+        timeout: settings::timeout(CLI, args.timeout)?,
+        progress: args.show_progress(),
+        ..FitConfig::default().lm
+    };
+    let patch = args.patch.as_deref().map(parse_patch).transpose()?;
+    Ok(FitConfig {
+        model: model.to_string(),
+        model_opts: args.factors.apply(settings::model_options(
+            CLI,
+            args.mode.into(),
+            args.tol,
+            patch,
+        )?),
+        residual: args.residual.into(),
+        loss: Loss::new(args.loss.into(), settings::f_scale(CLI, args.f_scale)?)?,
+        floor: settings::floor(CLI, args.floor)?,
+        init: parse_assignments(args.init.as_deref().unwrap_or(""))?,
+        fix: parse_assignments(args.fix.as_deref().unwrap_or(""))?,
+        lm,
+        weights_are_uncertainties,
+        reduce: !args.no_reduce,
+    })
+}
+
+/// The unit of λ the fit's σ and T are in: `--wavelength`'s, else the file's.
+pub fn wavelength_unit(args: &FitArgs, ds: &Dataset) -> Option<String> {
+    match (args.wavelength, &ds.wavelength) {
+        (Some((_, u)), _) => u.map(String::from),
+        (None, Some(_)) => ds.wavelength_unit.clone(),
+        (None, None) => None,
+    }
+}
