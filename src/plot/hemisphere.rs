@@ -13,7 +13,7 @@
 //! more than a decade, as BRDFs and radiances do); the residuals have a diverging scale
 //! symmetric about 0 (blue: fitted below measured, red: above).
 
-use super::fit::{checked_groups, group_label, quantity_desc, FitPlotInput, Group};
+use super::fit::input::{checked_groups, group_label, quantity_desc, FitPlotInput, Group};
 use super::legend::{sequential_color, text_width, Entry, Glyph, Marker};
 use super::smooth::{draw_polyline, Canvas, Pen};
 use super::ticks::{linear_ticks, log_ticks, nice_step};
