@@ -1,4 +1,5 @@
-//! Library values → Python: errors as exceptions, JSON values as Python objects.
+//! Library values → Python: errors (and panics) as exceptions, JSON values as Python
+//! objects.
 
 use goniofit::Error;
 use pyo3::exceptions::{
@@ -6,6 +7,7 @@ use pyo3::exceptions::{
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// A library error as a Python exception, `context` (e.g. a group's label) before the
 /// message: `ValueError` for the user's input or usage (the message names file, line and
@@ -107,6 +109,24 @@ pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound
             d.into_any()
         }
     })
+}
+
+/// A panic's message as a `RuntimeError` (a panic is a bug: it must never cross into
+/// Python as a crash).
+pub fn panic_error(payload: Box<dyn std::any::Any + Send>) -> PyErr {
+    let msg = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into());
+    PyRuntimeError::new_err(format!(
+        "goniofit internal error (a bug, please report it): {msg}"
+    ))
+}
+
+/// `f()`, with a panic turned into a `RuntimeError`.
+pub fn guard<T>(f: impl FnOnce() -> T) -> PyResult<T> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(panic_error)
 }
 
 #[cfg(test)]

@@ -140,7 +140,8 @@ fn evaluate<'py>(
         ..arrays::Columns::default()
     };
     let ds = arrays::dataset("arrays", &cols, radians, false).map_err(to_py_err)?;
-    let geo = run::guard(|| Geometry::new(&ds.samples, &lambda, quantity))?.map_err(to_py_err)?;
+    let geo =
+        convert::guard(|| Geometry::new(&ds.samples, &lambda, quantity))?.map_err(to_py_err)?;
     let (values, jac) = run::evaluate_interruptible(py, m.as_ref(), &p, &geo, jacobian)?;
     let values = values.into_pyarray(py);
     match jac {
@@ -180,7 +181,7 @@ fn read<'py>(
     require_value: bool,
     subsample: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ds = run::guard(|| {
+    let ds = convert::guard(|| {
         let opts = ReadOptions {
             radians: csv_radians,
             signed_theta_r,

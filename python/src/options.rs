@@ -551,7 +551,7 @@ impl SampleArrays {
     /// The library's checked dataset of these samples (`arrays` in reports); a bad
     /// element is a `ValueError` naming its array and index.
     pub fn dataset(&self, o: &FitOptions) -> PyResult<goniofit::io::Dataset> {
-        crate::run::guard(|| self.checked(o))?.map_err(to_py_err)
+        crate::convert::guard(|| self.checked(o))?.map_err(to_py_err)
     }
 
     fn checked(&self, o: &FitOptions) -> goniofit::Result<goniofit::io::Dataset> {

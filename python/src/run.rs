@@ -2,7 +2,7 @@
 //! threads fit, and Ctrl-C (Python's own SIGINT handler) turned into the library's
 //! interrupt flag.
 
-use crate::convert::{to_py_err, to_py_err_in};
+use crate::convert::{guard, panic_error, to_py_err, to_py_err_in};
 use crate::options::FitOptions;
 use goniofit::fit::dataset::{batch, fit_dataset_near, Outcome};
 use goniofit::geometry::Geometry;
@@ -17,24 +17,6 @@ use std::time::Duration;
 
 /// How often the calling thread looks for a pending Ctrl-C while a fit runs.
 const SIGNAL_POLL: Duration = Duration::from_millis(50);
-
-/// A panic's message as a `RuntimeError` (a panic is a bug: it must never cross into
-/// Python as a crash).
-fn panic_error(payload: Box<dyn std::any::Any + Send>) -> PyErr {
-    let msg = payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "unknown panic".into());
-    PyRuntimeError::new_err(format!(
-        "goniofit internal error (a bug, please report it): {msg}"
-    ))
-}
-
-/// `f()`, with a panic turned into a `RuntimeError`.
-pub fn guard<T>(f: impl FnOnce() -> T) -> PyResult<T> {
-    catch_unwind(AssertUnwindSafe(f)).map_err(panic_error)
-}
 
 /// Run `work` on another thread with the GIL released (on a rayon pool of `threads`
 /// threads, all cores when None), while this thread runs Python's signal handlers every
