@@ -1,8 +1,11 @@
-//! Command-line definition (clap derive). Each subcommand's arguments live beside its
-//! implementation in `commands/`.
+//! Command-line definition (clap derive) and dispatch. Each subcommand's arguments live
+//! beside its implementation in `commands/`.
 
-use crate::commands;
+use crate::commands::{
+    self, bench, convert, design, eval, figures, fit, plot, recover, render, synth,
+};
 use clap::{Parser, Subcommand};
+use goniofit::io::FileSet;
 
 /// Fit physical light-scattering models (Kirchhoff–Beckmann–Spizzichino, Lambertian,
 /// specular) to gonioreflectometer measurements.
@@ -41,6 +44,43 @@ pub enum Command {
     Render(commands::render::RenderArgs),
     /// Regenerate the paper's Figures 4–7 (PNG and SVG) into a folder.
     Figures(commands::figures::FiguresArgs),
+}
+
+impl Command {
+    /// Every file the command reads and writes, with the option naming it.
+    fn files(&self) -> anyhow::Result<FileSet> {
+        Ok(match self {
+            Command::Eval(a) => a.files(),
+            Command::Fit(a) => a.files(),
+            Command::Plot(a) => a.files(),
+            Command::Synth(a) => a.files(),
+            Command::Recover(_) => FileSet::new().stdout(),
+            Command::Bench(a) => a.files(),
+            Command::Convert(a) => a.files(),
+            Command::Design(a) => a.files(),
+            Command::Render(a) => a.files(),
+            Command::Figures(a) => a.files(),
+        })
+    }
+}
+
+/// Run the parsed command line, once its files passed [`FileSet::check`] (no output is an
+/// input or another output, every output path can be written): nothing is read or written
+/// before.
+pub fn run(cli: Cli) -> anyhow::Result<u8> {
+    cli.command.files()?.check()?;
+    match cli.command {
+        Command::Eval(a) => eval::run(a),
+        Command::Fit(a) => fit::run(*a),
+        Command::Plot(a) => plot::run(a),
+        Command::Synth(a) => synth::run(*a),
+        Command::Recover(a) => recover::run(*a),
+        Command::Bench(a) => bench::run(*a),
+        Command::Convert(a) => convert::run(a),
+        Command::Design(a) => design::run(*a),
+        Command::Render(a) => render::run(a),
+        Command::Figures(a) => figures::run(a),
+    }
 }
 
 #[cfg(test)]

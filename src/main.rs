@@ -20,7 +20,7 @@ fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
-    match commands::run(cli) {
+    match cli::run(cli) {
         Ok(code) => ExitCode::from(code),
         Err(e) => {
             // A stop with nothing to report is no error: it says what was stopped (exit 3).

@@ -286,3 +286,23 @@ pub fn wavelength_unit(args: &FitArgs, ds: &Dataset) -> Option<String> {
         (None, None) => None,
     }
 }
+
+/// `goniofit fit`'s arguments from a command line without the program name (`fit …`, as
+/// a report's `replay.args` keeps it), parsed as `goniofit` parses them; Err with clap's
+/// message when they do not parse or are not a fit's.
+pub fn parse_fit_line(args: Vec<String>) -> Result<FitArgs, clap::Error> {
+    #[derive(clap::Parser)]
+    #[command(name = "goniofit")]
+    struct FitLine {
+        #[command(subcommand)]
+        command: FitOnly,
+    }
+    #[derive(clap::Subcommand)]
+    enum FitOnly {
+        Fit(Box<FitArgs>),
+    }
+    use clap::Parser;
+    let line = FitLine::try_parse_from(std::iter::once("goniofit".to_string()).chain(args))?;
+    let FitOnly::Fit(args) = line.command;
+    Ok(*args)
+}

@@ -4,9 +4,8 @@
 
 use super::fit::input_of;
 use super::fit_args::fit_config;
-use crate::cli::{Cli, Command};
 use anyhow::Context;
-use clap::{Args, Parser};
+use clap::Args;
 use goniofit::fit::driver::{FitConfig, FitInput};
 use goniofit::fit::problem::ParamLayout;
 use goniofit::io::{self, FileSet};
@@ -80,11 +79,8 @@ pub fn read_saved_fit(report: &Path) -> anyhow::Result<SavedFit> {
         serde_json::from_value(replay["model"].clone()).map_err(|_| bad("replay.model"))?;
     let values: Vec<f64> =
         serde_json::from_value(replay["values"].clone()).map_err(|_| bad("replay.values"))?;
-    let cli = Cli::try_parse_from(std::iter::once("goniofit".to_string()).chain(fit_args))
+    let fa = super::fit_args::parse_fit_line(fit_args)
         .map_err(|e| bad(&format!("its fit arguments do not parse: {e}")))?;
-    let Command::Fit(fa) = cli.command else {
-        return Err(bad("not a fit").into());
-    };
     let opts = fa.read_options()?;
     // The report's absolute input path (reports before it had one: the path as typed).
     let saved = &json["setting"]["input"];
