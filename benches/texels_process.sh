@@ -5,7 +5,7 @@
 # outside (reading, fitting, writing the outputs) and fits per second, with the recovery
 # of every texel's T/σ (within 5 % of the truth) read from the summary rows: the standard
 # output when ARGS hold `--summary -`, else a `--summary` file (the text reports then go
-# to /dev/null).
+# to /dev/null). Peak memory is the process's maximum resident set (`/usr/bin/time`).
 #
 # NEW_ARGS are this tree's binary's arguments (default `--warm-start --summary -`); with
 # BASE=path/to/goniofit a baseline binary runs too with BASE_ARGS (default none: text
@@ -28,20 +28,23 @@ truth = {r["group"]: float(r["T"]) / float(r["sigma"])
 def run(binary, extra):
     args = [binary, "fit", "--by-group", "--model", "kbs", "--wavelength", "1", "--quiet",
             "--threads", "2", *extra.split()]
-    with tempfile.NamedTemporaryFile("w+", suffix=".csv") as f:
+    with tempfile.NamedTemporaryFile("w+", suffix=".csv") as f, \
+            tempfile.NamedTemporaryFile("w+", suffix=".rss") as m:
         to_file = "--summary" not in extra.split()
         if to_file:
             args += ["--summary", f.name]
         t = time.perf_counter()
-        p = subprocess.run(args + [data], capture_output=not to_file, text=True,
+        p = subprocess.run(["/usr/bin/time", "-f", "%M", "-o", m.name] + args + [data],
+                           capture_output=not to_file, text=True,
                            stdout=subprocess.DEVNULL if to_file else None)
         wall = time.perf_counter() - t
         text = open(f.name).read() if to_file else p.stdout
+        rss = int(open(m.name).read().split()[-1]) / 1024
     rows = list(csv.DictReader(io.StringIO(text)))
     within = sum(abs(float(r["T_over_sigma"]) / truth[r["group"].rsplit("[", 1)[-1][:-1]] - 1) <= 0.05
                  for r in rows)
     conv = sum(r["converged"] == "true" for r in rows)
-    return wall, len(rows), within, conv
+    return wall, len(rows), within, conv, rss
 res = {name: [] for name, _, _ in bins}
 for _ in range(repeats):
     for name, binary, extra in bins:
@@ -49,11 +52,12 @@ for _ in range(repeats):
 print(f"{data}: whole process, --threads 2, {repeats} runs each (alternated)")
 for name, _, extra in bins:
     walls = [r[0] for r in res[name]]
-    n, within, conv = res[name][-1][1:]
+    n, within, conv = res[name][-1][1:4]
     m = statistics.median(walls)
+    rss = statistics.median(r[4] for r in res[name])
     print(f"  {name:4} {extra or '(default)':26} {m:.3f} s = {n / m:6.0f} fits/s (runs "
           + ", ".join(f"{w:.3f}" for w in walls)
-          + f"); T/sigma within 5 %: {within}/{n}, converged {conv}")
+          + f"); peak RSS {rss:.0f} MiB; T/sigma within 5 %: {within}/{n}, converged {conv}")
 if len(bins) == 2:
     b, w = (statistics.median(r[0] for r in res[k]) for k in ("base", "new"))
     per = ", ".join(f"{x[0] / y[0]:.2f}" for x, y in zip(res["base"], res["new"]))

@@ -272,6 +272,14 @@ fn summary_to_standard_output_replaces_the_text_reports() {
         .unwrap()
         .contains("[[goniofit"));
     assert_eq!(std::fs::read_to_string(&file).unwrap(), text);
+    // With --warm-start (each group started at the one before it) too: the rows alone
+    // are those written beside the reports.
+    let warm = fit(&["--summary", "-", "--warm-start"]);
+    let beside = fit(&["--summary", file.to_str().unwrap(), "--warm-start"]);
+    assert!(warm.status.success() && beside.status.success());
+    let warm = String::from_utf8(warm.stdout).unwrap();
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), warm);
+    assert_eq!(warm.lines().count(), 3, "{warm}");
     let both = fit(&["--summary", "-", "--json"]);
     assert_eq!(both.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&both.stderr).contains("--summary -"));

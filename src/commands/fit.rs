@@ -146,15 +146,18 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .num_threads(threads)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat))?;
+    let rows_only = (!single && rows_only(&args)).then_some(&files[..]);
+    let (fitted, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat), rows_only)?;
     let wall = t0.elapsed().as_secs_f64();
     heartbeat.stage("writing the reports and outputs");
+    let (outcomes, infos): (Vec<Outcome>, Vec<Option<RunInfo>>) = fitted.into_iter().unzip();
     // The reports' parts of a big batch are built on the fit's threads.
     use rayon::prelude::*;
     let infos: Vec<RunInfo> = pool.install(|| {
         outcomes
             .par_iter()
-            .map(|o| run_info(&args, o, &files))
+            .zip(infos)
+            .map(|(o, i)| i.unwrap_or_else(|| run_info(&args, o, &files)))
             .collect()
     });
     let threads = pool.current_num_threads();
@@ -260,11 +263,12 @@ fn fit_jobs(
     mut jobs: Vec<(String, Dataset)>,
     stop: &Stop,
     (pool, heartbeat): (&rayon::ThreadPool, &super::heartbeat::Heartbeat),
-) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
+    rows_only: Option<&[(PathBuf, report::setting::InputInfo)]>,
+) -> anyhow::Result<(Vec<Fitted>, Vec<String>)> {
     if jobs.len() == 1 {
         let job = jobs.pop().expect("one job");
         let one = pool.install(|| fit_one(args, job, true, stop, None))?;
-        return Ok((vec![one], Vec::new()));
+        return Ok((vec![(one, None)], Vec::new()));
     }
     let bar = if args.show_progress() {
         super::recover::progress_bar(jobs.len() as u64, "datasets fitted")
@@ -272,21 +276,42 @@ fn fit_jobs(
         indicatif::ProgressBar::hidden()
     };
     heartbeat.count(jobs.len() as u64);
-    let done: Vec<anyhow::Result<Outcome>> = pool.install(|| {
+    let done: Vec<anyhow::Result<Fitted>> = pool.install(|| {
         batch::in_chains(jobs, args.warm_start, |(label, ds), previous| {
             // After a stop request no further dataset is started.
             if stop.is_requested() {
                 return Err(not_fitted(&label, stop));
             }
-            let near = previous.and_then(|r: &anyhow::Result<Outcome>| r.as_ref().ok());
-            let outcome = fit_one(args, (label, ds), false, stop, near);
+            let near = previous.and_then(|r: &anyhow::Result<Fitted>| r.as_ref().ok());
+            let mut outcome = fit_one(args, (label, ds), false, stop, near.map(|f| &f.0))?;
             bar.inc(1);
             heartbeat.inc();
-            outcome
+            let info = rows_only.map(|files| {
+                let info = run_info(args, &outcome, files);
+                outcome.drop_samples();
+                info
+            });
+            Ok((outcome, info))
         })
     });
     bar.finish_and_clear();
     fitted_and_stopped(done)
+}
+
+/// A dataset's fit, and the report's run information when it was made beside the fit
+/// (for a batch whose output is the summary rows alone, the outcome then without its
+/// samples: [`Outcome::drop_samples`]).
+type Fitted = (Outcome, Option<RunInfo>);
+
+/// Whether the summary rows on standard output are all the command writes of a batch
+/// (`--summary -` without `--json`, `--html`, `--plot` or `--residuals`): no fit's samples
+/// need to be kept once its row can be made.
+fn rows_only(args: &FitArgs) -> bool {
+    summary_on_stdout(args)
+        && !args.json
+        && args.html.is_none()
+        && args.plot.is_none()
+        && args.residuals.is_none()
 }
 
 /// The error of a dataset `label` a stop request kept from being fitted.
@@ -300,9 +325,9 @@ fn not_fitted(label: &str, stop: &Stop) -> anyhow::Error {
 /// The fits of a batch, and the labels of the datasets a stop request kept from a result
 /// ([`Error::Stopped`]: not started, or stopped before the first evaluation on the whole
 /// data finished). Any other error ends the command.
-fn fitted_and_stopped(
-    outcomes: Vec<anyhow::Result<Outcome>>,
-) -> anyhow::Result<(Vec<Outcome>, Vec<String>)> {
+fn fitted_and_stopped<T>(
+    outcomes: Vec<anyhow::Result<T>>,
+) -> anyhow::Result<(Vec<T>, Vec<String>)> {
     let mut fitted = Vec::new();
     let mut skipped = Vec::new();
     for o in outcomes {
