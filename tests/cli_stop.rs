@@ -155,6 +155,22 @@ fn timeout_ends_a_by_group_batch_with_the_groups_it_has() {
     }
     // Sanity bound only (one channel takes ~0.05 s unloaded; 31 would be ~1.5 s).
     assert!(wall < 20.0, "took {wall:.2} s with --timeout 0.3");
+    // With the summary rows as the whole output: a row per group fitted, the others
+    // named on standard error, exit 3.
+    let mut rows_args = args.to_vec();
+    rows_args.retain(|a| *a != "--json");
+    rows_args.splice(rows_args.len() - 1..rows_args.len() - 1, ["--summary", "-"]);
+    let (out, _) = run_timed(goniofit().args(&rows_args));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    let rows = text.lines().count() - 1;
+    let not_fitted = err
+        .split_once(" of 31 datasets not fitted")
+        .and_then(|(head, _)| head.rsplit(' ').next()?.parse::<usize>().ok())
+        .expect("the count of groups not fitted");
+    assert!(not_fitted > 0, "{err}");
+    assert_eq!(rows + not_fitted, 31, "{text}\n{err}");
 }
 
 /// Check the outcome of a fit that a stop request (`why`: "interrupted", "time limit

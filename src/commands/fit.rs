@@ -146,18 +146,24 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .num_threads(threads)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let rows_only = (!single && rows_only(&args)).then_some(&files[..]);
-    let (fitted, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat), rows_only)?;
+    if !single && rows_only(&args) {
+        return rows_batch(
+            &args,
+            (jobs, &files),
+            &stop,
+            (&pool, &heartbeat),
+            (read, t0),
+        );
+    }
+    let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat), |o| o)?;
     let wall = t0.elapsed().as_secs_f64();
     heartbeat.stage("writing the reports and outputs");
-    let (outcomes, infos): (Vec<Outcome>, Vec<Option<RunInfo>>) = fitted.into_iter().unzip();
     // The reports' parts of a big batch are built on the fit's threads.
     use rayon::prelude::*;
     let infos: Vec<RunInfo> = pool.install(|| {
         outcomes
             .par_iter()
-            .zip(infos)
-            .map(|(o, i)| i.unwrap_or_else(|| run_info(&args, o, &files)))
+            .map(|o| run_info(&args, o, &files))
             .collect()
     });
     let threads = pool.current_num_threads();
@@ -168,17 +174,10 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         super::fit_outputs::write_batch_outputs(&args, &outcomes, &infos, &skipped)?;
     }
     if super::stages::wanted() {
-        let report = t0.elapsed().as_secs_f64() - wall;
-        super::stages::print(
-            &super::stages::Phases {
-                read,
-                fit: wall,
-                report,
-            },
-            &outcomes,
-        );
+        let times: Vec<_> = outcomes.iter().map(super::stages::Times::of).collect();
+        super::stages::print((read, wall, t0.elapsed().as_secs_f64() - wall), &times);
     }
-    let code = exit_code(&outcomes, &skipped, &stop);
+    let code = exit_code(outcomes.iter().all(usable), &skipped, &stop);
     // The process ends with this command: its memory goes back to the system at once,
     // while freeing a big batch's results vector by vector is serial work at the end.
     std::mem::forget((outcomes, infos));
@@ -189,16 +188,49 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
 /// skipped and no signal came; else 3. A signal that came after the fits (while the
 /// outputs were written) still says the run was interrupted: every output is complete, and
 /// the exit code is 3.
-fn exit_code(outcomes: &[Outcome], skipped: &[String], stop: &Stop) -> u8 {
+fn exit_code(all_usable: bool, skipped: &[String], stop: &Stop) -> u8 {
     let interrupted = stop.requested() == Some(goniofit::lm::Termination::Interrupted);
-    let all_usable = outcomes
-        .iter()
-        .all(|o| o.result.converged() && !o.intervals_stopped && o.result.fitted_computed);
     if all_usable && !interrupted && skipped.is_empty() {
         0
     } else {
         3
     }
+}
+
+/// An input file and what the reports say of it (absolute path, size, SHA-256).
+type InputFile = (PathBuf, report::setting::InputInfo);
+
+/// Whether a fit did all it was asked: converged, with its figures and intervals computed.
+fn usable(o: &Outcome) -> bool {
+    o.result.converged() && !o.intervals_stopped && o.result.fitted_computed
+}
+
+/// A batch whose output is the summary rows alone ([`rows_only`]): each fit kept as its
+/// row once no later fit starts from it, the rows written after the last fit, with the
+/// batch's messages, stage timing and exit code as for any batch.
+fn rows_batch(
+    args: &FitArgs,
+    (jobs, files): (Vec<(String, Dataset)>, &[InputFile]),
+    stop: &Stop,
+    (pool, heartbeat): (&rayon::ThreadPool, &super::heartbeat::Heartbeat),
+    (read, t0): (f64, std::time::Instant),
+) -> anyhow::Result<u8> {
+    let (kept, skipped) = fit_jobs(args, jobs, stop, (pool, heartbeat), |o| {
+        let units = run_info(args, &o, files).setting.units;
+        let row = report::summary::row(&o.label, &o.result, &units);
+        (row, usable(&o), super::stages::Times::of(&o))
+    })?;
+    let wall = t0.elapsed().as_secs_f64();
+    let (rows, rest): (Vec<report::summary::Row>, Vec<_>) =
+        kept.into_iter().map(|(row, u, t)| (row, (u, t))).unzip();
+    let csv = report::summary::csv_rows(&rows);
+    io::write_csv(Path::new("-"), &report::summary::csv_header(), &csv)?;
+    batch_messages(args, &rows, &skipped, wall, pool.current_num_threads());
+    if super::stages::wanted() {
+        let times: Vec<_> = rest.iter().map(|k| k.1).collect();
+        super::stages::print((read, wall, t0.elapsed().as_secs_f64() - wall), &times);
+    }
+    Ok(exit_code(rest.iter().all(|k| k.0), &skipped, stop))
 }
 
 /// Read every input file into the datasets to fit (one per file, or one per group with
@@ -208,10 +240,7 @@ fn read_jobs(
     args: &FitArgs,
     opts: &ReadOptions,
     stop: &Stop,
-) -> anyhow::Result<(
-    Vec<(String, Dataset)>,
-    Vec<(PathBuf, report::setting::InputInfo)>,
-)> {
+) -> anyhow::Result<(Vec<(String, Dataset)>, Vec<InputFile>)> {
     let mut jobs: Vec<(String, Dataset)> = Vec::new();
     let mut files = Vec::new();
     for file in &args.file {
@@ -258,17 +287,17 @@ fn read_jobs(
 /// Fit every job in `pool` (one job: on the calling thread's pool with the fit's own
 /// progress; several: in parallel, with a bar of datasets fitted), all sharing `stop`.
 /// Returns the fits and the labels of the datasets a stop request kept from a result.
-fn fit_jobs(
+fn fit_jobs<K: Send>(
     args: &FitArgs,
     mut jobs: Vec<(String, Dataset)>,
     stop: &Stop,
     (pool, heartbeat): (&rayon::ThreadPool, &super::heartbeat::Heartbeat),
-    rows_only: Option<&[(PathBuf, report::setting::InputInfo)]>,
-) -> anyhow::Result<(Vec<Fitted>, Vec<String>)> {
+    keep: impl Fn(Outcome) -> K + Sync + Send,
+) -> anyhow::Result<(Vec<K>, Vec<String>)> {
     if jobs.len() == 1 {
         let job = jobs.pop().expect("one job");
         let one = pool.install(|| fit_one(args, job, true, stop, None))?;
-        return Ok((vec![(one, None)], Vec::new()));
+        return Ok((vec![keep(one)], Vec::new()));
     }
     let bar = if args.show_progress() {
         super::recover::progress_bar(jobs.len() as u64, "datasets fitted")
@@ -276,36 +305,25 @@ fn fit_jobs(
         indicatif::ProgressBar::hidden()
     };
     heartbeat.count(jobs.len() as u64);
-    let done: Vec<anyhow::Result<Fitted>> = pool.install(|| {
-        batch::in_chains(jobs, args.warm_start, |(label, ds), previous| {
-            // After a stop request no further dataset is started.
-            if stop.is_requested() {
-                return Err(not_fitted(&label, stop));
-            }
-            let near = previous.and_then(|r: &anyhow::Result<Fitted>| r.as_ref().ok());
-            let mut outcome = fit_one(args, (label, ds), false, stop, near.map(|f| &f.0))?;
-            bar.inc(1);
-            heartbeat.inc();
-            let info = rows_only.map(|files| {
-                let info = run_info(args, &outcome, files);
-                outcome.drop_samples();
-                info
-            });
-            Ok((outcome, info))
-        })
-    });
+    let fit = |(label, ds): (String, Dataset), previous: Option<&anyhow::Result<Outcome>>| {
+        // After a stop request no further dataset is started.
+        if stop.is_requested() {
+            return Err(not_fitted(&label, stop));
+        }
+        let near = previous.and_then(|r| r.as_ref().ok());
+        let outcome = fit_one(args, (label, ds), false, stop, near);
+        bar.inc(1);
+        heartbeat.inc();
+        outcome
+    };
+    let done = pool.install(|| batch::in_chains_kept(jobs, args.warm_start, fit, |r| r.map(&keep)));
     bar.finish_and_clear();
     fitted_and_stopped(done)
 }
 
-/// A dataset's fit, and the report's run information when it was made beside the fit
-/// (for a batch whose output is the summary rows alone, the outcome then without its
-/// samples: [`Outcome::drop_samples`]).
-type Fitted = (Outcome, Option<RunInfo>);
-
 /// Whether the summary rows on standard output are all the command writes of a batch
-/// (`--summary -` without `--json`, `--html`, `--plot` or `--residuals`): no fit's samples
-/// need to be kept once its row can be made.
+/// (`--summary -` without `--json`, `--html`, `--plot` or `--residuals`): no fit needs to
+/// be kept once its row is made.
 fn rows_only(args: &FitArgs) -> bool {
     summary_on_stdout(args)
         && !args.json
@@ -341,11 +359,7 @@ fn fitted_and_stopped<T>(
 }
 
 /// What a report says about the run besides the fit: input, command, setting, intervals.
-fn run_info(
-    args: &FitArgs,
-    o: &Outcome,
-    files: &[(PathBuf, report::setting::InputInfo)],
-) -> RunInfo {
+fn run_info(args: &FitArgs, o: &Outcome, files: &[InputFile]) -> RunInfo {
     let file = files
         .iter()
         .find(|(p, _)| *p == o.dataset.path)
@@ -415,26 +429,40 @@ fn print_reports(
             &report::summary::csv_rows(&rows),
         )?;
     }
+    if !single {
+        batch_messages(args, &rows, skipped, wall, threads);
+    }
+    Ok(())
+}
+
+/// A batch's messages on standard error: the datasets a stop kept from a fit, and (unless
+/// `--quiet`) how many were fitted, how fast, and how many did not converge.
+fn batch_messages(
+    args: &FitArgs,
+    rows: &[report::summary::Row],
+    skipped: &[String],
+    wall: f64,
+    threads: usize,
+) {
     if !skipped.is_empty() {
         eprintln!(
             "goniofit: {} of {} datasets not fitted:\n  {}",
             skipped.len(),
-            skipped.len() + outcomes.len(),
+            skipped.len() + rows.len(),
             skipped.join("\n  ")
         );
     }
-    if !single && !args.quiet {
+    if !args.quiet {
         let failed =
-            report::summary::not_converged(&rows).map_or(String::new(), |t| format!("; {t}"));
+            report::summary::not_converged(rows).map_or(String::new(), |t| format!("; {t}"));
         eprintln!(
             "goniofit: fitted {} datasets in {:.3} s ({:.1} datasets/s) on {} threads{failed}",
-            outcomes.len(),
+            rows.len(),
             wall,
-            outcomes.len() as f64 / wall,
+            rows.len() as f64 / wall,
             threads
         );
     }
-    Ok(())
 }
 
 /// Whether `--summary -` makes the summary CSV the standard output (in place of the text

@@ -6,6 +6,7 @@
 //! nothing is measured beyond the fit's own clocks and nothing is written.
 
 use goniofit::fit::dataset::Outcome;
+use goniofit::fit::driver::StageSeconds;
 
 /// The environment variable that asks for the stage timing.
 pub const VAR: &str = "GONIOFIT_STAGES";
@@ -15,35 +16,48 @@ pub fn wanted() -> bool {
     std::env::var_os(VAR).is_some()
 }
 
-/// The wall seconds of the process's phases.
-pub struct Phases {
-    pub read: f64,
-    pub fit: f64,
-    pub report: f64,
+/// One fit's stage times: its [`StageSeconds`], its intervals' and its whole dataset's
+/// wall seconds.
+#[derive(Debug, Clone, Copy)]
+pub struct Times {
+    stages: StageSeconds,
+    intervals: f64,
+    dataset: f64,
 }
 
-/// Write the stage timing line (see the module doc) for `outcomes`.
-pub fn print(phases: &Phases, outcomes: &[Outcome]) {
-    let us = |f: &dyn Fn(&Outcome) -> f64| {
-        let mut v: Vec<f64> = outcomes.iter().map(|o| 1e6 * f(o)).collect();
+impl Times {
+    /// The stage times of `o`.
+    pub fn of(o: &Outcome) -> Times {
+        Times {
+            stages: o.result.stage_seconds,
+            intervals: o.interval_seconds,
+            dataset: o.seconds,
+        }
+    }
+}
+
+/// Write the stage timing line (see the module doc): the process's phases `(read, fit,
+/// report)` in wall seconds, and the median of each stage over the fits' `times`.
+pub fn print((read, fit, report): (f64, f64, f64), times: &[Times]) {
+    let us = |f: &dyn Fn(&Times) -> f64| {
+        let mut v: Vec<f64> = times.iter().map(|t| 1e6 * f(t)).collect();
         (median(&mut v) * 10.0).round() / 10.0
     };
-    let s = |o: &Outcome| o.result.stage_seconds;
     let line = serde_json::json!({
-        "fits": outcomes.len(),
-        "read_s": phases.read,
-        "fit_s": phases.fit,
-        "report_s": phases.report,
+        "fits": times.len(),
+        "read_s": read,
+        "fit_s": fit,
+        "report_s": report,
         "median_us": {
-            "grid": us(&|o| s(o).grid),
-            "refine": us(&|o| s(o).refine),
-            "solve": us(&|o| s(o).solve),
-            "uncertainty": us(&|o| s(o).uncertainty),
-            "assemble": us(&|o| s(o).assemble),
-            "intervals": us(&|o| o.interval_seconds),
-            "dataset": us(&|o| o.seconds),
+            "grid": us(&|t| t.stages.grid),
+            "refine": us(&|t| t.stages.refine),
+            "solve": us(&|t| t.stages.solve),
+            "uncertainty": us(&|t| t.stages.uncertainty),
+            "assemble": us(&|t| t.stages.assemble),
+            "intervals": us(&|t| t.intervals),
+            "dataset": us(&|t| t.dataset),
         },
-        "report_us_per_fit": (1e7 * phases.report / outcomes.len().max(1) as f64).round() / 10.0,
+        "report_us_per_fit": (1e7 * report / times.len().max(1) as f64).round() / 10.0,
     });
     eprintln!("{line}");
 }

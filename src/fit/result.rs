@@ -289,16 +289,6 @@ impl FitResult {
         self.sample_modes = s.sample_modes;
     }
 
-    /// The result without its per-sample vectors (fitted values, residuals, standardized
-    /// residuals, evaluation modes), every figure of the fit kept: for a batch whose
-    /// output is one summary row per fit.
-    pub fn drop_samples(&mut self) {
-        self.fitted = Vec::new();
-        self.residuals = Vec::new();
-        self.std_residuals = Vec::new();
-        self.sample_modes = Vec::new();
-    }
-
     /// Whether the fit is a usable optimum: the solver met a convergence criterion and the
     /// cost, every parameter, standard error and correlation is a finite number (R² may be
     /// undefined, NaN, only for data without spread).

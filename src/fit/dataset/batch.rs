@@ -17,8 +17,23 @@ where
     R: Send,
     F: Fn(J, Option<&R>) -> R + Sync + Send,
 {
+    in_chains_kept(jobs, warm, fit, |r| r)
+}
+
+/// [`in_chains`], each result handed to `keep` as soon as no later job needs it (at once
+/// without `warm`, after the next job of its chain with it), and `keep`'s values returned
+/// in the jobs' order: a batch that keeps a little of each result (a summary row) holds
+/// one whole result per chain at a time.
+pub fn in_chains_kept<J, R, K, F, G>(jobs: Vec<J>, warm: bool, fit: F, keep: G) -> Vec<K>
+where
+    J: Send,
+    R: Send,
+    K: Send,
+    F: Fn(J, Option<&R>) -> R + Sync + Send,
+    G: Fn(R) -> K + Sync + Send,
+{
     if !warm {
-        return jobs.into_par_iter().map(|j| fit(j, None)).collect();
+        return jobs.into_par_iter().map(|j| keep(fit(j, None))).collect();
     }
     let chains = CHAINS_PER_THREAD * rayon::current_num_threads();
     let len = jobs.len().div_ceil(chains).max(1);
@@ -32,12 +47,14 @@ where
     split
         .into_par_iter()
         .flat_map_iter(|chain| {
-            let mut done: Vec<R> = Vec::with_capacity(chain.len());
+            let mut kept: Vec<K> = Vec::with_capacity(chain.len());
+            let mut previous: Option<R> = None;
             for job in chain {
-                let r = fit(job, done.last());
-                done.push(r);
+                let r = fit(job, previous.as_ref());
+                kept.extend(previous.replace(r).map(&keep));
             }
-            done
+            kept.extend(previous.map(&keep));
+            kept
         })
         .collect()
 }
@@ -71,5 +88,15 @@ mod tests {
             })
         });
         assert!(cold.iter().enumerate().all(|(k, r)| r.0 == k && !r.1));
+        // Keeping a part of each result: the same values in the same order.
+        let kept = pool.install(|| {
+            in_chains_kept(
+                jobs.clone(),
+                true,
+                |j, prev: Option<&(usize, Option<usize>)>| (j, prev.map(|p| p.0)),
+                |r| r.1,
+            )
+        });
+        assert_eq!(kept, warm.iter().map(|r| r.1).collect::<Vec<_>>());
     }
 }

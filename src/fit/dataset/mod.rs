@@ -134,20 +134,6 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
-impl Outcome {
-    /// The outcome without its samples: the dataset's and the input's per-sample vectors
-    /// and every result's ([`FitResult::drop_samples`]) released, the labels, settings and
-    /// every result's figures kept (a later dataset may still start from its optimum). A
-    /// big batch that writes one summary row per fit holds this of each.
-    pub fn drop_samples(&mut self) {
-        self.dataset.clear();
-        self.dataset.shrink_to_fit();
-        self.input = self.input.subset(&[]);
-        self.result.drop_samples();
-        self.candidates.iter_mut().for_each(FitResult::drop_samples);
-    }
-}
-
 /// The largest |L|·√w, |L| and w (and the smallest w) a fit accepts: the cost ½Σw r² and
 /// the Jacobian products square these, so beyond them double precision overflows (cost
 /// = inf, R² = NaN). The fit is the same in any unit of L (amplitudes scale with it) and
