@@ -147,7 +147,7 @@ impl Kbs {
     }
 
     /// [`Self::lobe`]'s values with the evaluation mode of each sample, from one evaluation
-    /// of ln Q.
+    /// of ln Q (a forced mode is every sample's).
     pub(crate) fn lobe_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
         let batch = self.batch_ln_q(geo, p[0], p[1]);
         self.lobe_from(geo, p, &batch, out, None);
@@ -413,18 +413,5 @@ impl Model for Kbs {
 
     fn radiance_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
         self.lobe_modes(geo, p, out)
-    }
-
-    fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
-        // A forced mode is every sample's: nothing to evaluate (a forced series on rough
-        // data costs a whole evaluation, after a time limit too).
-        if let Some(m) = self.forced_mode() {
-            return vec![m; geo.len()];
-        }
-        self.batch_ln_q(geo, p[0], p[1])
-            .2
-            .iter()
-            .map(|q| q.mode)
-            .collect()
     }
 }

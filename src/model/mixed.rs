@@ -62,6 +62,13 @@ fn lobe_params(p: &[f64]) -> ([f64; 5], usize) {
     (kp, nf)
 }
 
+/// The Lambertian term s_d cos θi added to the lobe's values.
+fn add_diffuse(geo: &Geometry, s_d: f64, out: &mut [f64]) {
+    for (o, c) in out.iter_mut().zip(&geo.cos_i) {
+        *o += s_d * c;
+    }
+}
+
 impl Model for KbsLambert {
     fn name(&self) -> &'static str {
         "kbs+lambert"
@@ -88,25 +95,17 @@ impl Model for KbsLambert {
                 j_d.copy_from_slice(&geo.cos_i);
             }
         }
-        for (o, c) in out.iter_mut().zip(&geo.cos_i) {
-            *o += p[3] * c;
-        }
+        add_diffuse(geo, p[3], out);
     }
 
     fn options(&self) -> Option<ModelOptions> {
         Some(self.kbs.opts)
     }
 
-    fn modes(&self, geo: &Geometry, p: &[f64]) -> Vec<Mode> {
-        self.kbs.modes(geo, &p[..3])
-    }
-
     fn radiance_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
         let (kp, nf) = lobe_params(p);
         let modes = self.kbs.lobe_modes(geo, &kp[..3 + nf], out);
-        for (o, c) in out.iter_mut().zip(&geo.cos_i) {
-            *o += p[3] * c;
-        }
+        add_diffuse(geo, p[3], out);
         modes
     }
 }

@@ -183,26 +183,17 @@ pub trait Model: Send + Sync {
         None
     }
 
-    /// The evaluation mode used for each sample at parameters `p`.
-    fn modes(&self, geo: &Geometry, _p: &[f64]) -> Vec<Mode> {
-        vec![Mode::Closed; geo.len()]
-    }
-
-    /// [`Self::radiance`]'s values and [`Self::modes`] from one evaluation (a model whose
-    /// modes cost an evaluation of their own shares it).
+    /// [`Self::radiance`]'s values and the evaluation mode of each sample at parameters `p`,
+    /// from one evaluation (every sample [`Mode::Closed`] for a model in closed form).
     fn radiance_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
         self.radiance(geo, p, out, None);
-        self.modes(geo, p)
+        vec![Mode::Closed; geo.len()]
     }
 
     /// [`Self::eval`]'s values (no Jacobian) and each sample's evaluation mode.
     fn eval_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
         let modes = self.radiance_modes(geo, p, out);
-        if geo.quantity != crate::geometry::Quantity::Radiance {
-            for (i, v) in out.iter_mut().enumerate() {
-                *v *= geo.out_factor(i);
-            }
-        }
+        to_quantity(geo, out);
         modes
     }
 
@@ -212,21 +203,11 @@ pub trait Model: Send + Sync {
         match jac {
             Some(j) => {
                 self.radiance(geo, p, out, Some(&mut *j));
-                if geo.quantity != crate::geometry::Quantity::Radiance {
-                    for col in j.chunks_mut(n.max(1)) {
-                        for (i, v) in col.iter_mut().enumerate() {
-                            *v *= geo.out_factor(i);
-                        }
-                    }
-                }
+                j.chunks_mut(n.max(1)).for_each(|col| to_quantity(geo, col));
             }
             None => self.radiance(geo, p, out, None),
         }
-        if geo.quantity != crate::geometry::Quantity::Radiance {
-            for (i, v) in out.iter_mut().enumerate() {
-                *v *= geo.out_factor(i);
-            }
-        }
+        to_quantity(geo, out);
     }
 
     /// Index of the named parameter.
@@ -246,6 +227,17 @@ pub trait Model: Send + Sync {
                         .join(", ")
                 ),
             })
+    }
+}
+
+/// Radiance values (or one Jacobian column) of the samples of `geo` turned into its
+/// measured quantity in place: unchanged for radiance, × each sample's output factor
+/// (1/cos θi) for a BRDF.
+fn to_quantity(geo: &Geometry, values: &mut [f64]) {
+    if geo.quantity != crate::geometry::Quantity::Radiance {
+        for (i, v) in values.iter_mut().enumerate() {
+            *v *= geo.out_factor(i);
+        }
     }
 }
 

@@ -316,26 +316,13 @@ impl<'a> FitProblem<'a> {
 
     /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
     pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
-        self.model_values_until(p, want_jac, None)
-            .expect("an evaluation without a stop request is never cut")
-    }
-
-    /// [`Self::model_values`], or None when `stop` was requested before every block was
-    /// evaluated (it ends within one block's evaluation of the request).
-    #[allow(clippy::type_complexity)]
-    pub fn model_values_until(
-        &self,
-        p: &[f64],
-        want_jac: bool,
-        stop: Option<&Stop>,
-    ) -> Option<(Vec<f64>, Option<DMatrix<f64>>)> {
         let n_spec = self.model.params().len();
         let mut f = vec![0.0; self.n];
         let mut jac = want_jac.then(|| DMatrix::zeros(self.n, self.layout.len()));
-        let complete = self.eval_blocks(
+        self.eval_blocks(
             p,
             want_jac,
-            stop,
+            None,
             |_, _, _| {},
             |b, out, bj| {
                 let m = b.idx.len();
@@ -352,7 +339,7 @@ impl<'a> FitProblem<'a> {
                 }
             },
         );
-        complete.then_some((f, jac))
+        (f, jac)
     }
 
     /// Model values and each sample's evaluation mode at full parameters `p` (one
@@ -363,19 +350,20 @@ impl<'a> FitProblem<'a> {
         p: &[f64],
         stop: Option<&Stop>,
     ) -> Option<(Vec<f64>, Vec<Mode>)> {
-        let parts: Vec<Option<(Vec<f64>, Vec<Mode>)>> = self
-            .blocks
-            .par_iter()
-            .map(|b| {
-                if stop.is_some_and(Stop::is_requested) {
-                    return None;
-                }
-                let mut f = vec![0.0; b.geo.len()];
-                let mp = self.layout.model_params(p, b.channel);
-                let modes = self.model.eval_modes(&b.geo, &mp, &mut f);
-                Some((f, modes))
-            })
-            .collect();
+        let run = |b: &Block| {
+            if stop.is_some_and(Stop::is_requested) {
+                return None;
+            }
+            let mut f = vec![0.0; b.geo.len()];
+            let mp = self.layout.model_params(p, b.channel);
+            let modes = self.model.eval_modes(&b.geo, &mp, &mut f);
+            Some((f, modes))
+        };
+        // One block (a small fit) runs on the calling thread, as in `eval_blocks`.
+        let parts: Vec<Option<(Vec<f64>, Vec<Mode>)>> = match &self.blocks[..] {
+            [b] => vec![run(b)],
+            blocks => blocks.par_iter().map(run).collect(),
+        };
         let mut values = vec![0.0; self.n];
         let mut modes = vec![Mode::Closed; self.n];
         for (b, part) in self.blocks.iter().zip(parts) {

@@ -121,20 +121,20 @@ impl Reading<'_> {
         lines.pieces(&mut texts, batch, bytes).ok()?;
         while !texts.is_empty() || !parsed.is_empty() {
             let mut now = Vec::new();
-            let (read, appended) = rayon::in_place_scope(|scope| {
-                scope.spawn(|_| now = self.parse_pieces(&texts, &mut parts));
-                let mut appended = Some(());
-                for (piece, part) in parsed.drain(..).zip(parsed_parts.iter_mut()) {
-                    let Some(piece) = piece else {
-                        appended = None;
-                        break;
-                    };
-                    first = first.take().or(piece.first);
-                    ds.append_from_line(part, line);
-                    line += piece.lines;
-                }
-                (lines.pieces(&mut spare_texts, batch, bytes), appended)
-            });
+            let (read, appended) =
+                rayon::in_place_scope(|scope| {
+                    scope.spawn(|_| now = self.parse_pieces(&texts, &mut parts));
+                    let appended = parsed.drain(..).zip(parsed_parts.iter_mut()).try_for_each(
+                        |(piece, part)| {
+                            let piece = piece?;
+                            first = first.take().or(piece.first);
+                            ds.append_from_line(part, line);
+                            line += piece.lines;
+                            Some(())
+                        },
+                    );
+                    (lines.pieces(&mut spare_texts, batch, bytes), appended)
+                });
             appended?;
             read.ok()?;
             parsed = now;
