@@ -682,3 +682,62 @@ fn small_cli_texts_say_what_they_mean() {
         .code(0)
         .stderr(contains("px").and(contains("model kbs at sigma=0.3,T=2,scale=1")));
 }
+
+/// The JSON a fit writes reads back into the library's typed report and is written again
+/// value for value: a single fit with intervals and a model comparison, and every fit of a
+/// batch report.
+#[test]
+fn json_reports_read_back_into_the_typed_report() {
+    use goniofit::report::json::FitReport;
+    let round_trip = |v: &serde_json::Value| {
+        let report: FitReport = serde_json::from_value(v.clone()).unwrap();
+        assert_eq!(&serde_json::to_value(&report).unwrap(), v);
+        report
+    };
+    let auto = fit_json(&[
+        "fit",
+        "--model",
+        "auto",
+        "--channel",
+        "550nm",
+        "--json",
+        GARNET,
+    ]);
+    let report = round_trip(&auto);
+    assert!(report.comparison.as_ref().is_some_and(|c| c.len() > 1));
+    assert!(report.replay.is_some());
+    assert!(report.params.values().any(|p| p.interval95.is_some()));
+    assert_eq!(report.adequacy.headline, auto["adequacy"]["headline"]);
+    let batch = fit_json(&[
+        "fit",
+        "--model",
+        "lambert",
+        "--by-group",
+        "--json",
+        "--no-intervals",
+        GARNET,
+    ]);
+    let fits = batch["fits"].as_array().unwrap();
+    assert!(fits.len() > 3);
+    for fit in fits {
+        round_trip(fit);
+    }
+}
+
+/// `plot` refuses a file that is not a fit report, saying what it is missing.
+#[test]
+fn plot_names_what_a_report_lacks() {
+    let dir = tempfile::tempdir().unwrap();
+    let not_json = dir.path().join("a.json");
+    std::fs::write(&not_json, "L,theta_i\n").unwrap();
+    usage_error(
+        &["plot", not_json.to_str().unwrap(), "--out", "p"],
+        "not a goniofit fit report (not JSON)",
+    );
+    let no_replay = dir.path().join("b.json");
+    std::fs::write(&no_replay, r#"{"model": "kbs"}"#).unwrap();
+    usage_error(
+        &["plot", no_replay.to_str().unwrap(), "--out", "p"],
+        "missing field",
+    );
+}

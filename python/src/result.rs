@@ -1,5 +1,5 @@
 //! `FitResult`: a finished fit as Python sees it, every field taken from the library's
-//! report of the outcome (the CLI's JSON object, [`report::outcome::to_json`]), so that
+//! report of the outcome (the CLI's JSON report, [`report::outcome::report`]), so that
 //! `to_dict()` is the CLI's `--json` key for key; and the summary columns of many fits.
 
 use crate::convert::json_to_py;
@@ -8,6 +8,7 @@ use crate::options::FitOptions;
 use goniofit::fit::dataset::Outcome;
 use goniofit::fit::driver::FitConfig;
 use goniofit::plot;
+use goniofit::report::json::FitReport;
 use goniofit::report::{self, RunInfo};
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
@@ -28,6 +29,7 @@ pub struct FitResult {
     outcome: Outcome,
     info: RunInfo,
     args: Vec<String>,
+    report: OnceLock<FitReport>,
     json: OnceLock<Value>,
     /// The settings the pictures need (the chosen model with its factors, residual kind,
     /// floor), and the unit of λ they name.
@@ -64,24 +66,39 @@ impl FitResult {
             outcome,
             info,
             args,
+            report: OnceLock::new(),
             json: OnceLock::new(),
             config,
             unit,
         }
     }
 
-    /// The CLI's JSON object of this fit (built once).
+    /// The CLI's report of this fit (built once).
+    fn typed_report(&self) -> &FitReport {
+        self.report
+            .get_or_init(|| report::outcome::report(&self.outcome, &self.info, &self.args))
+    }
+
+    /// The report as a JSON value (built once).
     fn json(&self) -> &Value {
-        self.json
-            .get_or_init(|| report::outcome::to_json(&self.outcome, &self.info, &self.args))
+        self.json.get_or_init(|| self.typed_report().to_value())
+    }
+
+    /// The pictures' status line and the parameters the data does not determine.
+    fn status(&self) -> (String, Vec<String>) {
+        (
+            self.typed_report().status_line(),
+            self.typed_report().undetermined(),
+        )
     }
 
     /// The report's pictures as (name, SVG document).
     fn svg_figures(&self) -> PyResult<Vec<(String, String)>> {
+        let (line, undetermined) = self.status();
         plot::fit::svg_of_outcome(
             &self.config,
             &self.outcome,
-            self.json(),
+            (&line, &undetermined),
             self.unit.as_deref(),
         )
         .map_err(to_py_err)
@@ -200,7 +217,7 @@ impl FitResult {
 
     /// The CLI's JSON report as text.
     fn to_json(&self) -> PyResult<String> {
-        serde_json::to_string_pretty(self.json())
+        serde_json::to_string_pretty(self.typed_report())
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
     }
 
@@ -219,11 +236,12 @@ impl FitResult {
                 }
             }
             "png" | "matplotlib" => {
+                let (line, undetermined) = self.status();
                 let pngs = py.detach(|| {
                     plot::fit::png_of_outcome(
                         &self.config,
                         &self.outcome,
-                        self.json(),
+                        (&line, &undetermined),
                         self.unit.as_deref(),
                     )
                 });
@@ -250,10 +268,11 @@ impl FitResult {
     /// The report as HTML for notebooks: status, the model comparison of ``auto``, the
     /// tables, and the fit on a log scale.
     fn _repr_html_(&self) -> String {
+        let (line, undetermined) = self.status();
         let key = plot::fit::key_svg_of_outcome(
             &self.config,
             &self.outcome,
-            self.json(),
+            (&line, &undetermined),
             self.unit.as_deref(),
         )
         .ok()

@@ -251,7 +251,7 @@ fn alternatives(a: &DesignArgs, main: &(f64, Option<String>)) -> anyhow::Result<
 /// wavelength and quantity, its residual kind with `--noise` or √ reduced χ².
 fn from_report(a: &DesignArgs, saved: SavedFit) -> anyhow::Result<Setup> {
     let SavedFit {
-        json,
+        report,
         model,
         values,
         config,
@@ -271,7 +271,7 @@ fn from_report(a: &DesignArgs, saved: SavedFit) -> anyhow::Result<Setup> {
             "design plans for one wavelength: the report's data has several".into(),
         ));
     }
-    let weighted = json["setting"]["weights"]["source"].as_str() != Some("none");
+    let weighted = report.setting.weights.source != "none";
     let level = match (a.noise, weighted) {
         (Some(e), _) => e,
         (None, true) => {
@@ -279,7 +279,7 @@ fn from_report(a: &DesignArgs, saved: SavedFit) -> anyhow::Result<Setup> {
                 "the fit was weighted: give the noise of one new sample with --noise".into(),
             ))
         }
-        (None, false) => json["reduced_chi2"].as_f64().unwrap_or(f64::NAN).sqrt(),
+        (None, false) => report.reduced_chi2.unwrap_or(f64::NAN).sqrt(),
     };
     let m = by_name(&model, &config.model_opts)?;
     let existing = (0..input.geo.len())
@@ -308,10 +308,10 @@ fn from_report(a: &DesignArgs, saved: SavedFit) -> anyhow::Result<Setup> {
         noise: NoiseModel::new(config.residual, level)
             .with_context(|| "--noise (or the fit's √ reduced χ²)")?,
         existing,
-        source: json["setting"]["input"]["path"]
-            .as_str()
-            .unwrap_or("the fit's data")
-            .to_string(),
+        source: match report.setting.input.path.as_str() {
+            "" => "the fit's data".to_string(),
+            path => path.to_string(),
+        },
         fit: Some(fit),
     })
 }

@@ -394,7 +394,7 @@ fn print_reports(
         .map(|(o, i)| report::summary::row(&o.label, &o.result, &i.setting.units))
         .collect();
     if args.json && single {
-        let v = report::outcome::to_json(&outcomes[0], &infos[0], &replay_args());
+        let v = report::outcome::report(&outcomes[0], &infos[0], &replay_args());
         io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&v)?))?;
     } else if args.json {
         let head = serde_json::json!({
@@ -495,7 +495,7 @@ fn print_batch_json(
             w.write_all(b"[]")?;
         }
         for (k, (o, i)) in outcomes.iter().zip(infos).enumerate() {
-            let fit = report::outcome::to_json(o, i, &replay);
+            let fit = report::outcome::report(o, i, &replay);
             let fit = serde_json::to_string_pretty(&fit).map_err(std::io::Error::other)?;
             // Two levels deeper than alone: JSON strings hold no raw line breaks.
             w.write_all(if k == 0 { b"[\n    " } else { b",\n    " })?;

@@ -6,7 +6,8 @@ use super::fit_args::{fit_config, wavelength_unit, FitArgs};
 use goniofit::fit::dataset::Outcome;
 use goniofit::fit::driver::{FitConfig, FitResult};
 use goniofit::io::{self, Dataset};
-use goniofit::plot::fit::{plot_fit, plot_status, svg_of_outcome, undetermined_params};
+use goniofit::plot::fit::{plot_fit, svg_of_outcome};
+use goniofit::report::json::FitReport;
 use goniofit::report::{self, RunInfo};
 use std::path::{Path, PathBuf};
 
@@ -214,9 +215,15 @@ fn svg_pictures(
     info: &RunInfo,
 ) -> anyhow::Result<Vec<(String, String)>> {
     let config = outcome_config(args, o)?;
-    let json = report::json::to_json(&o.result, info);
+    let report = FitReport::of(&o.result, info);
+    let status = (report.status_line(), report.undetermined());
     let unit = wavelength_unit(args, &o.dataset);
-    Ok(svg_of_outcome(&config, o, &json, unit.as_deref())?)
+    Ok(svg_of_outcome(
+        &config,
+        o,
+        (&status.0, &status.1),
+        unit.as_deref(),
+    )?)
 }
 
 /// The fit configuration of an outcome's chosen model, with its factors (an `auto`
@@ -236,13 +243,13 @@ fn draw_pictures(
     info: &RunInfo,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let config = outcome_config(args, o)?;
-    let json = report::json::to_json(&o.result, info);
+    let report = FitReport::of(&o.result, info);
     Ok(plot_fit(
         dir,
         &config,
         &o.input,
         (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
-        (&plot_status(&json), &undetermined_params(&json)),
+        (&report.status_line(), &report.undetermined()),
         wavelength_unit(args, &o.dataset).as_deref(),
     )?)
 }

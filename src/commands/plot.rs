@@ -9,7 +9,8 @@ use clap::Args;
 use goniofit::fit::driver::{FitConfig, FitInput};
 use goniofit::fit::problem::ParamLayout;
 use goniofit::io::{self, FileSet};
-use goniofit::plot::fit::{plot_fit, plot_status, undetermined_params};
+use goniofit::plot::fit::plot_fit;
+use goniofit::report::json::FitReport;
 use goniofit::Error;
 use std::path::{Path, PathBuf};
 
@@ -28,8 +29,8 @@ impl PlotArgs {
         let mut set = FileSet::new().input("report", &self.report);
         let data = std::fs::read_to_string(&self.report)
             .ok()
-            .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
-            .and_then(|json| saved_input(&json));
+            .and_then(|text| serde_json::from_str::<FitReport>(&text).ok())
+            .and_then(|report| saved_input(&report));
         if let Some(data) = data {
             set = set.input("the report's input", &data);
         }
@@ -37,18 +38,16 @@ impl PlotArgs {
     }
 }
 
-/// The absolute path of the fitted file a report names (reports before it had one: None).
-fn saved_input(json: &serde_json::Value) -> Option<PathBuf> {
-    json["setting"]["input"]["path"]
-        .as_str()
-        .filter(|p| !p.is_empty())
-        .map(PathBuf::from)
+/// The absolute path of the fitted file a report names (None for a fit of arrays).
+fn saved_input(report: &FitReport) -> Option<PathBuf> {
+    let path = &report.setting.input.path;
+    (!path.is_empty()).then(|| PathBuf::from(path))
 }
 
 /// A fit report read back with the data it fitted: the fit's arguments, model, fitted
 /// values (layout order), settings and input, and the unit of λ.
 pub struct SavedFit {
-    pub json: serde_json::Value,
+    pub report: FitReport,
     pub model: String,
     pub values: Vec<f64>,
     pub config: FitConfig,
@@ -60,48 +59,48 @@ pub struct SavedFit {
 /// Read a report written by `goniofit fit --json` and re-read the file it fitted (warning
 /// when the file changed since). Errors: not such a report (a bad input, exit 2), or the
 /// data no longer readable.
-pub fn read_saved_fit(report: &Path) -> anyhow::Result<SavedFit> {
-    let text = std::fs::read_to_string(report).map_err(|source| Error::Io {
-        path: report.to_path_buf(),
+pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
         source,
     })?;
     let bad = |what: &str| Error::File {
-        path: report.to_path_buf(),
+        path: path.to_path_buf(),
         message: format!(
             "not a goniofit fit report ({what}); write one with `goniofit fit --json`"
         ),
     };
-    let json: serde_json::Value = serde_json::from_str(&text).map_err(|_| bad("not JSON"))?;
-    let replay = json.get("replay").ok_or_else(|| bad("no 'replay' block"))?;
-    let fit_args: Vec<String> =
-        serde_json::from_value(replay["args"].clone()).map_err(|_| bad("replay.args"))?;
-    let model: String =
-        serde_json::from_value(replay["model"].clone()).map_err(|_| bad("replay.model"))?;
-    let values: Vec<f64> =
-        serde_json::from_value(replay["values"].clone()).map_err(|_| bad("replay.values"))?;
-    let fa = super::fit_args::parse_fit_line(fit_args)
+    let report: FitReport = serde_json::from_str(&text).map_err(|e| match e.classify() {
+        serde_json::error::Category::Data => bad(&e.to_string()),
+        _ => bad("not JSON"),
+    })?;
+    let replay = report
+        .replay
+        .clone()
+        .ok_or_else(|| bad("no 'replay' block"))?;
+    let fa = super::fit_args::parse_fit_line(replay.args)
         .map_err(|e| bad(&format!("its fit arguments do not parse: {e}")))?;
     let opts = fa.read_options()?;
-    // The report's absolute input path (reports before it had one: the path as typed).
-    let saved = &json["setting"]["input"];
-    let file = match saved_input(&json) {
+    // The report's absolute input path (a fit of arrays has none: the path as typed).
+    let file = match saved_input(&report) {
         Some(p) => p,
         None => fa.file.first().ok_or_else(|| bad("no input file"))?.clone(),
     };
     let ds = io::read_dataset(&file, &opts)
-        .with_context(|| format!("re-reading the data of {}", goniofit::io::shown(report)))?;
-    if let Some(want) = saved["sha256"].as_str() {
+        .with_context(|| format!("re-reading the data of {}", goniofit::io::shown(path)))?;
+    let want = &report.setting.input.sha256;
+    if !want.is_empty() {
         let now = super::fit::input_info(&file)?.sha256;
-        if now != want {
+        if &now != want {
             eprintln!(
                 "goniofit: warning: {} changed since the fit (sha256 {now}, the report has {want}); what follows uses the file as it is now",
                 goniofit::io::shown(&file)
             );
         }
     }
+    let (model, factors, values) = (replay.model, replay.factors, replay.values);
     let input = input_of(&fa, &ds, model.starts_with("kbs"))?;
     // The factors of the fitted model (an `auto` choice's are not among the arguments).
-    let factors = replay["factors"].as_str().unwrap_or_default();
     let mut config = fit_config(&fa, &model, ds.sigma_l.is_some())?;
     config.model_opts = config
         .model_opts
@@ -114,7 +113,7 @@ pub fn read_saved_fit(report: &Path) -> anyhow::Result<SavedFit> {
     }
     let unit = super::fit_args::wavelength_unit(&fa, &ds);
     Ok(SavedFit {
-        json,
+        report,
         model,
         values,
         config,
@@ -126,7 +125,7 @@ pub fn read_saved_fit(report: &Path) -> anyhow::Result<SavedFit> {
 
 pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     let SavedFit {
-        json,
+        report,
         values,
         config,
         input,
@@ -134,13 +133,12 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
         unit,
         ..
     } = read_saved_fit(&args.report)?;
-    let status = plot_status(&json);
     let written = plot_fit(
         &args.out,
         &config,
         &input,
         (&layout, &values, None),
-        (&status, &undetermined_params(&json)),
+        (&report.status_line(), &report.undetermined()),
         unit.as_deref(),
     )?;
     eprintln!(

@@ -1,151 +1,392 @@
-//! The fit report as one JSON object.
+//! The fit report as one typed document: what `fit --json` writes, what the Python
+//! package's `FitResult.report` holds and what `goniofit plot` reads back. Numbers that are
+//! not finite are written as `null` (JSON has no NaN); fields that are numbers or null are
+//! `Option<f64>` here.
 
 use super::RunInfo;
-use crate::fit::driver::FitResult;
+use crate::fit::driver::{FitResult, Verdict};
+use crate::fit::problem::loss::LossKind;
+use crate::fit::stats::adequacy::Adequacy;
 use crate::fit::stats::profile::LEVELS;
-use serde_json::{json, Map, Value};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A fit's report. Keys as in the JSON object, which lists them in this order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitReport {
+    /// The model's name (`kbs+lambert`, …).
+    pub model: String,
+    /// Its factor options as command-line text (`--fresnel dielectric`), empty without.
+    pub factors: String,
+    /// What the data determines (`full`, `rough`, `smooth`, `partial`, `not_computed`).
+    pub verdict: Verdict,
+    /// Whether the fit is at a usable optimum.
+    pub converged: bool,
+    /// The solver's termination (`ftol`, `degenerate`, …; [`termination_name`]).
+    pub termination: String,
+    /// The fitted parameters by name.
+    pub params: BTreeMap<String, ParamEntry>,
+    /// The derived quantities (T/σ, Beckmann's α, reflectances, …) by name.
+    pub derived: BTreeMap<String, DerivedEntry>,
+    /// The report's notes, in words.
+    pub notes: Vec<String>,
+    pub cost: Option<f64>,
+    pub loss: LossEntry,
+    pub chi2: Option<f64>,
+    pub reduced_chi2: Option<f64>,
+    pub rms: Option<f64>,
+    pub max_abs_residual: Option<f64>,
+    pub r2: Option<f64>,
+    pub aic: Option<f64>,
+    pub bic: Option<f64>,
+    /// Samples fitted.
+    pub n: usize,
+    /// Free parameters.
+    pub n_free: usize,
+    /// Whether the model describes the data, with its tests.
+    pub adequacy: AdequacyEntry,
+    /// The checks of the paper's assumptions at the fitted surface (KBS models), by name.
+    pub validity: Option<BTreeMap<String, ValidityEntry>>,
+    pub correlation: Correlation,
+    pub singular_values: Vec<Option<f64>>,
+    pub condition: Option<f64>,
+    /// The starting point by parameter name, and whether it came from the start search
+    /// (`search`) or a neighbouring dataset's optimum (`neighbour`).
+    pub start: BTreeMap<String, Option<f64>>,
+    pub start_from: String,
+    pub iterations: u64,
+    pub evaluations: u64,
+    pub jacobian_evaluations: u64,
+    /// Wall-clock seconds of the fit, of its profile intervals, of the start search with
+    /// its refinement, and of the grid alone.
+    pub seconds: f64,
+    pub interval_seconds: f64,
+    pub init_seconds: f64,
+    pub start_seconds: f64,
+    /// Samples per evaluation mode of the KBS series (`series`, `rough`, …).
+    pub modes: BTreeMap<String, usize>,
+    /// Whether fitted values exist for every sample at the reported point.
+    pub fitted_computed: bool,
+    /// The range of g over the samples (KBS models).
+    pub g_range: Option<[Option<f64>; 2]>,
+    /// The input as named on the command line, the fit's setting, the command line and
+    /// the version of goniofit.
+    pub input: String,
+    pub setting: super::Setting,
+    pub command: String,
+    pub version: String,
+    /// What `goniofit plot` needs to redraw the fit (reports of a dataset's outcome).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replay: Option<Replay>,
+    /// The candidates of a model comparison (`--model auto`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub comparison: Option<Vec<ComparisonRow>>,
+}
+
+/// A fitted parameter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParamEntry {
+    pub value: Option<f64>,
+    /// The standard error; null when unknown.
+    pub stderr: Option<f64>,
+    /// Whether the data determine it.
+    pub determined: bool,
+    /// Whether it was held fixed.
+    pub fixed: bool,
+    /// Its unit in the run's unit setting.
+    pub unit: String,
+    /// The profile-likelihood intervals at 68.27 % and 95 % (`[lo, hi]`, null for an open
+    /// side), when computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval68: Option<[Option<f64>; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval95: Option<[Option<f64>; 2]>,
+}
+
+/// A derived quantity.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DerivedEntry {
+    pub value: Option<f64>,
+    pub stderr: Option<f64>,
+    pub determined: bool,
+    /// Its meaning in one line.
+    pub doc: String,
+    /// Its unit (depends on whether the verdict is a smooth surface).
+    pub unit: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval68: Option<[Option<f64>; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval95: Option<[Option<f64>; 2]>,
+}
+
+/// The robust loss: its kind, its scale C and how many samples lie beyond it (null for
+/// the linear loss).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LossEntry {
+    pub kind: LossKind,
+    pub f_scale: Option<f64>,
+    pub beyond_f_scale: Option<usize>,
+}
+
+/// The adequacy verdict with its headline in words.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AdequacyEntry {
+    #[serde(flatten)]
+    pub adequacy: Adequacy,
+    pub headline: String,
+}
+
+/// One validity check.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ValidityEntry {
+    /// Whether the fitted surface satisfies it; null when the data does not determine it.
+    pub satisfied: Option<bool>,
+    pub value: Option<f64>,
+    pub limit: f64,
+    pub text: String,
+}
+
+/// The correlation matrix of the free parameters, with the most correlated pairs (those
+/// the text report lists).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Correlation {
+    pub names: Vec<String>,
+    pub matrix: Vec<Vec<Option<f64>>>,
+    pub largest: Vec<Pair>,
+}
+
+/// Two correlated parameters and their correlation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Pair {
+    pub a: String,
+    pub b: String,
+    pub rho: Option<f64>,
+}
+
+/// What `goniofit plot` needs to redraw a fit: the fit's command-line arguments, the model
+/// with its factor options (those of an `auto` choice are not among the arguments), and
+/// the value of every parameter in layout order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Replay {
+    pub args: Vec<String>,
+    pub model: String,
+    pub factors: String,
+    pub names: Vec<String>,
+    pub values: Vec<f64>,
+    pub n_free: usize,
+}
+
+/// One candidate of a model comparison.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ComparisonRow {
+    /// The model with its factor options.
+    pub model: String,
+    pub bic: Option<f64>,
+    pub aic: Option<f64>,
+    pub cost: Option<f64>,
+    pub converged: bool,
+    pub termination: String,
+    /// Its BIC minus the chosen fit's.
+    pub delta_bic: Option<f64>,
+    pub chosen: bool,
+    /// A usable fit within ΔBIC < 2 of the chosen one.
+    pub tie: bool,
+}
 
 /// The solver's termination as the report spells it (`ftol`, `degenerate`, …).
 pub fn termination_name(t: crate::lm::Termination) -> String {
     format!("{t:?}").to_lowercase()
 }
 
-/// Finite numbers as numbers, the rest as null (JSON has no NaN).
-fn num(v: f64) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
+/// A finite number, or None.
+pub fn num(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+impl FitReport {
+    /// The report of fit `r` run as `info` says, with its profile intervals (no replay
+    /// block and no comparison: [`super::outcome::report`] adds those).
+    pub fn of(r: &FitResult, info: &RunInfo) -> FitReport {
+        let mut params = params_of(r, info);
+        let mut derived = derived_of(r, info);
+        attach_intervals(info, &mut params, &mut derived);
+        FitReport {
+            model: r.model.clone(),
+            factors: r.factors.trim().to_string(),
+            verdict: r.verdict,
+            converged: r.converged(),
+            termination: termination_name(r.termination),
+            params,
+            derived,
+            notes: r.notes.clone(),
+            cost: num(r.cost),
+            loss: LossEntry {
+                kind: r.loss.kind,
+                f_scale: num(r.loss.f_scale),
+                beyond_f_scale: r.beyond_f_scale,
+            },
+            chi2: num(r.chi2),
+            reduced_chi2: num(r.reduced_chi2),
+            rms: num(r.rms),
+            max_abs_residual: num(r.max_abs_residual),
+            r2: num(r.r2),
+            aic: num(r.aic),
+            bic: num(r.bic),
+            n: r.n,
+            n_free: r.n_free,
+            adequacy: AdequacyEntry {
+                adequacy: r.adequacy.clone(),
+                headline: r.adequacy.headline(),
+            },
+            validity: validity_of(r),
+            correlation: correlation_of(r),
+            singular_values: r.singular_values.iter().map(|v| num(*v)).collect(),
+            condition: num(r.condition),
+            start: start_of(r),
+            start_from: if r.started_near {
+                "neighbour"
+            } else {
+                "search"
+            }
+            .into(),
+            iterations: r.iterations,
+            evaluations: r.evaluations,
+            jacobian_evaluations: r.jacobian_evaluations,
+            seconds: r.seconds,
+            interval_seconds: info.interval_seconds,
+            init_seconds: r.init_seconds,
+            start_seconds: r.start_seconds,
+            modes: r.modes.clone(),
+            fitted_computed: r.fitted_computed,
+            g_range: r.g_range.map(|(a, b)| [num(a), num(b)]),
+            input: info.input.clone(),
+            setting: info.setting.clone(),
+            command: info.command.clone(),
+            version: info.version.clone(),
+            replay: None,
+            comparison: None,
+        }
+    }
+
+    /// The report as a JSON value (keys of objects sorted).
+    pub fn to_value(&self) -> serde_json::Value {
+        serde_json::to_value(self).unwrap_or(serde_json::Value::Null)
+    }
+
+    /// The pictures' second title line (so that `goniofit plot` says what `fit --plot`
+    /// says): T/σ with its standard error, the verdict when it leaves something
+    /// undetermined, the parameters the data does not determine, and whether the fit
+    /// converged (or why not).
+    pub fn status_line(&self) -> String {
+        use crate::error::fmt_num;
+        let mut parts = Vec::new();
+        let t_over_sigma = self.derived.get("T/sigma");
+        if let Some((value, d)) = t_over_sigma.and_then(|d| Some((d.value?, d))) {
+            parts.push(match d.stderr {
+                Some(e) => format!("T/σ = {} ± {}", fmt_num(value), fmt_num(e)),
+                None => format!("T/σ = {}", fmt_num(value)),
+            });
+        }
+        let mut undetermined: Vec<String> = self
+            .undetermined()
+            .iter()
+            .map(|k| k.replace("sigma", "σ"))
+            .collect();
+        // σ and T first, as in the report.
+        undetermined.sort_by_key(|k| (k != "σ", k != "T", k.clone()));
+        if self.verdict != Verdict::Full {
+            parts.push(self.verdict.describe().replace("sigma", "σ"));
+        }
+        if !undetermined.is_empty() {
+            parts.push(format!("not determined: {}", undetermined.join(", ")));
+        }
+        let termination = &self.termination;
+        parts.push(if self.converged {
+            format!("converged ({termination})")
+        } else if termination == "degenerate" {
+            "degenerate: not a usable optimum (see the report's notes)".to_string()
+        } else {
+            format!("not converged ({termination}): the best point so far")
+        });
+        parts.join("; ")
+    }
+
+    /// The free parameters the data does not determine, in the report's order.
+    pub fn undetermined(&self) -> Vec<String> {
+        self.params
+            .iter()
+            .filter(|(_, p)| !p.determined && !p.fixed)
+            .map(|(k, _)| k.clone())
+            .collect()
     }
 }
 
-/// The adequacy verdict, its headline, reasons and statistics (non-finite numbers as null).
-fn adequacy_json(r: &FitResult) -> Value {
-    let mut v = serde_json::to_value(&r.adequacy).unwrap_or(Value::Null);
-    if let Value::Object(m) = &mut v {
-        m.insert("headline".into(), json!(r.adequacy.headline()));
-    }
-    v
-}
-
-/// The report as a JSON value: the parameter and derived-quantity tables (with their
-/// profile intervals), the correlation, the validity checks, the statistics and the run's
-/// provenance, as one object.
-pub fn to_json(r: &FitResult, info: &RunInfo) -> Value {
-    let mut params = params_json(r, info);
-    let mut derived = derived_json(r, info);
-    attach_intervals(info, &mut params, &mut derived);
-    json!({
-        "model": r.model,
-        "factors": r.factors.trim(),
-        "start": start_json(r),
-        "params": params,
-        "derived": derived,
-        "verdict": r.verdict,
-        "notes": r.notes,
-        "correlation": correlation_json(r),
-        "singular_values": r.singular_values.iter().map(|v| num(*v)).collect::<Vec<_>>(),
-        "condition": num(r.condition),
-        "validity": validity_json(r),
-        "adequacy": adequacy_json(r),
-        "cost": num(r.cost),
-        "loss": {"kind": r.loss.kind, "f_scale": num(r.loss.f_scale), "beyond_f_scale": r.beyond_f_scale},
-        "chi2": num(r.chi2),
-        "reduced_chi2": num(r.reduced_chi2),
-        "rms": num(r.rms),
-        "max_abs_residual": num(r.max_abs_residual),
-        "r2": num(r.r2),
-        "aic": num(r.aic),
-        "bic": num(r.bic),
-        "n": r.n,
-        "n_free": r.n_free,
-        "termination": termination_name(r.termination),
-        "converged": r.converged(),
-        "iterations": r.iterations,
-        "evaluations": r.evaluations,
-        "jacobian_evaluations": r.jacobian_evaluations,
-        "seconds": r.seconds,
-        "interval_seconds": info.interval_seconds,
-        "init_seconds": r.init_seconds,
-        "start_seconds": r.start_seconds,
-        "start_from": if r.started_near { "neighbour" } else { "search" },
-        "modes": r.modes,
-        "fitted_computed": r.fitted_computed,
-        "g_range": r.g_range.map(|(a, b)| vec![num(a), num(b)]),
-        "input": info.input,
-        "setting": info.setting,
-        "command": info.command,
-        "version": info.version,
-    })
-}
-
-/// One entry per fitted parameter, keyed by its name: value, standard error (null when
-/// unknown or non-finite), whether the data determine it, whether it was held fixed, and
-/// its unit in the run's unit setting.
-fn params_json(r: &FitResult, info: &RunInfo) -> Map<String, Value> {
+/// The parameter table in the run's unit setting.
+fn params_of(r: &FitResult, info: &RunInfo) -> BTreeMap<String, ParamEntry> {
     let units = &info.setting.units;
-    let mut params = Map::new();
-    for p in &r.params {
-        params.insert(
-            p.name.clone(),
-            json!({
-                "value": num(p.value),
-                "stderr": p.stderr.map(num),
-                "determined": p.determined,
-                "fixed": p.fixed,
-                "unit": units.of_param(&p.name),
-            }),
-        );
-    }
-    params
+    r.params
+        .iter()
+        .map(|p| {
+            let entry = ParamEntry {
+                value: num(p.value),
+                stderr: p.stderr.and_then(num),
+                determined: p.determined,
+                fixed: p.fixed,
+                unit: units.of_param(&p.name),
+                interval68: None,
+                interval95: None,
+            };
+            (p.name.clone(), entry)
+        })
+        .collect()
 }
 
-/// One entry per derived quantity, keyed by its name: value, standard error, whether it is
-/// determined, its one-line description and its unit (which depends on whether the verdict
-/// is a smooth surface).
-fn derived_json(r: &FitResult, info: &RunInfo) -> Map<String, Value> {
+/// The derived quantities, their units depending on whether the verdict is a smooth
+/// surface.
+fn derived_of(r: &FitResult, info: &RunInfo) -> BTreeMap<String, DerivedEntry> {
     let units = &info.setting.units;
-    let smooth = r.verdict == crate::fit::driver::Verdict::Smooth;
-    let mut derived = Map::new();
-    for d in &r.derived {
-        derived.insert(
-            d.name.clone(),
-            json!({"value": num(d.value), "stderr": d.stderr.map(num), "determined": d.determined, "doc": d.doc, "unit": units.of_derived(&d.name, smooth)}),
-        );
-    }
-    derived
+    let smooth = r.verdict == Verdict::Smooth;
+    r.derived
+        .iter()
+        .map(|d| {
+            let entry = DerivedEntry {
+                value: num(d.value),
+                stderr: d.stderr.and_then(num),
+                determined: d.determined,
+                doc: d.doc.clone(),
+                unit: units.of_derived(&d.name, smooth),
+                interval68: None,
+                interval95: None,
+            };
+            (d.name.clone(), entry)
+        })
+        .collect()
 }
 
 /// Adds the profile intervals to the entries they belong to (a parameter's name first, else
-/// a derived quantity's): `interval68` / `interval95` = `[lo, hi]`, null for an open side.
-/// An interval whose name matches neither table, or whose level was not computed, adds
-/// nothing.
+/// a derived quantity's). An interval whose name matches neither table, or whose level was
+/// not computed, adds nothing.
 fn attach_intervals(
     info: &RunInfo,
-    params: &mut Map<String, Value>,
-    derived: &mut Map<String, Value>,
+    params: &mut BTreeMap<String, ParamEntry>,
+    derived: &mut BTreeMap<String, DerivedEntry>,
 ) {
     for iv in &info.intervals {
-        let target = if params.contains_key(&iv.name) {
-            params.get_mut(&iv.name)
-        } else {
-            derived.get_mut(&iv.name)
+        let level = |prob: f64| {
+            iv.at(prob)
+                .map(|l| [l.lo.value().and_then(num), l.hi.value().and_then(num)])
         };
-        if let Some(Value::Object(m)) = target {
-            for (key, prob) in [("interval68", LEVELS[0]), ("interval95", LEVELS[1])] {
-                if let Some(l) = iv.at(prob) {
-                    m.insert(
-                        key.into(),
-                        json!([l.lo.value().map(num), l.hi.value().map(num)]),
-                    );
-                }
-            }
+        let (lo68, hi95) = (level(LEVELS[0]), level(LEVELS[1]));
+        if let Some(p) = params.get_mut(&iv.name) {
+            (p.interval68, p.interval95) = (lo68, hi95);
+        } else if let Some(d) = derived.get_mut(&iv.name) {
+            (d.interval68, d.interval95) = (lo68, hi95);
         }
     }
 }
 
 /// The start point of the fit, parameter name → starting value.
-fn start_json(r: &FitResult) -> Map<String, Value> {
+fn start_of(r: &FitResult) -> BTreeMap<String, Option<f64>> {
     r.layout
         .params
         .iter()
@@ -154,35 +395,39 @@ fn start_json(r: &FitResult) -> Map<String, Value> {
         .collect()
 }
 
-/// The correlation matrix with its row/column names and the most correlated pairs
-/// (the same pairs the text report lists), non-finite entries as null.
-fn correlation_json(r: &FitResult) -> Value {
+/// The correlation matrix with its names and the most correlated pairs.
+fn correlation_of(r: &FitResult) -> Correlation {
     let k = r.corr_names.len();
-    let matrix: Vec<Vec<Value>> = (0..k)
-        .map(|i| (0..k).map(|j| num(r.correlation[(i, j)])).collect())
-        .collect();
-    json!({
-        "names": r.corr_names,
-        "matrix": matrix,
-        "largest": super::text::top_pairs(r, super::text::TOP_PAIRS)
+    Correlation {
+        names: r.corr_names.clone(),
+        matrix: (0..k)
+            .map(|i| (0..k).map(|j| num(r.correlation[(i, j)])).collect())
+            .collect(),
+        largest: super::text::top_pairs(r, super::text::TOP_PAIRS)
             .into_iter()
-            .map(|(a, b, rho)| json!({"a": a, "b": b, "rho": num(rho)}))
-            .collect::<Vec<_>>(),
-    })
+            .map(|(a, b, rho)| Pair {
+                a,
+                b,
+                rho: num(rho),
+            })
+            .collect(),
+    }
 }
 
-/// The validity checks keyed by name (satisfied, value, limit, text), or null when the
-/// fit ran none.
-fn validity_json(r: &FitResult) -> Option<Map<String, Value>> {
+/// The validity checks keyed by name, or None when the fit ran none.
+fn validity_of(r: &FitResult) -> Option<BTreeMap<String, ValidityEntry>> {
     r.validity.as_ref().map(|v| {
         v.checks
             .iter()
             .map(|c| {
-                (
-                    c.name.to_string(),
-                    json!({"satisfied": c.satisfied, "value": num(c.value), "limit": c.limit, "text": c.text}),
-                )
+                let entry = ValidityEntry {
+                    satisfied: c.satisfied,
+                    value: num(c.value),
+                    limit: c.limit,
+                    text: c.text.clone(),
+                };
+                (c.name.to_string(), entry)
             })
-            .collect::<Map<String, Value>>()
+            .collect()
     })
 }

@@ -5,7 +5,6 @@
 use super::{json, text, RunInfo};
 use crate::fit::dataset::Outcome;
 use crate::fit::driver::FitResult;
-use serde_json::Value;
 
 /// One candidate of a model comparison (`--model auto`), as every report shows it.
 pub struct Candidate<'a> {
@@ -27,7 +26,10 @@ impl Candidate<'_> {
         } else if r.termination == crate::lm::Termination::Degenerate {
             "degenerate (not usable)".into()
         } else {
-            format!("not converged ({}; not usable)", termination_name(r))
+            format!(
+                "not converged ({}; not usable)",
+                json::termination_name(r.termination)
+            )
         }
     }
 
@@ -39,11 +41,6 @@ impl Candidate<'_> {
             _ => "",
         }
     }
-}
-
-/// The termination as JSON names it (`ftol`, `maxiterations`, `degenerate`, …).
-fn termination_name(r: &FitResult) -> String {
-    format!("{:?}", r.termination).to_lowercase()
 }
 
 /// The outcome's candidates with their ΔBIC to the chosen fit and the ties
@@ -73,34 +70,33 @@ pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
         .collect()
 }
 
-/// The outcome's report as one JSON object: [`json::to_json`] of the chosen fit, `replay`
-/// (see [`replay_json`]) and, for several candidates, `comparison` (per candidate: model,
-/// bic, aic, cost, converged, termination, delta_bic, chosen, tie). `args` are the fit's
+/// The outcome's report: [`json::FitReport::of`] the chosen fit, with its `replay` block
+/// ([`replay`]) and, for several candidates, the `comparison`. `args` are the fit's
 /// command-line arguments (without the program name) that `goniofit plot` parses again.
-pub fn to_json(o: &Outcome, info: &RunInfo, args: &[String]) -> Value {
-    let mut v = json::to_json(&o.result, info);
-    v["replay"] = replay_json(&o.result, args);
+pub fn report(o: &Outcome, info: &RunInfo, args: &[String]) -> json::FitReport {
+    let mut report = json::FitReport::of(&o.result, info);
+    report.replay = Some(replay(&o.result, args));
     let rows = comparison(o);
     if !rows.is_empty() {
-        let num = |x: f64| {
-            if x.is_finite() {
-                Value::from(x)
-            } else {
-                Value::Null
-            }
-        };
-        v["comparison"] = rows
-            .iter()
-            .map(|c| {
-                let r = c.result;
-                serde_json::json!({"model": r.full_model(), "bic": num(r.bic), "aic": num(r.aic),
-                    "cost": num(r.cost), "converged": r.converged(),
-                    "termination": termination_name(r), "delta_bic": num(c.delta_bic),
-                    "chosen": c.chosen, "tie": c.tie})
-            })
-            .collect();
+        report.comparison = Some(rows.iter().map(comparison_row).collect());
     }
-    v
+    report
+}
+
+/// A candidate as the report's comparison lists it.
+fn comparison_row(c: &Candidate) -> json::ComparisonRow {
+    let r = c.result;
+    json::ComparisonRow {
+        model: r.full_model(),
+        bic: json::num(r.bic),
+        aic: json::num(r.aic),
+        cost: json::num(r.cost),
+        converged: r.converged(),
+        termination: json::termination_name(r.termination),
+        delta_bic: json::num(c.delta_bic),
+        chosen: c.chosen,
+        tie: c.tie,
+    }
 }
 
 /// The outcome's report as text: the model comparison (the lowest BIC among the usable
@@ -135,19 +131,17 @@ pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
     s + &text::render(&o.result, info)
 }
 
-/// What `goniofit plot` needs to redraw a fit from its JSON report: the fit's command-line
-/// arguments, the model with its factor options (`model`, `factors`: those of an `auto`
-/// choice are not among the arguments) and the fitted values of every parameter (layout
-/// order).
-pub fn replay_json(r: &FitResult, args: &[String]) -> Value {
-    serde_json::json!({
-        "args": args,
-        "model": r.model,
-        "factors": r.factors.trim(),
-        "names": r.layout.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
-        "values": r.values,
-        "n_free": r.n_free,
-    })
+/// What `goniofit plot` needs to redraw fit `r` ([`json::Replay`]), `args` being the
+/// fit's command-line arguments.
+pub fn replay(r: &FitResult, args: &[String]) -> json::Replay {
+    json::Replay {
+        args: args.to_vec(),
+        model: r.model.clone(),
+        factors: r.factors.trim().to_string(),
+        names: r.layout.params.iter().map(|p| p.name.clone()).collect(),
+        values: r.values.clone(),
+        n_free: r.n_free,
+    }
 }
 
 /// Where a fit's setting came from, beside the dataset and the fit input: what the caller

@@ -4,10 +4,10 @@
 use crate::fit::problem::weights::WeightsInfo;
 use crate::fit::problem::ResidualKind;
 use crate::geometry::Quantity;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Units of a fit's quantities.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Units {
     /// Unit of λ, σ, T and patch sizes (`nm`, `µm`); None when nothing states it.
     pub length: Option<String>,
@@ -59,7 +59,7 @@ impl Units {
 pub use crate::fit::driver::base_name;
 
 /// The input file as fitted.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct InputInfo {
     /// Absolute path (so the report can be used from any directory).
     pub path: String,
@@ -70,7 +70,7 @@ pub struct InputInfo {
 }
 
 /// The wavelength of the fit.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct WavelengthInfo {
     /// The distinct wavelengths of the fitted samples (one for a single-channel fit).
     pub values: Vec<f64>,
@@ -82,7 +82,7 @@ pub struct WavelengthInfo {
 }
 
 /// The floor of relative and log residuals.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FloorInfo {
     /// The floor (unit of the measured value).
     pub value: f64,
@@ -93,7 +93,7 @@ pub struct FloorInfo {
 }
 
 /// The whole setting of a fit.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
     pub input: InputInfo,
     pub wavelength: WavelengthInfo,

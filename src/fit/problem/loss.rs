@@ -32,10 +32,10 @@
 //! `ln_1p`/`sqrt` forms without cancellation at small z).
 
 use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Which robust loss ρ (scipy's names).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LossKind {
     /// ρ(z) = z: plain least squares.

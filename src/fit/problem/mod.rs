@@ -42,7 +42,7 @@ const BLOCK: usize = 1024;
 const PARALLEL_GROUP: usize = 64;
 
 /// What a residual measures.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ResidualKind {
     /// rᵢ = fᵢ − yᵢ.

@@ -11,7 +11,7 @@ use super::ResidualKind;
 use crate::geometry::PerSample;
 
 /// Where the weights came from, and how they were transformed.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WeightsInfo {
     /// `sigma_L column`, `weight column` or `none`.
     pub source: String,

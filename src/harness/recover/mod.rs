@@ -166,7 +166,7 @@ pub struct SceneResult {
     /// of its reasons: a correct model with correct weights should be flagged in at most
     /// [`crate::fit::stats::adequacy::ALPHA`] of the scenes.
     pub adequacy: Option<AdequacyVerdict>,
-    pub adequacy_reasons: Vec<&'static str>,
+    pub adequacy_reasons: Vec<String>,
     /// With a Fresnel factor: whether the fit says the data determines n (None without
     /// the factor, or when the fit failed).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -537,7 +537,12 @@ fn fit_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> SceneResult 
             checks: score(scene, &fit),
             error: None,
             adequacy: Some(fit.adequacy.verdict),
-            adequacy_reasons: fit.adequacy.reasons.iter().map(|r| r.code).collect(),
+            adequacy_reasons: fit
+                .adequacy
+                .reasons
+                .iter()
+                .map(|r| r.code.to_string())
+                .collect(),
             n_determined: fit
                 .params
                 .iter()

@@ -20,8 +20,8 @@ use input::{busiest, check, eval_group, plane_curve_samples, wavelength_text};
 pub(crate) use input::{checked_groups, group_label, quantity_desc};
 pub use input::{groups, plane_samples, signed_theta_r_deg, Channels, FitPlotInput, Group};
 pub use of_fit::{
-    key_svg_of_outcome, plot_fit, plot_status, png_of_outcome, svg_of_fit, svg_of_outcome,
-    undetermined_params, with_plot_input, FitToDraw,
+    key_svg_of_outcome, plot_fit, png_of_outcome, svg_of_fit, svg_of_outcome, with_plot_input,
+    FitToDraw,
 };
 pub use polar::{polar_plot, PolarPlot, POLAR_RIM};
 

@@ -1,64 +1,11 @@
 //! The pictures of a finished fit: the picture input built from the fit's problem (fitted
-//! values, standardized residuals, per-channel parameters), and the status line and title
+//! values, standardized residuals, per-channel parameters), titled with the status line
 //! its report gives. Used by `fit --plot`/`--html`, `goniofit plot` and Python's
 //! `FitResult.figures()`.
 
 use crate::error::Result;
-use crate::fit::driver::{self, FitConfig, FitInput, Verdict};
+use crate::fit::driver::{self, FitConfig, FitInput};
 use std::path::{Path, PathBuf};
-
-/// The free parameters the fit's JSON report marks as not determined by the data.
-pub fn undetermined_params(json: &serde_json::Value) -> Vec<String> {
-    json["params"]
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .filter(|(_, p)| p["determined"] == false && p["fixed"] != true)
-                .map(|(k, _)| k.clone())
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
-/// The pictures' second title line, from the fit's JSON report (so that `goniofit plot`
-/// says the same as `fit --plot`): T/σ with its standard error, the parameters the data
-/// does not determine, and whether the fit converged (or why not).
-pub fn plot_status(json: &serde_json::Value) -> String {
-    use crate::plot::fmt_num;
-    let mut parts = Vec::new();
-    if let Some(d) = json["derived"].get("T/sigma") {
-        if let Some(v) = d["value"].as_f64() {
-            parts.push(match d["stderr"].as_f64().filter(|e| e.is_finite()) {
-                Some(e) => format!("T/σ = {} ± {}", fmt_num(v), fmt_num(e)),
-                None => format!("T/σ = {}", fmt_num(v)),
-            });
-        }
-    }
-    let mut undetermined: Vec<String> = undetermined_params(json)
-        .iter()
-        .map(|k| k.replace("sigma", "σ"))
-        .collect();
-    // σ and T first, as in the report.
-    undetermined.sort_by_key(|k| (k != "σ", k != "T", k.clone()));
-    // The text report's words for a verdict that leaves something undetermined (σ drawn
-    // as the glyph the pictures can show).
-    let verdict = json["verdict"].as_str().and_then(Verdict::from_name);
-    if let Some(v) = verdict.filter(|v| *v != Verdict::Full) {
-        parts.push(v.describe().replace("sigma", "σ"));
-    }
-    if !undetermined.is_empty() {
-        parts.push(format!("not determined: {}", undetermined.join(", ")));
-    }
-    let termination = json["termination"].as_str().unwrap_or("?");
-    parts.push(if json["converged"] == true {
-        format!("converged ({termination})")
-    } else if termination == "degenerate" {
-        "degenerate: not a usable optimum (see the report's notes)".to_string()
-    } else {
-        format!("not converged ({termination}): the best point so far")
-    });
-    parts.join("; ")
-}
 
 /// A fit to draw: its layout, parameter values, and fitted values when the fit has them
 /// (else they are evaluated here).
@@ -104,7 +51,7 @@ pub fn svg_of_fit(
 
 /// Call `draw` with the picture input of a fit at parameter values `fit.1` (layout
 /// `fit.0`; `fit.2` its fitted values when the fit has them, else they are evaluated
-/// here), with `status.0` (see [`plot_status`]) under the titles, the parameters of
+/// here), with `status.0` (the report's status line) under the titles, the parameters of
 /// `status.1` (not determined by the data) named in the title without a value, and λ in
 /// `unit`. A joint fit draws every channel with its own parameters (the polar and contour
 /// maps: the busiest θi's channel, named in their titles).
@@ -225,16 +172,17 @@ fn plot_title(
     title
 }
 
-/// The pictures of a dataset's fit `o` in memory as (name, SVG document), titled with the
-/// status of its JSON report `json`; none when the fit was stopped before its fitted values
-/// were evaluated. `unit`: the unit of λ.
+/// The pictures of a dataset's fit `o` in memory as (name, SVG document), titled with
+/// `status` (the report's status line and the parameters the data does not determine:
+/// `FitReport::status_line` and `FitReport::undetermined` of the report); none when the
+/// fit was stopped before its fitted values were evaluated. `unit`: the unit of λ.
 pub fn svg_of_outcome(
     config: &FitConfig,
     o: &crate::fit::dataset::Outcome,
-    json: &serde_json::Value,
+    status: (&str, &[String]),
     unit: Option<&str>,
 ) -> Result<Vec<(String, String)>> {
-    of_outcome(config, o, json, unit, crate::plot::fit::svg_pictures)
+    of_outcome(config, o, status, unit, crate::plot::fit::svg_pictures)
 }
 
 /// The key picture of `o` alone (see [`svg_of_outcome`]): measured and fitted values on a
@@ -243,10 +191,10 @@ pub fn svg_of_outcome(
 pub fn key_svg_of_outcome(
     config: &FitConfig,
     o: &crate::fit::dataset::Outcome,
-    json: &serde_json::Value,
+    status: (&str, &[String]),
     unit: Option<&str>,
 ) -> Result<Option<String>> {
-    let svg = of_outcome(config, o, json, unit, |input| {
+    let svg = of_outcome(config, o, status, unit, |input| {
         super::check(input)?;
         let chart = super::fit_chart(input, true)?;
         Ok(vec![(String::new(), crate::plot::svg_string(&chart)?)])
@@ -258,17 +206,17 @@ pub fn key_svg_of_outcome(
 pub fn png_of_outcome(
     config: &FitConfig,
     o: &crate::fit::dataset::Outcome,
-    json: &serde_json::Value,
+    status: (&str, &[String]),
     unit: Option<&str>,
 ) -> Result<Vec<(String, Vec<u8>)>> {
-    of_outcome(config, o, json, unit, crate::plot::fit::png_pictures)
+    of_outcome(config, o, status, unit, crate::plot::fit::png_pictures)
 }
 
 /// The pictures of `o` drawn by `draw` (see [`svg_of_outcome`]).
 fn of_outcome<T>(
     config: &FitConfig,
     o: &crate::fit::dataset::Outcome,
-    json: &serde_json::Value,
+    status: (&str, &[String]),
     unit: Option<&str>,
     draw: impl FnOnce(&crate::plot::fit::FitPlotInput) -> Result<Vec<(String, T)>>,
 ) -> Result<Vec<(String, T)>> {
@@ -279,7 +227,7 @@ fn of_outcome<T>(
         config,
         &o.input,
         (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
-        (&plot_status(json), &undetermined_params(json)),
+        status,
         unit,
         draw,
     )

@@ -34,6 +34,7 @@ use crate::geometry::{Geometry, PerSample};
 use distributions::{chi2_sf, normal_sf, sign_test, slope, spearman, Runs};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
+use std::borrow::Cow;
 
 /// Family-wise significance level of the adequacy tests (Bonferroni-corrected).
 pub const ALPHA: f64 = 1e-3;
@@ -45,7 +46,7 @@ pub const FAR_DEG: f64 = 45.0;
 pub const MIN_SAMPLES: usize = 10;
 
 /// The verdict on a fit's adequacy.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AdequacyVerdict {
     /// No test rejects the model or its weights.
@@ -80,59 +81,68 @@ impl AdequacyVerdict {
 }
 
 /// One reason of a flagged verdict.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Reason {
     /// Short name: chi2_high, chi2_low, runs, proportional_noise, grazing_above,
     /// grazing_below, peak_below, peak_above, floor, far_above, far_below.
-    pub code: &'static str,
+    pub code: Cow<'static, str>,
     /// What it means, in words, with the numbers.
     pub text: String,
     /// The test's p-value.
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub p: f64,
 }
 
 /// The runs test of the residual signs along the scans.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunsTest {
     pub runs: usize,
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub expected: f64,
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub sd: f64,
     pub signs: usize,
     pub scans: usize,
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub p: f64,
 }
 
 /// The spread of the weighted residuals against L.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SpreadTest {
     /// Disjoint triples of scan neighbours.
     pub triples: usize,
     /// Spearman ρ of |second difference| with the mean fitted value of the triple.
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub rho: f64,
     /// Slope of ln |second difference| on ln fitted value: ≈ 0 for constant noise, ≈ 1 for
     /// noise proportional to L (NaN when not computable).
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub slope: f64,
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub p: f64,
 }
 
 /// The sign test of one region of the hemisphere.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RegionTest {
     /// grazing, peak or far.
-    pub region: &'static str,
+    pub region: Cow<'static, str>,
     /// Samples in the region with a non-zero residual.
     pub n: usize,
     /// Of which the measured value lies above the model (negative residual).
     pub data_above: usize,
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub p: f64,
 }
 
 /// The adequacy of a fit: verdict, reasons and the statistics behind them.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Adequacy {
     pub verdict: AdequacyVerdict,
     pub reasons: Vec<Reason>,
     /// Family-wise significance level; each test is held to `alpha / tests`.
+    #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub alpha: f64,
     /// Number of tests run.
     pub tests: usize,
@@ -171,7 +181,7 @@ impl Adequacy {
 
     /// The reason codes, comma-separated ("" when none).
     pub fn codes(&self) -> String {
-        let codes: Vec<&str> = self.reasons.iter().map(|r| r.code).collect();
+        let codes: Vec<&str> = self.reasons.iter().map(|r| r.code.as_ref()).collect();
         codes.join(",")
     }
 }
@@ -239,14 +249,18 @@ pub fn assess(fr: &FitResiduals) -> Adequacy {
     let level = ALPHA / outcomes.len() as f64;
     for o in outcomes {
         if let (true, Some((code, text))) = (o.p < level, o.reason) {
-            out.reasons.push(Reason { code, text, p: o.p });
+            out.reasons.push(Reason {
+                code: code.into(),
+                text,
+                p: o.p,
+            });
         }
     }
     // Weights that do not follow the noise come first: they also bend the fit, so the
     // misfit reasons that remain may follow from them.
     out.reasons
-        .sort_by_key(|r| (r.code != "proportional_noise", wording::is_misfit(r.code)));
-    out.verdict = if out.reasons.iter().any(|r| wording::is_misfit(r.code)) {
+        .sort_by_key(|r| (r.code != "proportional_noise", wording::is_misfit(&r.code)));
+    out.verdict = if out.reasons.iter().any(|r| wording::is_misfit(&r.code)) {
         AdequacyVerdict::Misfit
     } else if out.reasons.is_empty() {
         AdequacyVerdict::Adequate
@@ -529,7 +543,7 @@ fn region_tests(fr: &FitResiduals, w: &Weighted, out: &mut Adequacy) -> Vec<Outc
         }
         let above = signs.iter().filter(|&&a| a).count();
         let test = RegionTest {
-            region,
+            region: region.into(),
             n: signs.len(),
             data_above: above,
             p: sign_test(above, signs.len()),

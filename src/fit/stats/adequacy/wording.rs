@@ -35,7 +35,7 @@ pub(super) fn headline(a: &Adequacy) -> String {
         AdequacyVerdict::Adequate => {
             format!("adequate: no test finds the model or its weights at odds with the data ({tests})")
         }
-        AdequacyVerdict::Misfit if a.reasons.iter().any(|r| !is_misfit(r.code)) => format!(
+        AdequacyVerdict::Misfit if a.reasons.iter().any(|r| !is_misfit(&r.code)) => format!(
             "misfit: the model does not describe these data, and the weights do not match the noise; weigh the samples as measured first, since some of the misfit may follow from the weighting ({tests})"
         ),
         AdequacyVerdict::Misfit => {
@@ -129,7 +129,7 @@ pub(super) fn region(t: &RegionTest, has_diffuse: bool) -> (&'static str, String
         count(t.data_above, "above"),
         count(t.n - t.data_above, "below"),
     );
-    match (t.region, above) {
+    match (t.region.as_ref(), above) {
         ("grazing", true) => ("grazing_above", format!(
             "the measured values rise above the model beyond θ = {GRAZING_DEG:.0}° ({a}), as unmodelled Fresnel reflection would")),
         ("grazing", false) => ("grazing_below", format!(
