@@ -706,7 +706,10 @@ fn json_reports_read_back_into_the_typed_report() {
     let report = round_trip(&auto);
     assert!(report.comparison.as_ref().is_some_and(|c| c.len() > 1));
     assert!(report.replay.is_some());
-    assert!(report.params.values().any(|p| p.interval95.is_some()));
+    assert!(report
+        .params
+        .values()
+        .any(|p| p.estimate.interval95.is_some()));
     assert_eq!(report.adequacy.headline, auto["adequacy"]["headline"]);
     let batch = fit_json(&[
         "fit",

@@ -83,40 +83,38 @@ pub struct FitReport {
     pub comparison: Option<Vec<ComparisonRow>>,
 }
 
-/// A fitted parameter.
+/// An estimate: its value, standard error (null when unknown), whether the data determine
+/// it, and its profile-likelihood intervals at 68.27 % and 95 % (`[lo, hi]`, null for an
+/// open side) when computed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ParamEntry {
+pub struct Estimate {
     pub value: Option<f64>,
-    /// The standard error; null when unknown.
     pub stderr: Option<f64>,
-    /// Whether the data determine it.
     pub determined: bool,
-    /// Whether it was held fixed.
-    pub fixed: bool,
-    /// Its unit in the run's unit setting.
-    pub unit: String,
-    /// The profile-likelihood intervals at 68.27 % and 95 % (`[lo, hi]`, null for an open
-    /// side), when computed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interval68: Option<[Option<f64>; 2]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interval95: Option<[Option<f64>; 2]>,
 }
 
-/// A derived quantity.
+/// A fitted parameter: its estimate, whether it was held fixed, and its unit in the run's
+/// unit setting.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParamEntry {
+    #[serde(flatten)]
+    pub estimate: Estimate,
+    pub fixed: bool,
+    pub unit: String,
+}
+
+/// A derived quantity: its estimate, its meaning in one line, and its unit (which depends
+/// on whether the verdict is a smooth surface).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DerivedEntry {
-    pub value: Option<f64>,
-    pub stderr: Option<f64>,
-    pub determined: bool,
-    /// Its meaning in one line.
+    #[serde(flatten)]
+    pub estimate: Estimate,
     pub doc: String,
-    /// Its unit (depends on whether the verdict is a smooth surface).
     pub unit: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub interval68: Option<[Option<f64>; 2]>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub interval95: Option<[Option<f64>; 2]>,
 }
 
 /// The robust loss: its kind, its scale C and how many samples lie beyond it (null for
@@ -280,7 +278,7 @@ impl FitReport {
     pub fn status_line(&self) -> String {
         use crate::error::fmt_num;
         let mut parts = Vec::new();
-        let t_over_sigma = self.derived.get("T/sigma");
+        let t_over_sigma = self.derived.get("T/sigma").map(|d| &d.estimate);
         if let Some((value, d)) = t_over_sigma.and_then(|d| Some((d.value?, d))) {
             parts.push(match d.stderr {
                 Some(e) => format!("T/σ = {} ± {}", fmt_num(value), fmt_num(e)),
@@ -315,9 +313,22 @@ impl FitReport {
     pub fn undetermined(&self) -> Vec<String> {
         self.params
             .iter()
-            .filter(|(_, p)| !p.determined && !p.fixed)
+            .filter(|(_, p)| !p.estimate.determined && !p.fixed)
             .map(|(k, _)| k.clone())
             .collect()
+    }
+}
+
+impl Estimate {
+    /// A value with its standard error, without intervals (non-finite numbers as None).
+    fn of(value: f64, stderr: Option<f64>, determined: bool) -> Estimate {
+        Estimate {
+            value: num(value),
+            stderr: stderr.and_then(num),
+            determined,
+            interval68: None,
+            interval95: None,
+        }
     }
 }
 
@@ -328,13 +339,9 @@ fn params_of(r: &FitResult, info: &RunInfo) -> BTreeMap<String, ParamEntry> {
         .iter()
         .map(|p| {
             let entry = ParamEntry {
-                value: num(p.value),
-                stderr: p.stderr.and_then(num),
-                determined: p.determined,
+                estimate: Estimate::of(p.value, p.stderr, p.determined),
                 fixed: p.fixed,
                 unit: units.of_param(&p.name),
-                interval68: None,
-                interval95: None,
             };
             (p.name.clone(), entry)
         })
@@ -350,13 +357,9 @@ fn derived_of(r: &FitResult, info: &RunInfo) -> BTreeMap<String, DerivedEntry> {
         .iter()
         .map(|d| {
             let entry = DerivedEntry {
-                value: num(d.value),
-                stderr: d.stderr.and_then(num),
-                determined: d.determined,
+                estimate: Estimate::of(d.value, d.stderr, d.determined),
                 doc: d.doc.clone(),
                 unit: units.of_derived(&d.name, smooth),
-                interval68: None,
-                interval95: None,
             };
             (d.name.clone(), entry)
         })
@@ -376,11 +379,12 @@ fn attach_intervals(
             iv.at(prob)
                 .map(|l| [l.lo.value().and_then(num), l.hi.value().and_then(num)])
         };
-        let (lo68, hi95) = (level(LEVELS[0]), level(LEVELS[1]));
-        if let Some(p) = params.get_mut(&iv.name) {
-            (p.interval68, p.interval95) = (lo68, hi95);
-        } else if let Some(d) = derived.get_mut(&iv.name) {
-            (d.interval68, d.interval95) = (lo68, hi95);
+        let estimate = match params.get_mut(&iv.name) {
+            Some(p) => Some(&mut p.estimate),
+            None => derived.get_mut(&iv.name).map(|d| &mut d.estimate),
+        };
+        if let Some(e) = estimate {
+            (e.interval68, e.interval95) = (level(LEVELS[0]), level(LEVELS[1]));
         }
     }
 }
