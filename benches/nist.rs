@@ -12,7 +12,7 @@
 //! problem wrappers), worst-parameter LRE per run, and the wall time of the whole suite as
 //! the median over the repeats (the two solvers interleaved run by run); ratios are goniofit / levenberg-marquardt.
 
-#[path = "../tests/nist/problems.rs"]
+#[path = "../tests/lib/nist/problems.rs"]
 mod problems;
 
 use goniofit::geometry::median;

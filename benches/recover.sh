@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The larger recovery check: `goniofit recover --scenes N --seed S --json` at each seed
 # (default 150 scenes at the three seeds 2718, 16180, 90210, which no test uses;
-# tests/recover.rs uses 11, 4242, 777, 31337 and 5).
+# tests/trust/recover.rs uses 11, 4242, 777, 31337 and 5).
 # Prints per regime the ±2 s.e. coverage pooled over the seeds, and every confidently
 # wrong scene (converged, a determined quantity off by more than 10 s.e. and 20 %) with the
 # command that reproduces it. Exits 1 unless no scene is confidently wrong and every

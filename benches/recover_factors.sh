@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Synthetic recovery of the extended lobe: `goniofit recover --scenes N --seed S --fresnel
 # dielectric --shadowing smith --json` at each seed (default 150 scenes at the seeds 2929,
-# 4141, 7373; tests/recover.rs runs a small slice at seed 29). Every scene's truth and fit
+# 4141, 7373; tests/trust/recover.rs runs a small slice at seed 29). Every scene's truth and fit
 # carry the dielectric Fresnel factor (n drawn from 1.3 to 2.5) and Smith shadowing; every
 # twelfth scene is measured in-plane up to 40° only, where n must come out not determined.
 # Prints, per seed and pooled, the ±2 s.e. coverage of each quantity (σ, T, scale, T/σ,

@@ -28,7 +28,7 @@
 //! | `kappa` (κ) | 1 | > 0 (F is even in κ; κ = 0 is the dielectric form) |
 //!
 //! Accuracy: F to 1e-13 relative and ∂F/∂n, ∂F/∂κ to 1e-12 (|∂F| + F), tested against a
-//! 30-digit mpmath reference of the textbook r_s, r_p formulas (`tests/fresnel_shadowing.rs`:
+//! 30-digit mpmath reference of the textbook r_s, r_p formulas (`tests/lib/fresnel_shadowing.rs`:
 //! n 1.01–4, κ 0–10, θ_loc up to 89.9°; worst measured 3e-15 and 5e-15). F is finite wherever w ≠ 0, i.e. except at the critical angle of a real
 //! index n < 1 (and n = 1, κ = 0 at exact grazing). Beyond that critical angle F has a
 //! kink at κ = 0, and ∂F/∂κ there is the derivative from κ > 0.

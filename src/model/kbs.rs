@@ -31,7 +31,7 @@
 //! Accuracy: in `series` and `auto` modes, relative `tol` (default 1e-10) on L for results
 //! that are normal floating-point numbers, and |Δ ∂ln L/∂ln σ|, |Δ ∂ln L/∂ln T| ≤
 //! 2 tol (1 + |·|) on the Jacobian, plus rounding of a few ulps times the condition number
-//! (see [`super::series`]; checked against a 60-digit reference in `tests/kbs_reference.rs`,
+//! (see [`super::series`]; checked against a 60-digit reference in `tests/lib/kbs_reference.rs`,
 //! worst measured relative error of L 3e-12). `smooth` and `rough` are the paper's
 //! approximations (eq. 42, 43), exact only in their limits.
 

@@ -37,7 +37,7 @@
 //!   orders decay by at least 2× per step, and the estimate is below 0.15 tol. Unlike the
 //!   series' tail bounds this estimate is not a proof; it is checked against the mpmath
 //!   grid (worst error found 0.13 of the claim) and against the series at 3000 random
-//!   (g, a) (`tests/model_props.rs`). Work: the orders are evaluated four at a time, in
+//!   (g, a) (`tests/lib/model_props.rs`). Work: the orders are evaluated four at a time, in
 //!   four-lane vectors (`src/model/lanes.rs`): Horner in b² on four vectors (even and odd parts
 //!   of P_n and P_n'), 4k+4 fused multiply-adds of four lanes for the k-th group of four
 //!   orders, then the group's sums and acceptance tests as vector operations (no branch
@@ -711,7 +711,7 @@ mod tests {
 
     /// Both portable roundings (fused, and the separate roundings CPUs without FMA run)
     /// meet the accuracy claim of the module doc against the 60-digit mpmath reference
-    /// (`tests/ref/kbs_reference_q.csv`, the grid `tests/kbs_reference.rs` checks the
+    /// (`tests/ref/kbs_reference_q.csv`, the grid `tests/lib/kbs_reference.rs` checks the
     /// dispatched code on), in `series` and `auto` modes at tol 1e-10.
     #[test]
     fn portable_lanes_meet_tol_against_mpmath() {

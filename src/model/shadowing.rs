@@ -13,7 +13,7 @@
 //! θ = 90°.
 //!
 //! Accuracy: G to 1e-13 relative and ∂ln G/∂ln T to 1e-11 (1 + |·|), tested against a
-//! 30-digit mpmath reference of the erf form (`tests/fresnel_shadowing.rs`: θ up to 89.9°,
+//! 30-digit mpmath reference of the erf form (`tests/lib/fresnel_shadowing.rs`: θ up to 89.9°,
 //! T/σ 0.5–200; worst measured 5e-16 and 2e-16), and Λ(ν) itself to 1e-15 (1 + Λ) against
 //! a dense 30-digit table of ν from 1e-3 to 6.5 (`tests/ref/lambda_reference.csv`).
 //!

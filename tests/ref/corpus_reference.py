@@ -19,7 +19,7 @@ re-fits a handful of rows with an independent numpy model and scipy.
 The table gives the best point overall and the best point inside the physical domain of
 KBS (T/sigma >= 0.1, 2 pi T/lambda >= 0.1, sigma/lambda >= 1e-6, scale > 0, finite cost):
 the fit `goniofit fit` gives by default must either reach cost_best (within the tolerance
-of tests/corpus.rs) inside the domain, or say `degenerate` when the best optimum lies at an
+of tests/trust/corpus.rs) inside the domain, or say `degenerate` when the best optimum lies at an
 edge.
 
 Usage (from the repository root; numpy and scipy, e.g. in a venv; ~2 processes, about

@@ -22,7 +22,7 @@ Each row: the case, the best cost and point and its edge, the best inside the do
 this script's cost at goniofit's fitted point beside goniofit's own cost (they agree to
 1e-9 or the reference's model is not goniofit's; where goniofit's n is 1 to double
 precision the textbook F is 0/0 and the cost here is the 1e150 residuals' 1e302).
-tests/factors_trust.rs classes goniofit's fits against it.
+tests/trust/factors_trust.rs classes goniofit's fits against it.
 
 Usage (numpy, scipy; a few minutes on one core):
   python3 tests/ref/factors_reference.py target/release/goniofit > tests/ref/factors_reference.csv

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference values for the Fresnel and Smith factors (goniofit, tests/fresnel_shadowing.rs).
+"""Reference values for the Fresnel and Smith factors (goniofit, tests/lib/fresnel_shadowing.rs).
 
 Independent of the Rust code's algebra: the textbook forms, evaluated with mpmath at 30
 significant digits, derivatives by mpmath's numerical differentiation at that precision.

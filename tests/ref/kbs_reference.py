@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""High-precision reference values for the KBS series (goniofit, tests/kbs_reference.rs).
+"""High-precision reference values for the KBS series (goniofit, tests/lib/kbs_reference.rs).
 
     S(g, a) = sum_{m>=1} g^m / (m! m) exp(-a/m)        Q(g, a) = exp(-g) S(g, a) / g
 

@@ -18,7 +18,7 @@ against goniofit's `Shadowing::Smith` G = G₁(θi) G₁(θr) with a = T/(2σ ta
 w = √2 σ/T (the KBS rough limit's Beckmann α = 2σ/T = √2 w). The slope distribution is
 SCATMECH's Gaussian one with s = α (it cancels in the ratio). SCATMECH has no
 height-correlated form, so `smith-correlated` is not compared. Rows where the unshadowed
-BRDF underflows (below 1e-200) are left out. The Rust test (tests/fresnel_shadowing.rs)
+BRDF underflows (below 1e-200) are left out. The Rust test (tests/lib/fresnel_shadowing.rs)
 holds goniofit's G to 1e-13 relative of G_scatmech (its stated accuracy of G; measured
 worst 1e-15), and the table's own f to G_scatmech times the factor to 1e-15.
 

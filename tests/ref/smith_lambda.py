@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Smith's Lambda for the Beckmann distribution: the polynomial table of src/model/shadowing.rs
-and a dense reference (goniofit, tests/fresnel_shadowing.rs).
+and a dense reference (goniofit, tests/lib/fresnel_shadowing.rs).
 
 Lambda(nu) = (erf(nu) - 1)/2 + exp(-nu^2)/(2 nu sqrt(pi)). The code writes it as
 

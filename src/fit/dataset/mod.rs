@@ -392,7 +392,7 @@ pub const NEAR_UNEXPLAINED_RATIO: f64 = 4.0;
 /// worth taking for the next dataset. None for a lobe with factors, which is always
 /// searched: the Fresnel index has valleys that a neighbour's optimum does not tell apart,
 /// and a warm start can converge in one above the searched fit's cost, passing the
-/// acceptance of [`near_kept`] (tests/warm_start.rs checks `auto` against the search).
+/// acceptance of [`near_kept`] (tests/trust/warm_start.rs checks `auto` against the search).
 fn near_fit<'o>(near: &'o Outcome, config: &FitConfig) -> Option<&'o FitResult> {
     if config.model_opts.has_factors() {
         return None;

@@ -421,7 +421,7 @@ pub const PER_BAND: usize = 2;
 
 /// Relative grid cost above the grid's best within which a band's second lobe is kept: a
 /// lobe the grid ranks far worse than the best point is no rival on the whole data either
-/// (the second lobes that win on the whole data for Cornell acryl_blue, tests/corpus.rs, are
+/// (the second lobes that win on the whole data for Cornell acryl_blue, tests/trust/corpus.rs, are
 /// kept at this margin; it keeps the texel batch's throughput, benches/texels.sh).
 pub const SECOND_MARGIN: f64 = 0.25;
 

@@ -1,0 +1,23 @@
+//! The library: the models against references and their own properties, the readers and
+//! writers, the solver on the NIST problems, fits of synthetic and stiff cases, and the
+//! pictures.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod alta;
+mod binary_fuzz;
+mod fit;
+mod fresnel_fit;
+mod fresnel_shadowing;
+mod io;
+mod kbs_reference;
+mod kbs_rough;
+mod merl;
+mod model_props;
+mod nist;
+mod plot;
+mod plot_smooth;
+mod rgl;
+mod stiff;
+mod validity;
