@@ -191,9 +191,9 @@ fn hemisphere_times(c: f64, with_sigma: bool) -> std::path::PathBuf {
 
 #[test]
 fn the_verdict_does_not_depend_on_the_unit_of_l() {
-    // The same scan in units 1e10 larger or smaller: before the rank decision used
-    // unit-norm Jacobian columns, ×1e10 reported "scale not determined" and ended
-    // degenerate while ×1, ×1e6 and ×1e-10 reported every parameter determined.
+    // The same scan in units 1e10 larger or smaller: the same verdict as ×1 (the rank
+    // decision uses unit-norm Jacobian columns, so "scale not determined" never comes from
+    // the unit), converged, and the same parameters in that unit.
     for with_sigma in [true, false] {
         let fit = |c: f64| {
             let p = hemisphere_times(c, with_sigma);

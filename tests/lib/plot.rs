@@ -665,7 +665,7 @@ fn a_joint_fit_draws_every_channel_with_its_own_scales() {
             .any(|t| t.contains("(joint fit of 4 channels; scale, scale_d per channel)")),
         "{log:?}"
     );
-    // 6 θi × 4 λ fitted curves: every channel is drawn (it was the middle one alone): six
+    // 6 θi × 4 λ fitted curves: every channel is drawn, not the middle one alone: six
     // solid curves (λ = 0.351 µm) and the other three line styles in short pieces.
     let strokes: Vec<&str> = pics["fit_log"]
         .lines()

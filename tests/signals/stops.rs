@@ -103,9 +103,9 @@ fn timeout_ends_a_joint_fit_with_its_report_and_exit_3() {
             let notes = v["notes"].to_string();
             assert!(notes.contains("time limit"), "{paint}: {notes}");
         }
-        // The uninterrupted fit takes 4–5 s unloaded and 20 s on a loaded machine; before
-        // the start search checked the stop request `--timeout 1` took 8–11 s (and hung on
-        // garnet_red). A sanity bound only, for a CI machine shared with other jobs (the
+        // The uninterrupted fit takes 4–5 s unloaded and 20 s on a loaded machine; the start
+        // search checks the stop request too, so `--timeout 1` ends it early on every paint.
+        // A sanity bound only, for a CI machine shared with other jobs (the
         // goal unloaded is 1.5 s; the README gives measured times).
         assert!(wall < 20.0, "{paint}: took {wall:.2} s with --timeout 1");
     }
@@ -318,8 +318,8 @@ fn scratch(name: &str) -> std::path::PathBuf {
 #[test]
 fn timeout_bounds_a_slow_series_fit_with_its_intervals() {
     // 18,000 rough samples (g ≈ 2.6e4) in forced series mode: one evaluation costs ~0.5 s
-    // of CPU. Before the profile intervals shared the command's stop request each of their
-    // refits got a fresh time limit, and `--timeout 2` took 336 s. Started at a given σ: the
+    // of CPU. The profile intervals share the command's stop request: their refits get no
+    // time limit of their own, so `--timeout 2` bounds them too. Started at a given σ: the
     // start search alone may slide σ along the rough ridge to where a forced series is
     // refused (g above 1e5 at σ ≈ 32; the truth σ = 20 lies at g ≈ 6e4).
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
@@ -351,9 +351,8 @@ fn timeout_bounds_a_slow_series_fit_with_its_intervals() {
 fn a_time_limit_in_the_profile_intervals_ends_them_and_exits_3() {
     // 300,000 samples: reading and the fit take about 1 s, the profile intervals (dozens of
     // refits of the whole data) 2.5 s more, so a 2 s limit falls in the intervals here. The
-    // walks end within one block's evaluation (they overshot the limit by 13 s when their
-    // evaluations ignored the stop) and the run exits 3: it did not do all it was asked
-    // (it exited 0 with the intervals missing). On a slower machine the limit may fall in
+    // walks end within one block's evaluation (their evaluations check the stop) and the
+    // run exits 3, never 0 with intervals missing: it did not do all it was asked. On a slower machine the limit may fall in
     // the fit, on a much faster one after the intervals: those outcomes are checked too.
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
     let csv = synth_file(
@@ -458,7 +457,7 @@ fn sigint_and_sigterm_in_the_solver_print_the_report_and_exit_3() {
     // slow, the fitted values at that point are not evaluated after the signal: no
     // residuals file, and the figures they give say "not computed" (on a machine so loaded
     // that the first evaluation had not finished: nothing fitted). SIGTERM the same as
-    // SIGINT (it was ignored for minutes inside one evaluation).
+    // SIGINT, inside one evaluation too.
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
     for signal in ["-INT", "-TERM"] {
         let csv = rough_file(&format!("signal{signal}_solver"));
