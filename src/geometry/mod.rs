@@ -134,14 +134,14 @@ pub struct Geometry {
 }
 
 /// Per-sample quantities of the KBS lobe's Fresnel and shadowing factors that depend on
-/// the angles only: cos θ_loc = √(h/2), sin θi, cos θr, sin θr (each from its angle, to a
-/// few ulps), and the distinct polar angles when the samples share them.
+/// the angles only: cos θ_loc = √(h/2), and (cot θ, tan θ) of each direction
+/// ([`cot_tan`]) per sample, or per distinct polar angle when the samples share them.
 #[derive(Debug, Clone)]
 pub struct FactorColumns {
     pub cos_loc: Vec<f64>,
-    pub sin_i: Vec<f64>,
-    pub cos_r: Vec<f64>,
-    pub sin_r: Vec<f64>,
+    /// (cot θi, tan θi) and (cot θr, tan θr) of each sample; empty when `polar` holds them.
+    pub incidence: Vec<(f64, f64)>,
+    pub view: Vec<(f64, f64)>,
     /// The distinct polar angles of incidence and view, when there are at most a quarter
     /// as many as samples (a gonioreflectometer measures a few incidence and view angles:
     /// Cornell's paints, 1439 samples, have 18): the shadowing factor, a function of each
@@ -152,46 +152,51 @@ pub struct FactorColumns {
 /// The distinct polar angles of a geometry's directions ([`FactorColumns::polar`]).
 #[derive(Debug, Clone)]
 pub struct PolarAngles {
-    /// (cos θ, sin θ) of each distinct polar angle.
-    pub cos_sin: Vec<(f64, f64)>,
-    /// Per sample: the index of θi and of θr in `cos_sin`.
+    /// (cot θ, tan θ) of each distinct polar angle ([`cot_tan`]).
+    pub cot_tan: Vec<(f64, f64)>,
+    /// Per sample: the index of θi and of θr in `cot_tan`.
     pub incidence: Vec<u32>,
     pub view: Vec<u32>,
 }
 
 impl PolarAngles {
     /// The distinct angles of `theta_i` and `theta_r` (radians, equal by value), with their
-    /// cosines and sines as the per-sample columns hold them (`cos_i`, `sin_i`, `cos_r`,
-    /// `sin_r`); None when there are more than a quarter as many as samples.
-    fn of(
-        theta: (&[f64], &[f64]),
-        incidence: (&[f64], &[f64]),
-        view: (&[f64], &[f64]),
-    ) -> Option<PolarAngles> {
-        let n = theta.0.len();
+    /// cotangents and tangents ([`cot_tan`]); None when there are more than a quarter as
+    /// many as samples.
+    fn of(theta_i: &[f64], theta_r: &[f64]) -> Option<PolarAngles> {
+        let n = theta_i.len();
         let most = n / 4;
         let mut index: std::collections::HashMap<u64, u32> = std::collections::HashMap::new();
-        let mut cos_sin = Vec::new();
-        let mut id = |t: f64, cs: (f64, f64)| -> Option<u32> {
-            let next = cos_sin.len() as u32;
+        let mut cot_tan = Vec::new();
+        let mut id = |t: f64| -> Option<u32> {
+            let next = cot_tan.len() as u32;
             let k = *index.entry(t.to_bits()).or_insert(next);
             if k == next {
-                cos_sin.push(cs);
+                cot_tan.push(self::cot_tan(t));
             }
-            (cos_sin.len() <= most).then_some(k)
+            (cot_tan.len() <= most).then_some(k)
         };
         let mut at_i = Vec::with_capacity(n);
         let mut at_r = Vec::with_capacity(n);
         for i in 0..n {
-            at_i.push(id(theta.0[i], (incidence.0[i], incidence.1[i]))?);
-            at_r.push(id(theta.1[i], (view.0[i], view.1[i]))?);
+            at_i.push(id(theta_i[i])?);
+            at_r.push(id(theta_r[i])?);
         }
         Some(PolarAngles {
-            cos_sin,
+            cot_tan,
             incidence: at_i,
             view: at_r,
         })
     }
+}
+
+/// (cot θ, tan θ) of a polar angle θ ∈ [0, π/2]: cot θ = cos θ/sin θ (∞ at 0; clamped at
+/// 0 against rounding) and tan θ = 1/cot θ (0 at 0, ∞ where cot θ = 0), each to a few ulps.
+#[inline]
+pub fn cot_tan(theta: f64) -> (f64, f64) {
+    let (s, c) = theta.sin_cos();
+    let cot = (c / s).max(0.0);
+    (cot, 1.0 / cot)
 }
 
 /// The columns of a [`Geometry`] while they are computed.
@@ -360,25 +365,15 @@ impl Geometry {
     /// The factors' columns ([`FactorColumns`]), computed on the first call and kept.
     pub fn factor_columns(&self) -> &FactorColumns {
         self.factors.get_or_init(|| {
-            let (sin_i, (cos_r, sin_r)): (Vec<f64>, (Vec<f64>, Vec<f64>)) = self
-                .theta_i
-                .iter()
-                .zip(self.theta_r.iter())
-                .map(|(ti, tr)| {
-                    let (sr, cr) = tr.sin_cos();
-                    (ti.sin(), (cr, sr))
-                })
-                .unzip();
-            let polar = PolarAngles::of(
-                (&self.theta_i, &self.theta_r),
-                (&self.cos_i, &sin_i),
-                (&cos_r, &sin_r),
-            );
+            let polar = PolarAngles::of(&self.theta_i, &self.theta_r);
+            let per_sample = |theta: &Column| match polar {
+                Some(_) => Vec::new(),
+                None => theta.iter().map(|&t| cot_tan(t)).collect(),
+            };
             Arc::new(FactorColumns {
                 cos_loc: self.h.iter().map(|&h| cos_local(h)).collect(),
-                sin_i,
-                cos_r,
-                sin_r,
+                incidence: per_sample(&self.theta_i),
+                view: per_sample(&self.theta_r),
                 polar,
             })
         })

@@ -29,11 +29,9 @@
 //!
 //! Accuracy: F to 1e-13 relative and ∂F/∂n, ∂F/∂κ to 1e-12 (|∂F| + F), tested against a
 //! 30-digit mpmath reference of the textbook r_s, r_p formulas (`tests/lib/fresnel_shadowing.rs`:
-//! n 1.01–4, κ 0–10, θ_loc up to 89.9°; worst measured 3e-15 and 5e-15). F is finite wherever w ≠ 0, i.e. except at the critical angle of a real
+//! n 1.01–4, κ 0–10, θ_loc up to 89.9°; worst measured 3e-15 and 4e-15). F is finite wherever w ≠ 0, i.e. except at the critical angle of a real
 //! index n < 1 (and n = 1, κ = 0 at exact grazing). Beyond that critical angle F has a
 //! kink at κ = 0, and ∂F/∂κ there is the derivative from κ > 0.
-
-use std::ops::{Add, Mul, Sub};
 
 /// Which Fresnel factor multiplies the KBS lobe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -87,7 +85,7 @@ impl Fresnel {
 
     /// The normalised factor at `cos_loc` with the factor's parameters `p` (`[n]` or
     /// `[n, kappa]`; ignored for `None`, which gives F = 1).
-    #[inline]
+    #[inline(always)]
     pub fn eval(self, cos_loc: f64, p: &[f64]) -> FresnelValue {
         match self {
             Fresnel::None => FresnelValue {
@@ -116,39 +114,72 @@ pub struct FresnelValue {
 pub use crate::geometry::cos_local;
 
 /// Unpolarised Fresnel reflectance of the index η = n + iκ at incidence cos θ = `c`
-/// (0 ≤ c ≤ 1), divided by its value at normal incidence, with ∂/∂n and ∂/∂κ (module doc).
-#[inline]
+/// (0 ≤ c ≤ 1), divided by its value at normal incidence, with ∂/∂n and ∂/∂κ (module doc),
+/// in real arithmetic: two square roots and one division for w and F, one more division
+/// for the derivatives.
+#[inline(always)]
 pub fn complex_ratio(c: f64, n: f64, kappa: f64) -> FresnelValue {
-    let eta = C::new(n, kappa);
-    let eta2 = eta * eta;
+    // η² = er + i·ei; w² = η² − 1 + c² = x + i·ei, w = a + ib its principal root (a ≥ 0)
+    // without cancellation: t = √((|w²| + |x|)/2); |w|² = |w²|.
+    let (er, ei) = (n * n - kappa * kappa, 2.0 * n * kappa);
     let c2 = c * c;
-    let w = (eta2 - C::real(1.0 - c2)).sqrt();
-    let dw = eta.div(w); // ∂w/∂η
-    let u_inv = C::real(c).add(w).inv();
-    let a_s = u_inv * u_inv;
-    // ∂A_s/∂η = −2 A_s w'/(c + w).
-    let da_s = a_s * dw * u_inv * C::real(-2.0);
-    let num = eta2 * C::real(c2) + C::real(c2 - 1.0);
-    let d_inv = (eta2 * C::real(c) + w).inv();
-    let a_p = num * d_inv * d_inv;
-    // ∂A_p/∂η = 2c²η/D² − 2 A_p (2ηc + w')/D.
-    let da_p = eta * C::real(2.0 * c2) * d_inv * d_inv
-        - a_p * (eta * C::real(2.0 * c) + dw) * d_inv * C::real(2.0);
-    let m = 0.5 * (a_s.norm2() + a_p.norm2());
-    // ∂M/∂n = Re(Ā A'), ∂M/∂κ = Re(Ā i A') = −Im(Ā A') (A holomorphic).
-    let g = a_s.conj() * da_s + a_p.conj() * da_p;
+    let x = er - (1.0 - c2);
+    let w_abs2 = (x * x + ei * ei).sqrt();
+    let t = (0.5 * (w_abs2 + x.abs())).sqrt();
+    let (a, b) = if t == 0.0 {
+        (0.0, 0.0)
+    } else if x >= 0.0 {
+        (t, ei / (2.0 * t))
+    } else {
+        (ei.abs() / (2.0 * t), t.copysign(ei))
+    };
+    // |A_s|² = U⁻², U = |c + w|²; |A_p|² = |N|²/D², N = c²(η² + 1) − 1, D = |η²c + w|².
+    let ca = c + a;
+    let u = ca * ca + b * b;
+    let (dr, di) = (er * c + a, ei * c + b);
+    let d = dr * dr + di * di;
+    let (nr, ni) = (er * c2 + (c2 - 1.0), ei * c2);
+    let np = nr * nr + ni * ni;
+    let (u2, d2) = (u * u, d * d);
+    // One division for U⁻¹ and D⁻¹ while U²D² is normal (|η| below about 1e25).
+    let den = u2 * d2;
+    let (u_inv, d_inv) = if den.is_normal() {
+        let inv = 1.0 / den;
+        (u * d2 * inv, u2 * d * inv)
+    } else {
+        (1.0 / u, 1.0 / d)
+    };
+    let m = 0.5 * (u_inv * u_inv + np * (d_inv * d_inv));
     let q = (1.0 + n) * (1.0 + n) + kappa * kappa;
     let p = q * q;
+    // ∂|f|²/∂n = 2 Re(f̄ f'), ∂|f|²/∂κ = −2 Im(f̄ f') for f holomorphic in η, with
+    // w' = η/w = η w̄/|w|², N' = 2c²η, (η²c + w)' = 2cη + w'.
+    let inv_w2 = 1.0 / w_abs2;
+    let (wr, wi) = mul((n, kappa), (a * inv_w2, -b * inv_w2));
+    let zs = mul((ca, -b), (wr, wi));
+    let zn = mul((nr, -ni), (2.0 * c2 * n, 2.0 * c2 * kappa));
+    let zd = mul((dr, -di), (2.0 * c * n + wr, 2.0 * c * kappa + wi));
+    // ∂M/∂n = Re Z, ∂M/∂κ = −Im Z with Z = −2U⁻³ z_s + D⁻² z_n − 2|N|² D⁻³ z_d.
+    let (ks, kn) = (-2.0 * u_inv * u_inv * u_inv, d_inv * d_inv);
+    let kd = -2.0 * np * kn * d_inv;
+    let z_re = ks * zs.0 + kn * zn.0 + kd * zd.0;
+    let z_im = ks * zs.1 + kn * zn.1 + kd * zd.1;
     FresnelValue {
         f: p * m,
-        d_n: 4.0 * q * (1.0 + n) * m + p * g.re,
-        d_kappa: 4.0 * q * kappa * m - p * g.im,
+        d_n: 4.0 * q * (1.0 + n) * m + p * z_re,
+        d_kappa: 4.0 * q * kappa * m - p * z_im,
     }
+}
+
+/// The complex product of (re, im) pairs.
+#[inline(always)]
+fn mul((a, b): (f64, f64), (c, d): (f64, f64)) -> (f64, f64) {
+    (a * c - b * d, a * d + b * c)
 }
 
 /// [`complex_ratio`] at κ = 0 for n > 1, in real arithmetic (w² = n² − 1 + c² > 0): the
 /// same formulas, the same accuracy, one division.
-#[inline]
+#[inline(always)]
 pub fn real_ratio(c: f64, n: f64) -> FresnelValue {
     let (n2, c2) = (n * n, c * c);
     let w = (n2 - 1.0 + c2).sqrt();
@@ -187,82 +218,6 @@ pub fn schlick_ratio(c: f64, n: f64) -> FresnelValue {
     }
 }
 
-/// A complex number, only what [`complex_ratio`] needs (no dependency, no polar form).
-#[derive(Debug, Clone, Copy)]
-struct C {
-    re: f64,
-    im: f64,
-}
-
-impl C {
-    #[inline]
-    fn new(re: f64, im: f64) -> C {
-        C { re, im }
-    }
-    #[inline]
-    fn real(re: f64) -> C {
-        C { re, im: 0.0 }
-    }
-    #[inline]
-    fn conj(self) -> C {
-        C::new(self.re, -self.im)
-    }
-    #[inline]
-    fn norm2(self) -> f64 {
-        self.re * self.re + self.im * self.im
-    }
-    #[inline]
-    fn inv(self) -> C {
-        let d = self.norm2();
-        C::new(self.re / d, -self.im / d)
-    }
-    #[inline]
-    fn div(self, o: C) -> C {
-        self * o.inv()
-    }
-    /// The principal square root (Re ≥ 0), without cancellation: t = √((|z| + |x|)/2).
-    #[inline]
-    fn sqrt(self) -> C {
-        let (x, y) = (self.re, self.im);
-        if x == 0.0 && y == 0.0 {
-            return C::real(0.0);
-        }
-        let t = (0.5 * (self.norm2().sqrt() + x.abs())).sqrt();
-        if x >= 0.0 {
-            C::new(t, y / (2.0 * t))
-        } else {
-            C::new(y.abs() / (2.0 * t), t.copysign(y))
-        }
-    }
-}
-
-impl Add for C {
-    type Output = C;
-    #[inline]
-    fn add(self, o: C) -> C {
-        C::new(self.re + o.re, self.im + o.im)
-    }
-}
-
-impl Sub for C {
-    type Output = C;
-    #[inline]
-    fn sub(self, o: C) -> C {
-        C::new(self.re - o.re, self.im - o.im)
-    }
-}
-
-impl Mul for C {
-    type Output = C;
-    #[inline]
-    fn mul(self, o: C) -> C {
-        C::new(
-            self.re * o.re - self.im * o.im,
-            self.re * o.im + self.im * o.re,
-        )
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -275,25 +230,6 @@ mod tests {
             let grazing = complex_ratio(0.0, n, k).f;
             assert!((at0 - 1.0).abs() < 1e-14, "n={n} κ={k}: {at0}");
             assert!((grazing * r0 - 1.0).abs() < 1e-13, "n={n} κ={k}: {grazing}");
-        }
-    }
-
-    #[test]
-    fn sqrt_is_the_principal_root() {
-        for (x, y) in [
-            (4.0, 0.0),
-            (-4.0, 0.0),
-            (-4.0, -0.0),
-            (3.0, 4.0),
-            (-3.0, 4.0),
-        ] {
-            let r = C::new(x, y).sqrt();
-            let sq = r * r;
-            assert!(r.re >= 0.0);
-            assert!(
-                (sq.re - x).abs() < 1e-14 && (sq.im - y).abs() < 1e-14,
-                "{x},{y}"
-            );
         }
     }
 }

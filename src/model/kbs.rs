@@ -35,14 +35,12 @@
 //! worst measured relative error of L 3e-12). `smooth` and `rough` are the paper's
 //! approximations (eq. 42, 43), exact only in their limits.
 
+use super::fresnel::{complex_ratio, real_ratio, schlick_ratio, Fresnel, FresnelValue};
+use super::shadowing::{ShadowValue, Shadowing};
 use super::{series, EvalMode, Mode, Model, ModelOptions, ParamSpec};
 use crate::error::{Error, Result};
 use crate::geometry::{FactorColumns, Geometry};
 use std::f64::consts::PI;
-
-/// A batch's factor columns, with Smith's (Λ, ν ∂Λ/∂ν) of each distinct polar angle when
-/// the samples share them ([`crate::geometry::PolarAngles`]).
-type Factors<'a> = (&'a FactorColumns, Option<&'a [(f64, f64)]>);
 
 /// The KBS model with a chosen evaluation mode.
 #[derive(Debug, Clone, Copy)]
@@ -176,51 +174,39 @@ impl Kbs {
         out: &mut [f64],
         jac: Option<(&mut [f64], &mut [f64])>,
     ) {
-        let (sigma, corr) = (p[0], p[1]);
-        let fp = &p[3..];
+        let (sigma, corr, s) = (p[0], p[1], p[2]);
         let n = geo.len();
-        // What every sample's factors share: 1/σ, 1/T and T/σ.
-        let shared = (1.0 / sigma, 1.0 / corr, corr / sigma);
+        let point = |i: usize| self.point_from(geo, i, sigma, corr, s, g[i], a[i], q[i]);
         let fc = self.opts.has_factors().then(|| geo.factor_columns());
-        // Smith's Λ once per distinct polar angle, when the samples share them.
-        let shadowing = self.opts.shadowing;
-        let polar = fc.and_then(|fc| fc.polar.as_ref());
-        let lambdas: Option<Vec<(f64, f64)>> = polar
-            .filter(|_| shadowing != super::shadowing::Shadowing::None)
-            .map(|p| {
-                let dir =
-                    |&(c, s): &(f64, f64)| super::shadowing::Shadowing::direction(c, s, shared.2);
-                p.cos_sin.iter().map(dir).collect()
-            });
-        // Inlined into each loop below, so that the values-only loop computes no derivative.
-        #[inline(always)]
-        fn at(
-            m: &Kbs,
-            geo: &Geometry,
-            i: usize,
-            (p, fp, shared): (&[f64], &[f64], (f64, f64, f64)),
-            (g, a, q): (&[f64], &[f64], &[series::LnQ]),
-            fc: Option<Factors>,
-        ) -> (KbsPoint, f64, f64) {
-            let pt = m.point_from(geo, i, p[0], p[1], p[2], g[i], a[i], q[i]);
-            match fc {
-                Some((fc, lambdas)) => m.with_factors(geo, (fc, lambdas), i, pt, shared, fp),
-                None => (pt, 0.0, 0.0),
-            }
-        }
-        let factors = fc.map(|fc| (fc, lambdas.as_deref()));
-        let point = |i: usize| at(self, geo, i, (p, fp, shared), (g, a, q), factors);
-        match jac {
-            None => {
+        match (jac, fc) {
+            (None, None) => {
                 for (i, o) in out.iter_mut().enumerate() {
-                    *o = point(i).0.value;
+                    *o = point(i).value;
                 }
             }
-            Some((j, j_f)) => {
+            (None, Some(fc)) => {
+                // The factor of every sample first (a loop of independent samples), then
+                // the lobe times it.
+                let m = self.factors(fc, p, |f, sh| f.f * sh.g);
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = point(i).value * m[i];
+                }
+            }
+            (Some((j, j_f)), fc) => {
+                // G of every sample first, F and its derivatives beside the lobe.
+                let shadows = fc.map(|fc| (fc, self.shadow_each(fc, corr / sigma, |_, sh| sh)));
+                let (fresnel, fp) = (self.opts.fresnel, &p[3..]);
+                let shared = (1.0 / sigma, 1.0 / corr);
                 let (j_sigma, rest) = j.split_at_mut(n);
                 let (j_corr, j_s) = rest.split_at_mut(n);
                 for i in 0..n {
-                    let (pt, d_n, d_kappa) = point(i);
+                    let (pt, d_n, d_kappa) = match &shadows {
+                        Some((fc, sh)) => {
+                            let f = fresnel.eval(fc.cos_loc[i], fp);
+                            with_factors(point(i), (f, sh[i]), shared)
+                        }
+                        None => (point(i), 0.0, 0.0),
+                    };
                     out[i] = pt.value;
                     j_sigma[i] = pt.d_sigma;
                     j_corr[i] = pt.d_corr;
@@ -236,47 +222,70 @@ impl Kbs {
         }
     }
 
-    /// The point times the Fresnel and shadowing factors of sample i (`fc`: the batch's
-    /// [`FactorColumns`], with Smith's Λ of each distinct polar angle when it has them;
-    /// `fp`: the Fresnel parameters; `(1/σ, 1/T, T/σ)` computed once per batch), with ∂L/∂n
-    /// and ∂L/∂κ.
+    /// `each(F, G)` of every sample at the parameters `p` (σ, T, s, then the Fresnel
+    /// parameters) from the batch's factor columns `fc`: one loop per Fresnel form.
     #[inline(always)]
-    fn with_factors(
+    fn factors<T>(
         &self,
-        geo: &Geometry,
-        (fc, lambdas): Factors,
-        i: usize,
-        pt: KbsPoint,
-        (inv_sigma, inv_corr, t_over_sigma): (f64, f64, f64),
-        fp: &[f64],
-    ) -> (KbsPoint, f64, f64) {
-        use super::shadowing::Shadowing;
-        let (fresnel, shadowing) = (self.opts.fresnel, self.opts.shadowing);
-        let f = fresnel.eval(fc.cos_loc[i], fp);
-        let sh = if shadowing == Shadowing::None {
-            super::shadowing::ShadowValue::ONE
-        } else if let (Some(lam), Some(polar)) = (lambdas, &fc.polar) {
-            let at = |k: &[u32]| lam[k[i] as usize];
-            shadowing.combine(at(&polar.incidence), at(&polar.view))
-        } else {
-            shadowing.eval_cos_sin(
-                (geo.cos_i[i], fc.sin_i[i]),
-                (fc.cos_r[i], fc.sin_r[i]),
-                t_over_sigma,
-            )
-        };
-        let m = f.f * sh.g;
-        let value = pt.value * m;
-        // G depends on T/σ only: ∂ln G/∂ln σ = −∂ln G/∂ln T (0 where L is 0).
-        let d_ln = if value == 0.0 { 0.0 } else { value * sh.d_ln_t };
-        let lit = pt.value * sh.g;
-        let out = KbsPoint {
-            value,
-            d_sigma: pt.d_sigma * m - d_ln * inv_sigma,
-            d_corr: pt.d_corr * m + d_ln * inv_corr,
-            d_scale: pt.d_scale * m,
-        };
-        (out, lit * f.d_n, lit * f.d_kappa)
+        fc: &FactorColumns,
+        p: &[f64],
+        each: impl Fn(FresnelValue, ShadowValue) -> T,
+    ) -> Vec<T> {
+        let (fp, cos_loc, t_over_sigma) = (&p[3..], &fc.cos_loc[..], p[1] / p[0]);
+        match self.opts.fresnel {
+            Fresnel::None => self.shadow_each(fc, t_over_sigma, |_, sh| {
+                each(Fresnel::None.eval(0.0, fp), sh)
+            }),
+            Fresnel::Dielectric if fp[0] > 1.0 => self.shadow_each(fc, t_over_sigma, |i, sh| {
+                each(real_ratio(cos_loc[i], fp[0]), sh)
+            }),
+            Fresnel::Dielectric => self.shadow_each(fc, t_over_sigma, |i, sh| {
+                each(complex_ratio(cos_loc[i], fp[0], 0.0), sh)
+            }),
+            Fresnel::Conductor => self.shadow_each(fc, t_over_sigma, |i, sh| {
+                each(complex_ratio(cos_loc[i], fp[0], fp[1]), sh)
+            }),
+            Fresnel::Schlick => self.shadow_each(fc, t_over_sigma, |i, sh| {
+                each(schlick_ratio(cos_loc[i], fp[0]), sh)
+            }),
+        }
+    }
+
+    /// `each(i, G_i)` of every sample i at T/σ = `t_over_sigma`: Smith's Λ from each
+    /// sample's (cot θ, tan θ), or once per distinct polar angle when the samples share
+    /// them ([`crate::geometry::PolarAngles`]).
+    #[inline(always)]
+    fn shadow_each<T>(
+        &self,
+        fc: &FactorColumns,
+        t_over_sigma: f64,
+        each: impl Fn(usize, ShadowValue) -> T,
+    ) -> Vec<T> {
+        let shadowing = self.opts.shadowing;
+        let n = fc.cos_loc.len();
+        let k = 0.5 * t_over_sigma;
+        let k = (k, 1.0 / k);
+        if shadowing == Shadowing::None {
+            return (0..n).map(|i| each(i, ShadowValue::ONE)).collect();
+        }
+        let g = |li, lr| shadowing.combine(li, lr);
+        match &fc.polar {
+            Some(polar) => {
+                let lam: Vec<(f64, f64)> = (polar.cot_tan.iter())
+                    .map(|&ct| Shadowing::direction(ct, k))
+                    .collect();
+                let (at_i, at_r) = (&polar.incidence, &polar.view);
+                (0..n)
+                    .map(|i| each(i, g(lam[at_i[i] as usize], lam[at_r[i] as usize])))
+                    .collect()
+            }
+            None => (0..n)
+                .map(|i| {
+                    let li = Shadowing::direction(fc.incidence[i], k);
+                    each(i, g(li, Shadowing::direction(fc.view[i], k)))
+                })
+                .collect(),
+        }
     }
 
     /// ln Q of every sample (evaluated together, [`series::ln_q_batch`]), with g and a.
@@ -361,6 +370,28 @@ impl Kbs {
             d_scale,
         }
     }
+}
+
+/// The point times the factors F and G of its sample, with ∂L/∂n and ∂L/∂κ
+/// (`(1/σ, 1/T)` computed once per batch).
+#[inline(always)]
+fn with_factors(
+    pt: KbsPoint,
+    (f, sh): (FresnelValue, ShadowValue),
+    (inv_sigma, inv_corr): (f64, f64),
+) -> (KbsPoint, f64, f64) {
+    let m = f.f * sh.g;
+    let value = pt.value * m;
+    // G depends on T/σ only: ∂ln G/∂ln σ = −∂ln G/∂ln T (0 where L is 0).
+    let d_ln = if value == 0.0 { 0.0 } else { value * sh.d_ln_t };
+    let lit = pt.value * sh.g;
+    let out = KbsPoint {
+        value,
+        d_sigma: pt.d_sigma * m - d_ln * inv_sigma,
+        d_corr: pt.d_corr * m + d_ln * inv_corr,
+        d_scale: pt.d_scale * m,
+    };
+    (out, lit * f.d_n, lit * f.d_kappa)
 }
 
 /// inc · `factor` / x: a derivative of the radiance `inc` from its log-derivative factor;

@@ -14,17 +14,18 @@
 //!
 //! Accuracy: G to 1e-13 relative and ∂ln G/∂ln T to 1e-11 (1 + |·|), tested against a
 //! 30-digit mpmath reference of the erf form (`tests/lib/fresnel_shadowing.rs`: θ up to 89.9°,
-//! T/σ 0.5–200; worst measured 5e-16 and 2e-16), and Λ(ν) itself to 1e-15 (1 + Λ) against
+//! T/σ 0.5–200; worst measured 7e-16 and 2e-16), and Λ(ν) itself to 1e-15 (1 + Λ) against
 //! a dense 30-digit table of ν from 1e-3 to 6.5 (`tests/ref/lambda_reference.csv`).
 //!
-//! Cost: one `exp` per direction and no branch on ν (random geometries cost what ordered
-//! ones do). Λ = ½ e^{−ν²}(y/√π − erfcx ν) with y = 1/ν, and
+//! Cost: one `exp` per direction, no division and no branch on ν (random geometries cost
+//! what ordered ones do). Λ = ½ e^{−ν²}(y/√π − erfcx ν) with y = 1/ν, and
 //! erfcx ν = e^{ν²} erfc ν from a table of eight polynomial pieces (degree 11, Chebyshev
 //! interpolants from `tests/ref/smith_lambda.py`, summed by Estrin's scheme): in ν below
 //! ν = 1.25, as y·P(y) above (the last piece reaches y = 0). Worst |ΔΛ|/(1 + Λ) of the
-//! table in binary64: 3e-16 (tested at 1e-15 against the dense reference). The lobe passes
-//! cos θ and sin θ of both directions ([`Shadowing::eval_cos_sin`]), computed once per
-//! dataset ([`crate::geometry::FactorColumns`]), and G shares one division between them.
+//! table in binary64: 3e-16 (tested at 1e-15 against the dense reference). The lobe
+//! passes cot θ and tan θ of both directions ([`Shadowing::direction`]), computed once per
+//! dataset ([`crate::geometry::FactorColumns`]), so that ν = (T/2σ) cot θ and
+//! y = (2σ/T) tan θ are products.
 
 /// Which shadowing–masking factor multiplies the KBS lobe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -75,44 +76,32 @@ impl Shadowing {
         self.combine(lambda(k * cot_i), lambda(k * cot_r))
     }
 
-    /// [`Self::eval`] from the cosines and sines of θi and θr (each pair ≥ 0, as the lobe
-    /// has them), with one division for ν = (T/2σ) cos θ/sin θ and y = 1/ν of both
-    /// directions instead of four (ν and y then carry a few ulps more rounding: G is the
-    /// same to 1e-15 relative). Normal incidence or a grazing direction (a cosine or sine
-    /// of 0) takes [`Self::eval`]'s path.
-    #[inline(always)]
-    pub fn eval_cos_sin(
+    /// [`Self::eval`] the lobe's way, from (cot θ, tan θ) of incidence and view as
+    /// [`crate::geometry::cot_tan`] gives them ([`Self::direction`]: no division for ν and
+    /// 1/ν; G the same to 1e-15 relative).
+    #[inline]
+    pub fn eval_cot_tan(
         self,
-        (cos_i, sin_i): (f64, f64),
-        (cos_r, sin_r): (f64, f64),
+        incidence: (f64, f64),
+        view: (f64, f64),
         t_over_sigma: f64,
     ) -> ShadowValue {
         if self == Shadowing::None {
             return ShadowValue::ONE;
         }
         let k = 0.5 * t_over_sigma;
-        let (ai, ar) = (k * cos_i, k * cos_r);
-        let (pi, pr) = (ai * sin_i, ar * sin_r);
-        let prod = pi * pr;
-        if !(prod.is_normal() && prod > 0.0) {
-            return self.eval(cos_i / sin_i, cos_r / sin_r, t_over_sigma);
-        }
-        // a/b = a² (other)/prod and b/a = b² (other)/prod, with (other) the other direction's
-        // a·b.
-        let inv = 1.0 / prod;
-        let (ui, ur) = (pr * inv, pi * inv);
-        self.combine(
-            lambda_ny(ai * ai * ui, sin_i * sin_i * ui),
-            lambda_ny(ar * ar * ur, sin_r * sin_r * ur),
-        )
+        let k = (k, 1.0 / k);
+        self.combine(Self::direction(incidence, k), Self::direction(view, k))
     }
 
-    /// Λ and ν ∂Λ/∂ν ([`lambda`]) of one direction from cos θ and sin θ (≥ 0) and the
-    /// ratio `t_over_sigma` = T/σ, for [`Self::combine`]: ν = (T/2σ) cos θ/sin θ (∞ at
-    /// normal incidence, where Λ = 0; 0 at grazing, where Λ = ∞).
-    #[inline]
-    pub fn direction(cos: f64, sin: f64, t_over_sigma: f64) -> (f64, f64) {
-        lambda(0.5 * t_over_sigma * cos / sin)
+    /// Λ and ν ∂Λ/∂ν ([`lambda`]) of one direction, for [`Self::combine`], from its
+    /// (cot θ, tan θ) as [`crate::geometry::cot_tan`] gives them (tan θ = 1/cot θ, both
+    /// ≥ 0) and `(k, 1/k)` with k = T/(2σ) > 0: ν = k cot θ and 1/ν = tan θ/k, without a
+    /// division (∞ at normal incidence, where Λ = 0; 0 at grazing, where Λ = ∞). ν and 1/ν
+    /// carry a few ulps of rounding each: Λ is [`lambda`]'s to 1e-15 (1 + Λ).
+    #[inline(always)]
+    pub fn direction((cot, tan): (f64, f64), (k, inv_k): (f64, f64)) -> (f64, f64) {
+        lambda_ny(k * cot, tan * inv_k)
     }
 
     /// G from Λ and ν ∂Λ/∂ν of both directions ([`Self::direction`]; a grazing direction,

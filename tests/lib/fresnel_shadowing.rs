@@ -79,18 +79,10 @@ fn smith_matches_the_reference_at_extreme_angles() {
             (Shadowing::Smith, g.unwrap(), dg.unwrap()),
             (Shadowing::SmithCorrelated, gc.unwrap(), dgc.unwrap()),
         ] {
-            // The lobe's path from cosines and sines (one division) and the cotangent path.
-            let cos_sin = |cot: f64| {
-                let s = 1.0 / cot.mul_add(cot, 1.0).sqrt();
-                if cot.is_infinite() {
-                    (1.0, 0.0)
-                } else {
-                    (cot * s, s)
-                }
-            };
+            // The cotangent path and the lobe's path from cot θ and tan θ = 1/cot θ.
             for got in [
                 kind.eval(ci, cr, t),
-                kind.eval_cos_sin(cos_sin(ci), cos_sin(cr), t),
+                kind.eval_cot_tan((ci, 1.0 / ci), (cr, 1.0 / cr), t),
             ] {
                 let (eg, ed) = (rel(got.g, g, g), rel(got.d_ln_t, d, 1.0 + d.abs()));
                 assert!(
@@ -122,8 +114,8 @@ fn smith_matches_scatmech_shadowed_facet_model() {
         };
         let [ti, tr, t, f, ill, g] = [ti, tr, t, f, ill, g].map(Option::unwrap);
         assert!(rel(g * ill, f, f) < 1e-15, "table row {r:?}");
-        let cs = |deg: f64| (deg.to_radians().cos(), deg.to_radians().sin());
-        let got = Shadowing::Smith.eval_cos_sin(cs(ti), cs(tr), t).g;
+        let ct = |deg: f64| goniofit::geometry::cot_tan(deg.to_radians());
+        let got = Shadowing::Smith.eval_cot_tan(ct(ti), ct(tr), t).g;
         let e = rel(got, g, g);
         assert!(
             e < 1e-13,
