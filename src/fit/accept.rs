@@ -32,7 +32,7 @@ pub(super) fn termination_note(termination: Termination) -> Option<String> {
 /// Why the point a fit reached is not a usable optimum, in plain words naming the
 /// parameter, or None when it is one. An optimum is usable when it lies inside the model's
 /// physical domain (no parameter ran to an edge: σ → 0 or T/σ → 0 or kT → 0 for KBS,
-/// w → 0 for the Gaussian lobe, an amplitude → 0, a dielectric's index n → 1) and every free parameter of the solved
+/// w → 0 for the Gaussian lobe, an amplitude → 0, a dielectric's index n → 1 or n → ∞) and every free parameter of the solved
 /// problem has a finite variance (the Jacobian has full rank: a declared reduction, the
 /// rough or smooth regime, has already removed σ). `p` is in layout order; `unc` belongs
 /// to the solved problem's free parameters.
@@ -91,6 +91,9 @@ pub(super) fn degeneracy(
         if name == "n" && at_index_edge(specs[fp.spec].lower, p[k]) {
             return Some("the Fresnel index ran to its lower bound (n − 1 ≤ 1e-6): the data asks for a rise towards grazing steeper than any index gives (the factor's rise F(90°) = 1/R(0) grows without bound as n → 1), so the Fresnel factor does not describe this surface and n is not measured".into());
         }
+        if name == "n" && at_index_infinity(specs[fp.spec].lower, p[k]) {
+            return Some(format!("the Fresnel index ran to n → ∞ (n = {:.3e}), where the factor is 1: the data shows no rise towards grazing beyond the lobe's own, so the Fresnel factor does not describe this surface, n is not measured, and the lobe is the one without it", p[k]));
+        }
     }
     if unc.rank < free.len() {
         let names = null_space_names(layout, unc);
@@ -106,6 +109,12 @@ pub(super) fn degeneracy(
 /// 10⁻⁶ (where F(90°) = 1/R(0) > 10¹²): the index's edge of the domain.
 fn at_index_edge(lower: f64, n: f64) -> bool {
     lower == 1.0 && n - lower <= 1e-6
+}
+
+/// Whether a dielectric's index `n` (lower bound `lower` = 1) ran to where the factor is 1
+/// ([`FLAT_INDEX`](crate::model::fresnel::FLAT_INDEX)): the index's edge n → ∞.
+fn at_index_infinity(lower: f64, n: f64) -> bool {
+    lower == 1.0 && n >= crate::model::fresnel::FLAT_INDEX
 }
 
 /// Names of the free parameters that take part in the Jacobian's null space.

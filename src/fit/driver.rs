@@ -171,7 +171,8 @@ pub const UNCERTAINTIES_NOT_COMPUTED: &str = "the fit was stopped before the Jac
 /// keep the lowest-cost run inside the domain unless the edge run is lower by more than
 /// [`start::EDGE_MARGIN`] (then the edge run: the fit ends `degenerate` and says why).
 /// A fit that may reduce starts and stays below the rough ridge's [`solve::RIDGE_G`]
-/// ([`solve::SigmaRange`]).
+/// ([`solve::SigmaRange`]). Each solve of a fit with free Fresnel parameters settles the
+/// lobe with them held first ([`solve::run_lm_settled`]).
 fn solve_checked(
     problem: &FitProblem,
     input: &FitInput,
@@ -184,8 +185,15 @@ fn solve_checked(
         .flatten();
     let trail = solve::Trail::default();
     let solve = |p0: &[f64]| match &range {
-        Some(r) => solve::run_lm_in(problem, &r.project(p0), &config.lm, Some(r), Some(&trail)),
-        None => solve::run_lm_in(problem, p0, &config.lm, None, Some(&trail)),
+        Some(r) => solve::run_lm_settled(
+            problem,
+            input,
+            &r.project(p0),
+            &config.lm,
+            Some(r),
+            Some(&trail),
+        ),
+        None => solve::run_lm_settled(problem, input, p0, &config.lm, None, Some(&trail)),
     };
     let first = solve(&start.p0);
     let layout = &problem.layout;

@@ -59,6 +59,53 @@ pub(super) fn run_lm_in(
     Run { lm, values, joined }
 }
 
+/// [`run_lm_in`] of a fit with free Fresnel parameters (`n`, `kappa`: [`FACTOR_PARAMS`])
+/// in two stages: the lobe settles with those parameters held at `p0`'s values, then all
+/// are free from the settled point (the work of both counted in the run). A free index
+/// absorbs a lobe's misfit (σ and T off their optimum), so that a solve started away from
+/// the lobe's optimum runs to n → ∞ (the plain lobe's valley, a local minimum at infinity)
+/// or crawls along the valley n and the lobe share; settled first, the index only moves to
+/// its own optimum at that lobe. The settled solve records no trail: only the free one's
+/// path is one a later solve can join. Without free Fresnel parameters, or when the
+/// settled solve has no finite cost (a stop request), the plain [`run_lm_in`].
+pub(super) fn run_lm_settled(
+    problem: &FitProblem,
+    input: &FitInput,
+    p0: &[f64],
+    config: &LmConfig,
+    range: Option<&SigmaRange>,
+    trail: Option<&Trail>,
+) -> Run {
+    let mut layout = problem.layout.clone();
+    let specs = problem.model.params();
+    let mut held = false;
+    for (k, fp) in layout.params.iter_mut().enumerate() {
+        if fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name) {
+            fp.fixed = Some(p0[k]);
+            held = true;
+        }
+    }
+    let (kind, floor) = (problem.kind(), problem.floor);
+    let lobe = held
+        .then(|| FitProblem::new(problem.model, layout, input, kind, floor).ok())
+        .flatten()
+        .map(|p| p.with_loss(problem.loss()));
+    let Some(lobe) = lobe else {
+        return run_lm_in(problem, p0, config, range, trail);
+    };
+    let settled = run_lm_in(&lobe, p0, config, range, None);
+    if !settled.lm.cost.is_finite() {
+        return run_lm_in(problem, p0, config, range, trail);
+    }
+    let mut run = run_lm_in(problem, &settled.values, config, range, trail);
+    run.add_counts(&settled.lm);
+    run
+}
+
+/// The Fresnel factor's parameters, held while a lobe settles ([`run_lm_settled`] and the
+/// start search's refinement).
+pub(in crate::fit) const FACTOR_PARAMS: [&str; 2] = ["n", "kappa"];
+
 /// Largest relative difference, in every parameter, between a point of a run and a point
 /// of an earlier run's path at which the later run counts as having joined the earlier
 /// one (when its cost there is no lower). Two starts that fall into the same valley then

@@ -93,6 +93,11 @@ impl Fresnel {
                 d_n: 0.0,
                 d_kappa: 0.0,
             },
+            Fresnel::Dielectric if p[0] >= FLAT_INDEX => FresnelValue {
+                f: 1.0,
+                d_n: 0.0,
+                d_kappa: 0.0,
+            },
             Fresnel::Dielectric if p[0] > 1.0 => real_ratio(cos_loc, p[0]),
             Fresnel::Dielectric => complex_ratio(cos_loc, p[0], 0.0),
             Fresnel::Conductor => complex_ratio(cos_loc, p[0], p[1]),
@@ -100,6 +105,14 @@ impl Fresnel {
         }
     }
 }
+
+/// Index from which the dielectric factor is F = 1 with ∂F/∂n = 0: there |F − 1| ≤
+/// 2/(n cos θ_loc) is below 2·10⁻¹⁴ for θ_loc up to 89.9°, and ∂F/∂n ~ 2/(n² cos θ_loc)
+/// below 10⁻³⁰, while [`real_ratio`]'s ∂F/∂n, the difference of two terms of order 4/n,
+/// would be their rounding (a relative 10⁻¹⁵ of F on the solver's ln(n − 1), a column
+/// shaped like the lobe's amplitude) and its terms of order n⁴ overflow beyond n ~ 10⁷⁷.
+/// A fit whose index runs here has run to the edge n → ∞ of its domain.
+pub const FLAT_INDEX: f64 = 1e17;
 
 /// A normalised Fresnel factor F = R(θ_loc)/R(0) and its partial derivatives.
 #[derive(Debug, Clone, Copy, PartialEq)]

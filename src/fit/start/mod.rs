@@ -15,7 +15,7 @@ pub mod grid_cache;
 
 use super::config::FitConfig;
 use super::problem::{FitInput, FitProblem, ParamLayout};
-use super::solve::{run_lm, Run};
+use super::solve::{run_lm, Run, FACTOR_PARAMS};
 use crate::error::Result;
 use crate::lm::{LmConfig, Stop};
 use crate::model::{self, EvalMode, Model, ModelOptions};
@@ -287,9 +287,6 @@ impl<'m> Refiners<'m> {
         FitProblem::new(model, layout, &self.sub, kind, floor).ok()
     }
 }
-
-/// The Fresnel factor's parameters, held while the lobe settles ([`Refiners::run_settled`]).
-const FACTOR_PARAMS: [&str; 2] = ["n", "kappa"];
 
 /// Factor by which a Fresnel parameter freed after the lobe settled must move for the
 /// settled point to be solved on the whole data as well ([`Refiners::run_settled`]), the
