@@ -66,8 +66,10 @@ pub(super) fn run_lm_in(
 /// the lobe's optimum runs to n → ∞ (the plain lobe's valley, a local minimum at infinity)
 /// or crawls along the valley n and the lobe share; settled first, the index only moves to
 /// its own optimum at that lobe. The settled solve records no trail: only the free one's
-/// path is one a later solve can join. Without free Fresnel parameters, or when the
-/// settled solve has no finite cost (a stop request), the plain [`run_lm_in`].
+/// path is one a later solve can join. A stop request during the settled solve ends the
+/// run at its point, with the stop's termination and the Jacobian's columns of the held
+/// parameters not evaluated (NaN). Without free Fresnel parameters, or when the settled
+/// solve has no finite cost, the plain [`run_lm_in`].
 pub(super) fn run_lm_settled(
     problem: &FitProblem,
     input: &FitInput,
@@ -76,29 +78,52 @@ pub(super) fn run_lm_settled(
     range: Option<&SigmaRange>,
     trail: Option<&Trail>,
 ) -> Run {
-    let mut layout = problem.layout.clone();
     let specs = problem.model.params();
-    let mut held = false;
+    let factor = |fp: &super::problem::FitParam| {
+        fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name)
+    };
+    if !problem.layout.params.iter().any(factor) {
+        return run_lm_in(problem, p0, config, range, trail);
+    }
+    let mut layout = problem.layout.clone();
     for (k, fp) in layout.params.iter_mut().enumerate() {
-        if fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name) {
+        if factor(fp) {
             fp.fixed = Some(p0[k]);
-            held = true;
         }
     }
     let (kind, floor) = (problem.kind(), problem.floor);
-    let lobe = held
-        .then(|| FitProblem::new(problem.model, layout, input, kind, floor).ok())
-        .flatten()
-        .map(|p| p.with_loss(problem.loss()));
-    let Some(lobe) = lobe else {
+    let Ok(lobe) = FitProblem::new(problem.model, layout, input, kind, floor) else {
         return run_lm_in(problem, p0, config, range, trail);
     };
+    let lobe = lobe.with_loss(problem.loss());
     let settled = run_lm_in(&lobe, p0, config, range, None);
     if !settled.lm.cost.is_finite() {
         return run_lm_in(problem, p0, config, range, trail);
     }
+    if config.stop.as_ref().is_some_and(Stop::is_requested) {
+        return lifted(problem, &lobe, settled, config);
+    }
     let mut run = run_lm_in(problem, &settled.values, config, range, trail);
     run.add_counts(&settled.lm);
+    run
+}
+
+/// A run of `lobe` (`problem` with some free parameters held) as a run of `problem`: the
+/// solver's point in `problem`'s variables, the held parameters' Jacobian columns not
+/// evaluated (NaN), and a converged run's termination that of the stop request that cut
+/// the solve after it ([`Run::mark_cut`]).
+fn lifted(problem: &FitProblem, lobe: &FitProblem, mut run: Run, config: &LmConfig) -> Run {
+    let free = problem.layout.free();
+    let lobe_free = lobe.layout.free();
+    let mut jacobian = DMatrix::from_element(run.lm.jacobian.nrows(), free.len(), f64::NAN);
+    for (j, k) in free.iter().enumerate() {
+        if let Some(i) = lobe_free.iter().position(|q| q == k) {
+            jacobian.set_column(j, &run.lm.jacobian.column(i));
+        }
+    }
+    run.lm.jacobian = jacobian;
+    run.lm.x = problem.layout.to_x(&run.values);
+    run.mark_cut(config);
     run
 }
 

@@ -245,4 +245,20 @@ mod tests {
             assert!((grazing * r0 - 1.0).abs() < 1e-13, "n={n} κ={k}: {grazing}");
         }
     }
+
+    #[test]
+    fn the_dielectric_factor_is_one_from_the_flat_index_on_and_meets_it_there() {
+        for c in [1e-3, 0.1, 0.5, 0.9, 1.0] {
+            for n in [FLAT_INDEX, 1e30, 1e300, f64::INFINITY] {
+                let v = Fresnel::Dielectric.eval(c, &[n]);
+                assert_eq!((v.f, v.d_n, v.d_kappa), (1.0, 0.0, 0.0), "c={c} n={n}");
+            }
+            // Just below it the formulas give 1 within 2/(n c) and their rounding (10⁻¹⁴),
+            // ∂F/∂n within 10⁻³⁰.
+            let below = real_ratio(c, 0.99 * FLAT_INDEX);
+            let bound = 2.0 / (0.99 * FLAT_INDEX * c) + 1e-14;
+            assert!((below.f - 1.0).abs() < bound, "c={c}: {below:?}");
+            assert!(below.d_n.abs() < 1e-30, "c={c}: {below:?}");
+        }
+    }
 }

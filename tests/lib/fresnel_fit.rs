@@ -290,3 +290,38 @@ fn a_fit_with_factors_is_no_worse_than_from_the_plain_optimum() {
     );
     assert!(c_own < 1310.0, "{c_own}");
 }
+
+/// A fit whose index runs to n → ∞ (Cornell garnet red at 650 nm, relative residuals: the
+/// best lobe has no Fresnel rise) ends `degenerate` at that edge and says so, with n not
+/// determined and the lobe's σ, T and scale determined.
+#[test]
+fn an_index_run_to_infinity_is_the_edge_n_to_infinity() {
+    let file = common::data("cornell/garnet_red.astm");
+    let (_, v) = common::run_json(&[
+        "fit",
+        "--model",
+        "kbs+lambert",
+        "--fresnel",
+        "dielectric",
+        "--shadowing",
+        "smith",
+        "--residual",
+        "relative",
+        "--channel",
+        "650nm",
+        "--no-intervals",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(v["termination"], "degenerate", "{v}");
+    let notes = v["notes"].to_string();
+    assert!(notes.contains("ran to n → ∞"), "{notes}");
+    assert!(v["params"]["n"]["value"].as_f64().unwrap() >= 1e17);
+    assert_eq!(v["params"]["n"]["determined"], false);
+    for k in ["sigma", "T", "scale"] {
+        assert_eq!(
+            v["params"][k]["determined"], true,
+            "{k}: {}",
+            v["params"][k]
+        );
+    }
+}
