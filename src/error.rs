@@ -15,27 +15,40 @@ pub enum Error {
         shown_text(message)
     )]
     Input {
+        /// The input file.
         path: PathBuf,
         /// 1-based line number in the file.
         line: usize,
+        /// The column's name (as in the file's header, or the role it plays).
         column: String,
+        /// What is wrong with the value, showing it.
         message: String,
     },
     /// An element of an input array could not be used (arrays handed over by a program,
     /// such as the Python package; `index` is 0-based).
     #[error("{array}[{index}]: {message}")]
     Element {
+        /// The array's name: the input it holds (`L`, `weights`, `sigma_L`, …).
         array: String,
+        /// 0-based position of the element in the array.
         index: usize,
+        /// What is wrong with the element, showing it.
         message: String,
     },
     /// A whole input file is unusable (empty, header only, missing column, ...).
     #[error("{}: {}", shown(path), shown_text(message))]
-    File { path: PathBuf, message: String },
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What makes it unusable.
+        message: String,
+    },
     /// An I/O failure while reading or writing a file.
     #[error("{}: {source}", shown(path))]
     Io {
+        /// The file being read or written.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
@@ -43,7 +56,9 @@ pub enum Error {
     /// input, exit code 1. (A path that cannot be created is an [`Error::File`].)
     #[error("{}: writing failed: {source}", shown(path))]
     Write {
+        /// The output being written.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
@@ -52,13 +67,23 @@ pub enum Error {
     UnknownModel(String),
     /// A parameter name the model does not have, or a value outside its domain.
     #[error("parameter {name}: {message}")]
-    Param { name: String, message: String },
+    Param {
+        /// The parameter's name (with a `[channel]` suffix where per channel).
+        name: String,
+        /// What is wrong with it, showing the value.
+        message: String,
+    },
     /// A usage error: inconsistent options or arguments.
     #[error("{}", shown_text(.0))]
     Usage(String),
     /// A picture could not be drawn or written.
     #[error("{}: drawing failed: {message}", shown(path))]
-    Plot { path: PathBuf, message: String },
+    Plot {
+        /// The picture's output file (or the bundled font that could not be loaded).
+        path: PathBuf,
+        /// What failed: the drawing backend's error, in words.
+        message: String,
+    },
     /// A stop request (Ctrl-C, SIGTERM, SIGHUP, a time limit) came before any point of the
     /// fit was evaluated on the whole data: there is no fit to report (CLI exit code 3).
     #[error("{0}")]

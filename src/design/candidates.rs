@@ -15,8 +15,11 @@ pub const MAX_CANDIDATES: usize = 1_000_000;
 /// same). Where θi or θr is 0, φr does not change the geometry and only φr = 0 is kept.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {
+    /// Largest θi and θr of the grid, degrees.
     pub theta_max_deg: f64,
+    /// Spacing of θi, θr (and φr off the plane) in degrees.
     pub step_deg: f64,
+    /// Whether φr is only 0° and 180° (the plane of incidence) rather than 0° to 180°.
     pub in_plane: bool,
 }
 

@@ -42,12 +42,15 @@ pub const DYNAMIC_RANGE: f64 = 1e4;
 
 /// The surface and instrument a design plans for.
 pub struct Scene<'a> {
+    /// The model whose Fisher information is predicted.
     pub model: &'a dyn Model,
     /// The model's parameters (in the order of `model.params()`), e.g. a fit's values.
     pub params: Vec<f64>,
     /// Wavelength, in the unit of σ and T.
     pub wavelength: f64,
+    /// What the model values are: a BRDF (sr⁻¹) or a radiance.
     pub quantity: Quantity,
+    /// The noise each future measurement is assumed to carry.
     pub noise: NoiseModel,
     /// The unit of the wavelength, σ and T (`nm`), for the sentence; None: unstated.
     pub unit: Option<String>,
@@ -73,9 +76,13 @@ pub struct Request {
 /// A quantity's value and linearised standard error (None: not determined).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Estimate {
+    /// The quantity's name (`sigma`, `T`, `scale`, `T/sigma`, `amplitude_rough`, …).
     pub name: String,
+    /// Its value at the scene's parameters (the point the design linearises at).
     pub value: f64,
+    /// The model's unit of a parameter (`λ unit`, `1`, `rad`); empty for a derived quantity.
     pub unit: String,
+    /// Linearised standard error, `relative` × |value| (None: not determined).
     pub stderr: Option<f64>,
     /// stderr / |value| (the standard error of ln value).
     pub relative: Option<f64>,
@@ -105,6 +112,7 @@ impl Estimate {
 /// A candidate geometry, what the model predicts there and what it would add.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Candidate {
+    /// The candidate's direction in degrees: (θi, θr, φr).
     pub angles: [f64; 3],
     /// The model's value (the measured quantity).
     pub value: f64,
@@ -112,13 +120,16 @@ pub struct Candidate {
     pub reachable: bool,
     /// What the candidate alone would add ([`choose::single_gains`]).
     pub gain: f64,
+    /// Whether the design chose it.
     pub chosen: bool,
 }
 
 /// The design at another wavelength (its own amplitudes).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Alternative {
+    /// The alternative wavelength, in the unit of σ and T.
     pub wavelength: f64,
+    /// The geometries chosen at that wavelength (degrees: θi, θr, φr), in the order chosen.
     pub chosen: Vec<[f64; 3]>,
     /// The target's relative standard error after the design there (None: not determined;
     /// for `all`, the largest over the parameters).
@@ -128,21 +139,28 @@ pub struct Alternative {
 /// A finished design.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Design {
+    /// The target as requested: a quantity's name or `all`.
     pub target: String,
     /// `c-optimal` (one quantity) or `D-optimal` (`all`).
     pub criterion: String,
+    /// Number of geometries already measured.
     pub n_existing: usize,
     /// The chosen geometries (degrees: θi, θr, φr), in the order chosen.
     pub chosen: Vec<[f64; 3]>,
+    /// Every candidate with its predicted value, reachability and single gain, in the request's
+    /// order.
     pub candidates: Vec<Candidate>,
     /// Every parameter and derived quantity with the measured samples alone, and with the
     /// chosen ones added.
     pub before: Vec<Estimate>,
+    /// The same with the chosen geometries added to the measured ones.
     pub after: Vec<Estimate>,
     /// The target's relative standard error before and after (None: not determined; for
     /// `all` the largest over the parameters).
     pub target_before: Option<f64>,
+    /// The target's relative standard error with the chosen geometries added.
     pub target_after: Option<f64>,
+    /// The design at each of the request's other wavelengths, in their order.
     pub alternatives: Vec<Alternative>,
     /// What to do, in one sentence.
     pub sentence: String,

@@ -28,7 +28,10 @@ pub const NULL_EIGENVALUE: f64 = 1e-12;
 /// Relative and log noise carry the same information to first order: ∂r/∂x = ∂ ln f/∂x.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoiseModel {
+    /// The residual kind the noise lives in (absolute, relative or log).
     pub kind: ResidualKind,
+    /// The standard deviation ε of one residual: in the unit of L (absolute) or a fraction
+    /// (relative, log).
     pub level: f64,
 }
 

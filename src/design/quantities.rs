@@ -10,14 +10,18 @@ use nalgebra::DVector;
 pub struct QuantityDef {
     /// `sigma`, `T`, …, or a derived name (`T/sigma`, `beckmann_alpha`, …).
     pub name: String,
+    /// The model's unit for a parameter; empty for a derived quantity.
     pub unit: String,
+    /// Its value at the scene's parameters.
     pub value: f64,
     /// c: the quantity is cᵀx (x = ln p for a positive parameter, p otherwise), up to a
     /// constant factor.
     pub coef: DVector<f64>,
     /// Whether the design variable is ln of the quantity (its standard error is relative).
     pub log: bool,
+    /// Whether it is derived from the parameters (not one of the model's own).
     pub derived: bool,
+    /// Its meaning in one line (the parameter's doc, or the derived quantity's formula).
     pub doc: String,
 }
 

@@ -21,6 +21,8 @@ pub struct Simulation {
     /// Fits that ended at finite values inside the domain (their estimates are the
     /// scatter's); the others are counted in `failed`.
     pub used: usize,
+    /// Draws whose fit returned an error or ended at a non-finite or non-positive value
+    /// (`draws` − `used`; left out of `spread`).
     pub failed: usize,
     /// Fits that did not converge (among `used`).
     pub not_converged: usize,

@@ -26,12 +26,22 @@ pub(super) struct Solved<'m> {
 /// One fitted parameter.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ParamResult {
+    /// Parameter name as the layout spells it, with a `[channel]` suffix for per-channel
+    /// parameters ([`base_name`] strips it).
     pub name: String,
+    /// Value at the reported point, in the model's natural units (not transformed).
     pub value: f64,
     /// Standard error; None when fixed or undetermined.
     pub stderr: Option<f64>,
+    /// Whether the data determines it: free, not on a direction of the null space, not reduced
+    /// away by a rough or smooth verdict, not at a lower bound, and with a finite standard
+    /// error small enough (relative, for log-transformed parameters).
     pub determined: bool,
+    /// Whether the value was held fixed by the user (σ held by a regime's reduced refit does
+    /// not count).
     pub fixed: bool,
+    /// The model's unit of the parameter (`λ unit`, `1`, `rad`); the reports use the run's unit
+    /// setting instead.
     pub unit: String,
 }
 
@@ -56,10 +66,17 @@ pub struct StageSeconds {
 /// A quantity derived from the parameters (T/σ, Beckmann's α, determined combinations).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Derived {
+    /// Report name (`T/sigma`, `beckmann_alpha`, `amplitude`, `reflectance_factor`, with a
+    /// `[channel]` suffix where per channel).
     pub name: String,
+    /// Value at the reported point.
     pub value: f64,
+    /// Standard error propagated from the covariance; None when not determined or unknown.
     pub stderr: Option<f64>,
+    /// Whether the data determines it (under the verdict: T/σ not for a smooth or partial
+    /// verdict).
     pub determined: bool,
+    /// Its meaning in one line, as the reports print it.
     pub doc: String,
 }
 
@@ -126,18 +143,30 @@ impl Verdict {
 /// A finished fit (converged or not).
 #[derive(Debug, Clone)]
 pub struct FitResult {
+    /// The model's name (`kbs`, `kbs+lambert`, `lambert`, …) without factor options.
     pub model: String,
     /// The model's factor options as command-line text (` --fresnel dielectric`), empty
     /// without factors ([`crate::model::ModelOptions::factors_label`]).
     pub factors: String,
+    /// Every parameter of the layout, fixed ones included, in layout order.
     pub params: Vec<ParamResult>,
+    /// The quantities derived from the parameters (T/σ, Beckmann's α, amplitudes, reflectance
+    /// factors).
     pub derived: Vec<Derived>,
     /// Names and correlation matrix of the free parameters of the reported fit.
     pub corr_names: Vec<String>,
+    /// Correlation matrix of the free parameters, in the order of `corr_names` (NaN where a
+    /// standard error is 0).
     pub correlation: DMatrix<f64>,
+    /// Singular values of the weighted Jacobian with unit-norm columns, descending (one per
+    /// free parameter).
     pub singular_values: Vec<f64>,
+    /// Condition number σ_max/σ_min of that column-scaled Jacobian (∞ when singular).
     pub condition: f64,
+    /// What the data determines, from the Jacobian's null space at the reported point.
     pub verdict: Verdict,
+    /// Notes of the fit in words (bounds reached, reduced refits, termination, …) that the
+    /// reports print.
     pub notes: Vec<String>,
     /// Why the fit's point is not a usable optimum when it is degenerate (an edge of the
     /// domain, a lobe the sampling does not resolve, a lost rank; also among `notes`).
@@ -155,18 +184,37 @@ pub struct FitResult {
     pub beyond_f_scale: Option<usize>,
     /// The minimised cost ½ Σ C²ρ(wᵢrᵢ²/C²) (½ Σ wᵢrᵢ² = ½χ² for the linear loss).
     pub cost: f64,
+    /// χ² = Σ wᵢ rᵢ² over the samples at the reported point (2 × cost for the linear loss); NaN
+    /// under a robust loss when a stop cut the fitted values.
     pub chi2: f64,
+    /// χ²/(n − p), p the free parameters (n − p floored at 1); near 1 when the weights are the
+    /// inverse noise variances and the model fits.
     pub reduced_chi2: f64,
+    /// Root mean square of the unweighted residuals rᵢ, in the residual kind's space (data
+    /// units, relative, or ln units); NaN when the fitted values were not computed.
     pub rms: f64,
+    /// Largest |rᵢ| of the unweighted residuals; NaN when the fitted values were not computed.
     pub max_abs_residual: f64,
+    /// Weighted R² in the residuals' space (of ln y for log residuals); NaN when the data has
+    /// no spread or the fitted values were not computed.
     pub r2: f64,
+    /// Akaike's criterion n·ln(χ²/n) + 2p (2·cost in place of χ² under a robust loss); only
+    /// differences between fits of the same data mean something.
     pub aic: f64,
+    /// Bayesian criterion n·ln(χ²/n) + p·ln n (2·cost in place of χ² under a robust loss); the
+    /// model comparison ranks candidates by it.
     pub bic: f64,
+    /// Number of samples fitted.
     pub n: usize,
+    /// Number of free (not fixed) parameters p.
     pub n_free: usize,
+    /// Levenberg–Marquardt iterations, those of an earlier solve added for a refit.
     pub iterations: u64,
+    /// Residual evaluations of the solver, those of an earlier solve added for a refit.
     pub evaluations: u64,
+    /// Jacobian evaluations of the solver, those of an earlier solve added for a refit.
     pub jacobian_evaluations: u64,
+    /// Why the solver stopped.
     pub termination: Termination,
     /// Wall time of the whole fit: starting values, refinement, LM, uncertainty and verdict,
     /// the fitted values and the adequacy tests (not the profile intervals, which
@@ -179,6 +227,8 @@ pub struct FitResult {
     pub start_seconds: f64,
     /// The wall time of each stage of the fit ([`StageSeconds`]).
     pub stage_seconds: StageSeconds,
+    /// Number of samples per evaluation mode of the model (`series`, `rough`, …), keyed by the
+    /// mode's name; empty when the fitted values were not computed.
     pub modes: BTreeMap<String, usize>,
     /// Range of g = (2πσ/λ)²(cos θi + cos θr)² over the samples (KBS models).
     pub g_range: Option<(f64, f64)>,
@@ -187,12 +237,19 @@ pub struct FitResult {
     /// the solve (then those vectors and `modes` are empty, rms, max |residual| and R² are
     /// NaN, a note says so, and the command exits 3 without a residuals file or pictures).
     pub fitted_computed: bool,
+    /// Model value fᵢ of every sample at the reported point (empty when not computed).
     pub fitted: Vec<f64>,
+    /// Unweighted residual rᵢ of every sample: f − y, (f − y)/|y| or ln f − ln y, by the
+    /// residual kind (empty when not computed).
     pub residuals: Vec<f64>,
+    /// Standardized residual √wᵢ rᵢ of every sample, divided by s = √(χ²/(n − p)) unless the
+    /// weights are uncertainties (by the robust s under a robust loss).
     pub std_residuals: Vec<f64>,
+    /// The evaluation mode of the model at every sample (empty when not computed).
     pub sample_modes: Vec<Mode>,
     /// Full parameter values in layout order (for plotting per channel).
     pub layout: ParamLayout,
+    /// The value of every parameter in layout order, fixed ones included: the reported point.
     pub values: Vec<f64>,
     /// The grid point (layout order) whose quick refinement won, before any LM iteration;
     /// for a fit started at a neighbour's optimum, that optimum.

@@ -10,8 +10,12 @@ use std::path::Path;
 /// One direction pair in **degrees**, exactly as written to (or read from) a CSV file.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AnglesDeg {
+    /// Incidence polar angle θi from the surface normal, degrees.
     pub theta_i: f64,
+    /// Reflection (view) polar angle θr from the surface normal, degrees.
     pub theta_r: f64,
+    /// View azimuth φr from the plane of incidence, degrees (0: the forward, mirror side;
+    /// 180: back towards the source).
     pub phi_r: f64,
 }
 
@@ -36,6 +40,7 @@ impl AnglesDeg {
 pub const INPLANE_THETA_I_DEG: [f64; 5] = [15.0, 30.0, 45.0, 60.0, 75.0];
 /// Default in-plane θr step and largest |θr|, degrees.
 pub const INPLANE_STEP_DEG: f64 = 1.0;
+/// Default largest |θr| of the in-plane scans, degrees.
 pub const INPLANE_THETA_R_MAX_DEG: f64 = 85.0;
 /// Default grid (θi, θr, φr counts) of the hemisphere and grazing layouts.
 pub const DEFAULT_GRID: (usize, usize, usize) = (5, 18, 36);
@@ -47,20 +52,29 @@ pub enum Layout {
     /// integer k with |k·step| ≤ `theta_r_max_deg`, ascending (θr < 0 stored as |θr| at
     /// φr = 180°).
     InPlane {
+        /// Incidence angles θi of the scans, degrees, one scan each.
         theta_i_deg: Vec<f64>,
+        /// Spacing of the signed θr values, degrees (> 0).
         step_deg: f64,
+        /// Largest |θr|, degrees.
         theta_r_max_deg: f64,
     },
     /// θi × θr × φr grid over the hemisphere (θi outer, φr inner).
     Hemisphere {
+        /// Number of θi values: cell midpoints of [0°, 90°).
         n_theta_i: usize,
+        /// Number of θr values: cell midpoints of (0°, 90°).
         n_theta_r: usize,
+        /// Number of φr values: −180° + 360° l/n for l = 0…n − 1.
         n_phi_r: usize,
     },
     /// As `Hemisphere`, with θi from 70° to 89°.
     Grazing {
+        /// Number of θi values, evenly from 70° to 89° inclusive (89° alone for one).
         n_theta_i: usize,
+        /// Number of θr values: cell midpoints of (0°, 90°).
         n_theta_r: usize,
+        /// Number of φr values: −180° + 360° l/n for l = 0…n − 1.
         n_phi_r: usize,
     },
     /// Explicit directions (e.g. from a CSV file, [`Layout::read_csv`]).

@@ -30,14 +30,26 @@ pub struct FitReport {
     pub derived: BTreeMap<String, DerivedEntry>,
     /// The report's notes, in words.
     pub notes: Vec<String>,
+    /// The minimised cost ½ Σ C²ρ(wᵢrᵢ²/C²) (½χ² for the linear loss) at the reported point.
     pub cost: Option<f64>,
+    /// The loss the fit minimised.
     pub loss: LossEntry,
+    /// χ² = Σ wᵢrᵢ² at the reported point (null under a robust loss when the fitted values were
+    /// not computed).
     pub chi2: Option<f64>,
+    /// χ²/(n − p), p the free parameters.
     pub reduced_chi2: Option<f64>,
+    /// Root mean square of the unweighted residuals, in the residual kind's space (null when
+    /// the fitted values were not computed).
     pub rms: Option<f64>,
+    /// Largest |rᵢ| of the unweighted residuals (null when not computed).
     pub max_abs_residual: Option<f64>,
+    /// Weighted R² in the residuals' space (null when the data has no spread or the fitted
+    /// values were not computed).
     pub r2: Option<f64>,
+    /// Akaike's criterion n·ln(χ²/n) + 2p (2·cost for χ² under a robust loss).
     pub aic: Option<f64>,
+    /// Bayesian criterion n·ln(χ²/n) + p·ln n (2·cost for χ² under a robust loss).
     pub bic: Option<f64>,
     /// Samples fitted.
     pub n: usize,
@@ -47,21 +59,32 @@ pub struct FitReport {
     pub adequacy: AdequacyEntry,
     /// The checks of the paper's assumptions at the fitted surface (KBS models), by name.
     pub validity: Option<BTreeMap<String, ValidityEntry>>,
+    /// The free parameters' correlation matrix and its largest entries.
     pub correlation: Correlation,
+    /// Singular values of the weighted Jacobian with unit-norm columns, descending (null for a
+    /// non-finite one).
     pub singular_values: Vec<Option<f64>>,
+    /// Condition number σ_max/σ_min of that Jacobian (null when infinite: singular).
     pub condition: Option<f64>,
     /// The starting point by parameter name, and whether it came from the start search
     /// (`search`) or a neighbouring dataset's optimum (`neighbour`).
     pub start: BTreeMap<String, Option<f64>>,
+    /// `search` or `neighbour` (see `start`).
     pub start_from: String,
+    /// Levenberg–Marquardt iterations of the fit (a refit's added).
     pub iterations: u64,
+    /// Residual evaluations of the solver (a refit's added).
     pub evaluations: u64,
+    /// Jacobian evaluations of the solver (a refit's added).
     pub jacobian_evaluations: u64,
     /// Wall-clock seconds of the fit, of its profile intervals, of the start search with
     /// its refinement, and of the grid alone.
     pub seconds: f64,
+    /// Seconds of the profile intervals (0 when none were computed).
     pub interval_seconds: f64,
+    /// Seconds up to the end of the starting-value refinement (included in `seconds`).
     pub init_seconds: f64,
+    /// Seconds up to the grid's candidates (included in `init_seconds`).
     pub start_seconds: f64,
     /// Samples per evaluation mode of the KBS series (`series`, `rough`, …).
     pub modes: BTreeMap<String, usize>,
@@ -72,8 +95,12 @@ pub struct FitReport {
     /// The input as named on the command line, the fit's setting, the command line and
     /// the version of goniofit.
     pub input: String,
+    /// The fit's setting: input path and checksum, wavelength and units, quantity, residual,
+    /// floor, weights, loss.
     pub setting: super::Setting,
+    /// The full command line of the run.
     pub command: String,
+    /// goniofit's version that wrote the report.
     pub version: String,
     /// What `goniofit plot` needs to redraw the fit (reports of a dataset's outcome).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -88,11 +115,18 @@ pub struct FitReport {
 /// open side) when computed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
+    /// The value at the reported point (null if not finite).
     pub value: Option<f64>,
+    /// Its standard error; null when not determined, fixed or not finite.
     pub stderr: Option<f64>,
+    /// Whether the data determines it (see [`crate::fit::driver::Verdict`]).
     pub determined: bool,
+    /// The 68.27 % profile-likelihood interval `[lo, hi]` (a side null when open); absent when
+    /// not computed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interval68: Option<[Option<f64>; 2]>,
+    /// The 95 % profile-likelihood interval `[lo, hi]` (a side null when open); absent when not
+    /// computed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interval95: Option<[Option<f64>; 2]>,
 }
@@ -101,9 +135,12 @@ pub struct Estimate {
 /// unit setting.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ParamEntry {
+    /// Value, standard error, determination and intervals (flattened into the entry).
     #[serde(flatten)]
     pub estimate: Estimate,
+    /// Whether the user held it fixed.
     pub fixed: bool,
+    /// Its unit in the run's unit setting (`nm`, `unit of λ`, `sr⁻¹`, `1`, `rad`, …).
     pub unit: String,
 }
 
@@ -111,9 +148,12 @@ pub struct ParamEntry {
 /// on whether the verdict is a smooth surface).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DerivedEntry {
+    /// Value, standard error, determination and intervals (flattened into the entry).
     #[serde(flatten)]
     pub estimate: Estimate,
+    /// What the quantity is, in one line.
     pub doc: String,
+    /// Its unit in the run's unit setting (the smooth amplitude's carries a length²).
     pub unit: String,
 }
 
@@ -121,16 +161,21 @@ pub struct DerivedEntry {
 /// the linear loss).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LossEntry {
+    /// The loss function ρ (`linear`, `soft_l1`, `huber`, `cauchy`, `arctan`).
     pub kind: LossKind,
+    /// The loss scale C in units of the weighted residual √w·r (null for the linear loss).
     pub f_scale: Option<f64>,
+    /// Samples with |√wᵢ rᵢ| > C, treated as outliers (null for the linear loss).
     pub beyond_f_scale: Option<usize>,
 }
 
 /// The adequacy verdict with its headline in words.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AdequacyEntry {
+    /// The verdict, its reasons and the test statistics (flattened into the entry).
     #[serde(flatten)]
     pub adequacy: Adequacy,
+    /// The verdict in one sentence, as the text report gives it.
     pub headline: String,
 }
 
@@ -139,8 +184,13 @@ pub struct AdequacyEntry {
 pub struct ValidityEntry {
     /// Whether the fitted surface satisfies it; null when the data does not determine it.
     pub satisfied: Option<bool>,
+    /// The checked quantity: R/λ (curvature) or the shadowed fraction 1 − S (shadowing); null
+    /// when not finite.
     pub value: Option<f64>,
+    /// The limit the value is compared with: a lower bound for the curvature, an upper one for
+    /// the shadowing.
     pub limit: f64,
+    /// The check in words, with its numbers.
     pub text: String,
 }
 
@@ -148,16 +198,22 @@ pub struct ValidityEntry {
 /// the text report lists).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Correlation {
+    /// Names of the free parameters, in the matrix's order.
     pub names: Vec<String>,
+    /// The correlations ρᵢⱼ, row by row (null where a standard error is 0).
     pub matrix: Vec<Vec<Option<f64>>>,
+    /// The pairs with the largest |ρ|, largest first (at most ten, finite ones only).
     pub largest: Vec<Pair>,
 }
 
 /// Two correlated parameters and their correlation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Pair {
+    /// One parameter's name.
     pub a: String,
+    /// The other parameter's name.
     pub b: String,
+    /// Their correlation ρ ∈ [−1, 1].
     pub rho: Option<f64>,
 }
 
@@ -166,11 +222,17 @@ pub struct Pair {
 /// the value of every parameter in layout order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Replay {
+    /// The fit's command-line arguments (without the program's name).
     pub args: Vec<String>,
+    /// The model's name of the fit (the chosen one for `--model auto`).
     pub model: String,
+    /// Its factor options as command-line text, empty without.
     pub factors: String,
+    /// Every parameter name in layout order.
     pub names: Vec<String>,
+    /// Every parameter value (fixed ones included) in layout order.
     pub values: Vec<f64>,
+    /// Number of free parameters of the fit.
     pub n_free: usize,
 }
 
@@ -179,13 +241,19 @@ pub struct Replay {
 pub struct ComparisonRow {
     /// The model with its factor options.
     pub model: String,
+    /// Bayesian information criterion of the candidate's fit.
     pub bic: Option<f64>,
+    /// Akaike's information criterion of the candidate's fit.
     pub aic: Option<f64>,
+    /// The candidate's minimised cost.
     pub cost: Option<f64>,
+    /// Whether the candidate's fit is a usable optimum.
     pub converged: bool,
+    /// The solver's termination of the candidate's fit.
     pub termination: String,
     /// Its BIC minus the chosen fit's.
     pub delta_bic: Option<f64>,
+    /// Whether this candidate is the one reported.
     pub chosen: bool,
     /// A usable fit within ΔBIC < 2 of the chosen one.
     pub tie: bool,

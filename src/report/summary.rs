@@ -12,19 +12,27 @@ use std::fmt::Write;
 pub struct Row {
     /// The dataset (file, with `[group]`).
     pub group: String,
+    /// Number of samples fitted.
     pub n: usize,
+    /// Whether the fit is a usable optimum ([`FitResult::converged`]).
     pub converged: bool,
     /// Why the solver stopped, as in JSON (`ftol`, `maxiterations`, `degenerate`, …).
     pub termination: String,
+    /// The minimised cost ½ Σ C²ρ(wᵢrᵢ²/C²) (½χ² for the linear loss).
     pub cost: f64,
+    /// Weighted R² in the residuals' space (NaN when undefined or not computed).
     pub r2: f64,
     /// σ, T, T/σ: value and whether the data determines it (None: not in the model).
     pub sigma: Option<(f64, bool)>,
+    /// The fitted T, in [`Row::length_unit`], and whether the data determines it.
     pub t: Option<(f64, bool)>,
+    /// The derived T/σ and whether the data determines it.
     pub ratio: Option<(f64, bool)>,
+    /// What the data determines.
     pub verdict: Verdict,
     /// Whether the model describes the data, and the codes of the reasons when not.
     pub adequacy: AdequacyVerdict,
+    /// The adequacy reason codes, comma-separated (empty when none).
     pub adequacy_reasons: String,
     /// Unit of σ and T.
     pub length_unit: String,

@@ -87,26 +87,40 @@ impl Regime {
 /// One synthetic scene: truth, layout and noise.
 #[derive(Debug, Clone, Serialize)]
 pub struct Scene {
+    /// Index of the scene in the run's draw order (0-based); [`RecoverConfig::only`] selects
+    /// scenes by it.
     pub id: usize,
+    /// The regime, which follows from the id (smooth, intermediate, rough, grazing in turn).
     pub regime: Regime,
     /// Whether the layout is the sparse or the dense one.
     pub dense: bool,
     /// The layout as [`Layout::describe`] writes it.
     pub layout: String,
+    /// True RMS height σ, in units of λ (the scene's wavelength is 1), drawn log-uniformly
+    /// within the regime's range.
     pub sigma: f64,
+    /// True correlation length T, in units of λ: σ times a ratio T/σ drawn log-uniformly from 2
+    /// to 12, or (smooth scenes) T/λ drawn from 0.3 to 3.
     #[serde(rename = "T")]
     pub corr_len: f64,
+    /// True scale factor s on the lobe, drawn log-uniformly from 0.1 to 10.
     pub scale: f64,
+    /// Wavelength λ of the synthetic data: always 1, so σ and T are in units of λ.
     pub wavelength: f64,
+    /// The noise on the exact values: level ε from the run's configuration, relative for even
+    /// ids and Poisson-like for odd ones, with a seed drawn from the run's stream.
     pub noise: Noise,
     /// The factors on the lobe ([`RecoverConfig`]) and their truths: the index n (with a
     /// Fresnel factor) and κ (conductor).
     #[serde(skip_serializing_if = "is_default")]
     pub fresnel: Fresnel,
+    /// The shadowing factor on the truth's and the fit's lobe (omitted from JSON when none).
     #[serde(skip_serializing_if = "is_default")]
     pub shadowing: Shadowing,
+    /// True refractive index n with a Fresnel factor (None without one).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub n: Option<f64>,
+    /// True extinction coefficient κ with a conductor's Fresnel factor (None otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kappa: Option<f64>,
 }
@@ -140,9 +154,15 @@ impl Scene {
 /// One scored quantity of one scene.
 #[derive(Debug, Clone, Serialize)]
 pub struct Check {
+    /// Report name of the quantity (`sigma`, `T`, `scale`, `T/sigma`, `amplitude`, `n`,
+    /// `kappa`).
     pub name: String,
+    /// The scene's true value (for `amplitude`, s·(T/σ)² under a rough verdict, s·(σ/λ)²
+    /// otherwise).
     pub truth: f64,
+    /// The fitted (or derived) value the fit reports.
     pub value: f64,
+    /// The standard error the fit reports, None when it reports none or a non-finite one.
     pub stderr: Option<f64>,
     /// |value − truth| / truth.
     pub rel_error: f64,
@@ -153,19 +173,27 @@ pub struct Check {
 /// The outcome of one scene.
 #[derive(Debug, Clone, Serialize)]
 pub struct SceneResult {
+    /// The scene that was fitted.
     pub scene: Scene,
+    /// Number of samples of the scene's data (0 when the data could not be generated).
     pub n: usize,
     /// None when the fit returned an error (then `error` says why).
     pub termination: Option<Termination>,
+    /// The fit's verdict on what the data determines (None when the fit returned an error).
     pub verdict: Option<Verdict>,
+    /// Whether the solver converged ([`FitResult::converged`]); false on an error.
     pub converged: bool,
+    /// Wall seconds of the fit ([`FitResult::seconds`]); 0 on an error.
     pub seconds: f64,
+    /// The quantities scored against the truth ([`score`]); empty on an error.
     pub checks: Vec<Check>,
+    /// The error message when the data generation or the fit failed, else None.
     pub error: Option<String>,
     /// The adequacy verdict of the fit (None when the fit returned an error) and the codes
     /// of its reasons: a correct model with correct weights should be flagged in at most
     /// [`crate::fit::stats::adequacy::ALPHA`] of the scenes.
     pub adequacy: Option<AdequacyVerdict>,
+    /// Codes of the adequacy reasons of the fit (empty on an error).
     pub adequacy_reasons: Vec<String>,
     /// With a Fresnel factor: whether the fit says the data determines n (None without
     /// the factor, or when the fit failed).
@@ -176,61 +204,87 @@ pub struct SceneResult {
 /// Error statistics of one quantity within a regime.
 #[derive(Debug, Clone, Serialize)]
 pub struct QuantitySummary {
+    /// Report name of the quantity (see [`Check::name`]).
     pub name: String,
     /// Scenes in which it was scored.
     pub n: usize,
+    /// Median of |value − truth|/truth over those scenes (NaN ignored; NaN if none).
     pub median_rel_error: f64,
+    /// Largest relative error over those scenes (0 if none).
     pub max_rel_error: f64,
     /// Fraction covered among those with a standard error (None if none had one).
     pub coverage: Option<f64>,
+    /// Number of those checks that had a standard error (the denominator of `coverage`).
     pub n_with_stderr: usize,
 }
 
 /// Summary of one regime.
 #[derive(Debug, Clone, Serialize)]
 pub struct RegimeSummary {
+    /// The regime summarised.
     pub regime: Regime,
+    /// Number of scenes of the regime in the run.
     pub scenes: usize,
+    /// Count of scenes per verdict name (`error` for a fit that returned an error).
     pub verdicts: BTreeMap<String, usize>,
+    /// Count of scenes per termination (its `Debug` name, or `error`).
     pub terminations: BTreeMap<String, usize>,
+    /// Per scored quantity, in the order σ, T, scale, T/σ, amplitude, n, κ, then others.
     pub quantities: Vec<QuantitySummary>,
     /// Fraction of scored truths (with a standard error) inside ±2 se.
     pub coverage: Option<f64>,
+    /// Number of scored truths of the regime that had a standard error.
     pub n_with_stderr: usize,
+    /// Median wall seconds of the regime's fits that returned no error (NaN if none did).
     pub median_seconds: f64,
+    /// Number of the regime's scenes whose data generation or fit returned an error.
     pub errors: usize,
 }
 
 /// The whole recovery run.
 #[derive(Debug, Clone, Serialize)]
 pub struct RecoverReport {
+    /// Number of scenes fitted (those selected by `only`, or all).
     pub scenes: usize,
+    /// Seed of the scene draws (the same seed gives the same scenes).
     pub seed: u64,
     /// Fraction of all scored truths (with a standard error) inside ±2 standard errors.
     pub coverage: f64,
+    /// The expected coverage of ±2 standard errors ([`NOMINAL_COVERAGE`]).
     pub nominal_coverage: f64,
+    /// Number of scored truths (over all scenes) that had a standard error.
     pub n_with_stderr: usize,
+    /// Count of scenes per termination (its `Debug` name, or `error`).
     pub terminations: BTreeMap<String, usize>,
+    /// Number of scenes whose solver converged.
     pub converged: usize,
     /// Scenes whose fit the adequacy tests flag (misfit or noise), and the count of each
     /// reason among them.
     pub adequacy_flagged: usize,
+    /// Count of each adequacy reason code among the flagged scenes.
     pub adequacy_reasons: BTreeMap<String, usize>,
+    /// Number of scenes whose data generation or fit returned an error.
     pub errors: usize,
+    /// Median wall seconds of the fits that returned no error (NaN if none did).
     pub median_seconds: f64,
+    /// Wall seconds of the whole run: drawing, fitting (in parallel) and summarising.
     pub total_seconds: f64,
+    /// Per regime present in the run, in the order of [`Regime::ALL`].
     pub regimes: Vec<RegimeSummary>,
     /// The scenes with a truth outside ±2 s.e., with the commands that reproduce each.
     pub outliers: Vec<Outlier>,
     /// Converged scenes that are confidently wrong (see [`outliers`]).
     pub wrong_converged: usize,
+    /// Every scene's outcome, ordered by scene id.
     pub results: Vec<SceneResult>,
 }
 
 /// How to run a recovery.
 #[derive(Debug, Clone)]
 pub struct RecoverConfig {
+    /// Number of scenes to draw.
     pub scenes: usize,
+    /// Seed of the scene draws (scene parameters, layouts and noise seeds).
     pub seed: u64,
     /// Noise level ε of every scene (the kind alternates relative / Poisson-like).
     pub noise: f64,
@@ -241,6 +295,7 @@ pub struct RecoverConfig {
     pub only: Option<Vec<usize>>,
     /// The factors on the lobe of every scene's truth and fit ([`draw_scenes_with`]).
     pub fresnel: Fresnel,
+    /// The shadowing factor on the lobe of every scene's truth and fit.
     pub shadowing: Shadowing,
 }
 

@@ -96,13 +96,19 @@ pub struct Reason {
 /// The runs test of the residual signs along the scans.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunsTest {
+    /// Observed runs (maximal blocks of one residual sign along a scan), summed over the scans.
     pub runs: usize,
+    /// Runs expected under independent signs, Σ (1 + 2n₊n₋/n) over the scans.
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub expected: f64,
+    /// Standard deviation of the number of runs under independent signs.
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub sd: f64,
+    /// Signs counted (samples in the scans; a zero residual counts as negative).
     pub signs: usize,
+    /// Number of scans the signs were taken along.
     pub scans: usize,
+    /// One-sided p-value of too few runs, P(Z ≤ z) with z = (runs − expected)/sd.
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub p: f64,
 }
@@ -119,6 +125,7 @@ pub struct SpreadTest {
     /// noise proportional to L (NaN when not computable).
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub slope: f64,
+    /// One-sided p-value of a spread growing with L, from √(m − 1)·ρ ~ N(0, 1), m the triples.
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub p: f64,
 }
@@ -132,6 +139,7 @@ pub struct RegionTest {
     pub n: usize,
     /// Of which the measured value lies above the model (negative residual).
     pub data_above: usize,
+    /// Two-sided binomial(n, ½) p-value of `data_above` (exact sign test).
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub p: f64,
 }
@@ -139,7 +147,9 @@ pub struct RegionTest {
 /// The adequacy of a fit: verdict, reasons and the statistics behind them.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Adequacy {
+    /// Adequate, misfit, noise, not computed or exact.
     pub verdict: AdequacyVerdict,
+    /// The rejecting tests' reasons, in the order the tests ran (empty when adequate).
     pub reasons: Vec<Reason>,
     /// Family-wise significance level; each test is held to `alpha / tests`.
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
@@ -152,8 +162,12 @@ pub struct Adequacy {
     pub reduced_chi2: Option<f64>,
     /// Two-sided p-value of χ² against χ²(n − p).
     pub chi2_p: Option<f64>,
+    /// The runs test (None when not run: fewer than [`MIN_SAMPLES`] signs or no variance).
     pub runs: Option<RunsTest>,
+    /// The spread test (None when not run: residuals not absolute, fewer than [`MIN_SAMPLES`]
+    /// triples, or ρ undefined).
     pub spread: Option<SpreadTest>,
+    /// The sign tests of the grazing, peak and far regions that were run.
     pub regions: Vec<RegionTest>,
 }
 
@@ -194,8 +208,11 @@ pub struct FitResiduals<'a> {
     pub sqrt_weight: &'a PerSample,
     /// The model's values (the measured quantity).
     pub fitted: &'a [f64],
+    /// The samples' geometry (angles, wavelength), for the scans and the regions.
     pub geo: &'a Geometry,
+    /// The channel of every sample (scans do not mix channels).
     pub channel: &'a Channels,
+    /// The space the residuals are in (absolute, relative or logarithmic).
     pub kind: ResidualKind,
     /// Whether the weights are 1/σ_L² of stated uncertainties (then χ² is tested).
     pub absolute_weights: bool,
@@ -203,6 +220,7 @@ pub struct FitResiduals<'a> {
     pub linear_loss: bool,
     /// Whether the model has a diffuse (Lambertian) term.
     pub has_diffuse: bool,
+    /// Number of free parameters p (the degrees of freedom of χ² are n − p).
     pub n_free: usize,
     /// χ² = Σ wᵢ rᵢ².
     pub chi2: f64,
