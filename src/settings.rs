@@ -25,7 +25,9 @@ use std::time::Duration;
 /// package (`f_scale`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Front {
+    /// The command line: options spelled `--kebab-case`.
     Cli,
+    /// The Python package: keywords spelled `snake_case`.
     Python,
 }
 

@@ -9,8 +9,12 @@ use crate::model::ModelOptions;
 /// Everything about a fit except the data.
 #[derive(Debug, Clone)]
 pub struct FitConfig {
+    /// The model's name, as [`crate::model::by_name`] takes it (`kbs`, `kbs+lambert`, …).
     pub model: String,
+    /// The model's options: evaluation mode, series tolerance, patch, Fresnel and shadowing
+    /// factors.
     pub model_opts: ModelOptions,
+    /// What the residual of a sample is: absolute f − y, relative or logarithmic.
     pub residual: ResidualKind,
     /// The robust loss on the weighted residuals (default linear: plain least squares).
     pub loss: Loss,
@@ -20,6 +24,7 @@ pub struct FitConfig {
     pub init: Vec<(String, f64)>,
     /// Parameters held fixed (name, value).
     pub fix: Vec<(String, f64)>,
+    /// The Levenberg–Marquardt settings (tolerances, limits, time limit, stop request).
     pub lm: LmConfig,
     /// Whether weights are inverse variances from a stated uncertainty column.
     pub weights_are_uncertainties: bool,

@@ -85,7 +85,14 @@ impl PartialEq for Column {
 /// bits, so reading it gives exactly the entries given.
 #[derive(Debug, Clone, PartialEq)]
 pub enum PerSample {
-    One { value: f64, len: usize },
+    /// One value shared by every sample.
+    One {
+        /// The value of every sample.
+        value: f64,
+        /// Number of samples.
+        len: usize,
+    },
+    /// A value per sample.
     Each(Column),
 }
 

@@ -73,10 +73,15 @@ pub struct Row {
 /// The whole table.
 #[derive(Debug, Clone, Serialize)]
 pub struct WorkPrecision {
+    /// The evaluation rows (series tolerances, smooth, rough, auto), then the solver rows.
     pub rows: Vec<Row>,
+    /// What the model errors are measured against, in words (the series at [`REFERENCE_TOL`]).
     pub reference: String,
+    /// The layout of the model-error data sets ([`EVAL_LAYOUT`]).
     pub eval_layout: String,
+    /// The layout of the fits ([`FIT_LAYOUT`]).
     pub fit_layout: String,
+    /// Timing repeats each median is taken over.
     pub repeats: usize,
 }
 
@@ -96,7 +101,10 @@ impl Default for WorkPrecisionConfig {
 /// An evaluation mode of a row.
 #[derive(Debug, Clone, Copy)]
 pub struct ModeSpec {
+    /// The KBS evaluation mode of the row.
     pub mode: EvalMode,
+    /// The series' relative tolerance (the model's default for the other modes, which do not
+    /// use it).
     pub tol: f64,
 }
 
@@ -148,7 +156,10 @@ pub fn modes() -> Vec<ModeSpec> {
 
 /// Finite-difference Jacobian of a problem's residuals (forward or central).
 pub struct FiniteDifference<'p, P: LeastSquaresProblem + ?Sized> {
+    /// The problem whose residuals are differenced (its own Jacobian is not used).
     pub inner: &'p P,
+    /// Central differences (two evaluations per parameter) rather than forward ones from the
+    /// residuals at x.
     pub central: bool,
 }
 

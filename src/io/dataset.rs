@@ -30,6 +30,8 @@ pub struct ReadOptions {
 /// A dataset as read: angles validated, values parsed, raw rows kept for pass-through.
 #[derive(Debug, Clone)]
 pub struct Dataset {
+    /// The file as named by the caller (for arrays handed over by a program, the name it
+    /// gave them); messages about the data name it.
     pub path: PathBuf,
     /// Column names of `rows` (as in the file, surrounding whitespace removed).
     pub headers: Vec<String>,

@@ -14,10 +14,15 @@ use std::fmt::Write;
 /// One fit's section: its result, run information, text report, model comparison (empty
 /// for one model) and pictures as (name, SVG document).
 pub struct FitSection<'a> {
+    /// The fit of the section's dataset.
     pub result: &'a FitResult,
+    /// How it was run: input, command, setting and profile intervals.
     pub info: &'a RunInfo,
+    /// The fit's text report, as the single-fit page shows it.
     pub text: String,
+    /// The candidates of a model comparison (empty when one model was fitted).
     pub comparison: Vec<Candidate<'a>>,
+    /// The fit's pictures as (name, SVG document), inlined in order.
     pub pictures: Vec<(String, String)>,
 }
 
@@ -27,9 +32,12 @@ pub struct Batch<'a> {
     pub command: &'a str,
     /// One summary row per fit, in the order of `sections`.
     pub rows: &'a [Row],
+    /// One section per fit, in the order of `rows`.
     pub sections: Vec<FitSection<'a>>,
     /// The overview's small charts as (title, SVG document), and what their x axis is.
     pub overview: Vec<(String, String)>,
+    /// What the overview's x axis is, in words (the sentence "each quantity against …" names
+    /// it).
     pub overview_x: String,
     /// The datasets a stop request kept from being fitted (with why).
     pub not_fitted: &'a [String],

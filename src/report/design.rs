@@ -8,7 +8,9 @@ use std::collections::BTreeMap;
 
 /// A finished design with what it was planned for.
 pub struct Run<'a> {
+    /// The design: the chosen geometries and the estimates before and after.
     pub design: &'a Design,
+    /// The model, parameters, wavelength and noise it was planned for.
     pub scene: &'a Scene<'a>,
     /// Where the measured geometries came from (a path, or `none`).
     pub source: &'a str,

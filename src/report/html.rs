@@ -22,6 +22,8 @@ pub fn inline_svg(svg: &str) -> &str {
     svg.find("<svg").map_or(svg, |i| &svg[i..])
 }
 
+/// The pages' style sheet (tables, numbers, preformatted text, figures, yes/no colours),
+/// inlined so that a page is self-contained.
 pub const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\
 table{border-collapse:collapse;margin:0.5em 0 1em}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}\
 th{background:#eee}td.num{font-family:monospace;text-align:right;white-space:nowrap}pre{background:#f6f6f6;padding:0.5em;overflow-x:auto}\

@@ -8,9 +8,12 @@ use crate::fit::driver::FitResult;
 
 /// One candidate of a model comparison (`--model auto`), as every report shows it.
 pub struct Candidate<'a> {
+    /// The candidate's fit, as a summary (the per-sample vectors of candidates are moved out).
     pub result: &'a FitResult,
     /// Its BIC minus the chosen fit's.
     pub delta_bic: f64,
+    /// Whether it is the reported fit: the converged candidate of least BIC (of least BIC
+    /// overall when none converged).
     pub chosen: bool,
     /// A usable fit within ΔBIC < 2 of the chosen one (`fit::dataset::BIC_TIE`).
     pub tie: bool,
@@ -155,18 +158,24 @@ pub struct SettingSource {
     /// The quantity fitted and where it came from (`--quantity`, `stated by the file`,
     /// `default`).
     pub quantity: crate::geometry::Quantity,
+    /// Where the quantity came from (`--quantity`, `stated by the file`, `default`).
     pub quantity_source: String,
+    /// The residual kind asked for: absolute, relative or log.
     pub residual: crate::fit::problem::ResidualKind,
     /// The floor asked for (None: 1e-6 × max |L|).
     pub floor: Option<f64>,
     /// The unit of λ and where λ came from (`--wavelength`, `channel name`, `wavelength
     /// column`, `none`).
     pub wavelength_unit: Option<String>,
+    /// Where λ came from (`--wavelength`, `channel name`, `wavelength column`, `none`).
     pub wavelength_source: String,
     /// The robust loss (`linear` = plain least squares; scipy's names) and its scale C
     /// (None for linear).
     pub loss: String,
+    /// The loss scale C (`--f-scale`), in the unit of the weighted residual; None for linear.
     pub f_scale: Option<f64>,
+    /// Whether standard errors come from the stated uncertainties as they are (scipy's
+    /// `absolute_sigma=True`) instead of being rescaled by the residual scatter.
     pub absolute_sigma: bool,
 }
 

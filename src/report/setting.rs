@@ -95,15 +95,21 @@ pub struct FloorInfo {
 /// The whole setting of a fit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
+    /// The input file as fitted: absolute path, SHA-256 and size.
     pub input: InputInfo,
+    /// The distinct wavelengths of the samples, their unit and where they came from.
     pub wavelength: WavelengthInfo,
     /// `--channel` as given (None when not given).
     pub channel: Option<String>,
+    /// What the values are: a BRDF (sr⁻¹) or a radiance.
     pub quantity: Quantity,
     /// `--quantity`, `file (MEAS_NAME BRDF)`, `file (NIST f_r11)` or `default`.
     pub quantity_source: String,
+    /// The residual kind the fit minimised: absolute, relative or log.
     pub residual: ResidualKind,
+    /// The floor of relative and log residuals and how many values it raised.
     pub floor: FloorInfo,
+    /// Where the weights came from and how they were transformed for the residual.
     pub weights: WeightsInfo,
     /// The robust loss (`linear` = plain least squares; scipy's names).
     pub loss: String,
@@ -112,6 +118,7 @@ pub struct Setting {
     /// Standard errors and intervals from the stated uncertainties as they are (scipy's
     /// `absolute_sigma=True`), not rescaled by the residual scatter.
     pub absolute_sigma: bool,
+    /// The units of the reported quantities (length, measured value).
     pub units: Units,
 }
 

@@ -116,6 +116,7 @@ pub struct Outcome {
     /// The dataset; after a one-channel fit without its samples, lines and values (the
     /// input holds them), and a wavelength column of one value kept as that value once.
     pub dataset: Dataset,
+    /// The fit's data built from the dataset (values, weights, channels, geometry).
     pub input: FitInput,
     /// One result per candidate model fitted, in [`DatasetFit::candidates`] order (a stop
     /// request leaves the later ones out).

@@ -25,10 +25,16 @@ pub enum Transform {
     /// x = ln p (p > 0).
     Log,
     /// x = ln(p − lower) (p > lower > 0: a dielectric's index, above 1).
-    LogAbove { lower: f64 },
+    LogAbove {
+        /// The bound p stays above (1 for a dielectric's index).
+        lower: f64,
+    },
     /// p = u(√(x² + 1) − 1) ≥ 0, bounded below by 0, in units of u > 0 (the data's
     /// scale: see [`ParamLayout::set_amplitude_units`]).
-    NonNegative { unit: f64 },
+    NonNegative {
+        /// The unit u, in the parameter's own unit.
+        unit: f64,
+    },
 }
 
 /// Parameters that enter the model linearly: amplitudes, non-negative, and solved exactly
@@ -127,9 +133,12 @@ pub struct FitParam {
 /// The full parameter list of a fit and the channel → model-parameter mapping.
 #[derive(Debug, Clone)]
 pub struct ParamLayout {
+    /// Every fit parameter: per model parameter in the model's order, one shared entry, or
+    /// one per channel for a per-channel scale of a joint fit.
     pub params: Vec<FitParam>,
     /// `index[c][j]`: the fit parameter that feeds model parameter j on channel c.
     pub index: Vec<Vec<usize>>,
+    /// The channels' names (the `[channel]` suffixes; one empty name for a plain fit).
     pub channel_names: Vec<String>,
 }
 

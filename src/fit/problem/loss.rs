@@ -115,6 +115,7 @@ impl std::fmt::Display for LossKind {
 /// A robust loss with its scale `C` (`f_scale`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Loss {
+    /// The function ρ (`linear`: plain least squares).
     pub kind: LossKind,
     /// C > 0, finite, in the unit of the weighted residual √w r (for relative residuals
     /// without weights: a fraction of the value, 0.03 = 3 %). Default 1 (scipy's).

@@ -57,6 +57,7 @@ pub enum ResidualKind {
 /// The data of a fit.
 #[derive(Debug, Clone)]
 pub struct FitInput {
+    /// The samples' directions (radians) and wavelengths, and the measured quantity.
     pub geo: Geometry,
     /// Measured values (shared storage: a problem built on them refers to them).
     pub y: Column,
@@ -136,7 +137,9 @@ impl Rows {
 
 /// The fit's least-squares problem.
 pub struct FitProblem<'a> {
+    /// The model evaluated at every sample.
     pub model: &'a dyn Model,
+    /// The map from the solver's free variables to the model's parameters per channel.
     pub layout: ParamLayout,
     blocks: Vec<Block>,
     /// The input's measured values (shared, not a second copy of a big file's).

@@ -22,7 +22,9 @@ use nalgebra::{DMatrix, DVector};
 pub struct Uncertainty {
     /// `s²(JᵀJ)⁺`, `s² = 2·cost/(n−p)`.
     pub covariance: DMatrix<f64>,
+    /// Standard errors √Cⱼⱼ of the free variables (the solver's x, length `p`).
     pub stderr: DVector<f64>,
+    /// Correlations Cᵢⱼ/(sᵢsⱼ) (`p × p`; NaN where a standard error is 0).
     pub correlation: DMatrix<f64>,
     /// Singular values of `Ĵ` (`J` with unit-norm columns), descending (length `p`).
     pub singular_values: DVector<f64>,

@@ -84,14 +84,18 @@ impl Bound {
 /// An interval at one probability.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Level {
+    /// The probability P of the interval (one of [`LEVELS`]).
     pub prob: f64,
+    /// The lower end.
     pub lo: Bound,
+    /// The upper end.
     pub hi: Bound,
 }
 
 /// The profile intervals of one quantity.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Interval {
+    /// The quantity's report name (a parameter's layout name, `T/sigma`, `amplitude`, …).
     pub name: String,
     /// The best-fit value.
     pub value: f64,
@@ -143,9 +147,15 @@ impl Interval {
 /// indices, solved for `eliminate` (a log-transformed free parameter with c ≠ 0).
 #[derive(Debug, Clone)]
 pub enum Target {
+    /// The free parameter at this layout index, searched in its fit variable x (ln p where
+    /// log-transformed).
     Param(usize),
+    /// ψ = Π p_j^{c_j}, profiled through ln ψ.
     Product {
+        /// The pairs (layout index j, exponent c_j) of the product.
         coef: Vec<(usize, f64)>,
+        /// The layout index of the log-transformed free parameter solved for to hold ψ at its trial
+        /// value (its exponent must be non-zero).
         eliminate: usize,
     },
 }
@@ -289,6 +299,7 @@ type Limit = (f64, bool);
 
 /// The profile of one target over a full problem whose best fit is `p_best`.
 pub struct Profiler<'a, 'p> {
+    /// The full problem (every free parameter) the refits minimise.
     pub problem: &'a FitProblem<'p>,
     /// Best-fit parameters (layout order) of `problem`.
     pub p_best: Vec<f64>,
@@ -296,7 +307,10 @@ pub struct Profiler<'a, 'p> {
     pub chi2_min: f64,
     /// Covariance of the free x at the optimum, s²(JᵀJ)⁺.
     pub x_cov: DMatrix<f64>,
+    /// Whether the weights are true inverse variances: thresholds z² instead of s²·t².
     pub absolute: bool,
+    /// The solver settings of every refit (ftol tightened so that Δχ² is accurate to a tenth of
+    /// [`CROSS_TOL`]). accuracy).
     pub lm: LmConfig,
 }
 

@@ -45,6 +45,7 @@ pub struct Check {
 /// The validity checks of a KBS fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Validity {
+    /// The curvature check, then the shadowing check.
     pub checks: Vec<Check>,
 }
 
@@ -92,9 +93,11 @@ fn unshadowed_up_to(m: f64) -> f64 {
 pub struct Surface {
     /// Fitted σ and T (unit of λ).
     pub sigma: f64,
+    /// Fitted correlation length T (unit of λ).
     pub corr_len: f64,
     /// Whether T/σ, and σ and T separately, are determined by the data.
     pub ratio_determined: bool,
+    /// Whether σ and T are each determined (the curvature check needs both).
     pub both_determined: bool,
     /// Median wavelength of the samples (unit of σ, T).
     pub wavelength: f64,

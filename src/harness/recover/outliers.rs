@@ -19,6 +19,7 @@ pub const WRONG_REL: f64 = 0.2;
 /// One scored quantity whose truth lies outside ±k standard errors.
 #[derive(Debug, Clone, Serialize)]
 pub struct Miss {
+    /// Report name of the quantity (see [`super::Check::name`]).
     pub name: String,
     /// (value − truth)/stderr.
     pub z: f64,
@@ -29,11 +30,17 @@ pub struct Miss {
 /// A scene with at least one [`Miss`], and how to reproduce it.
 #[derive(Debug, Clone, Serialize)]
 pub struct Outlier {
+    /// The scene's id (pass it to `recover --only`).
     pub id: usize,
+    /// The scene's regime.
     pub regime: Regime,
+    /// The scene's layout, as [`crate::geometry::layout::Layout::describe`] writes it.
     pub layout: String,
+    /// The fit's verdict (None when the fit returned an error).
     pub verdict: Option<Verdict>,
+    /// Whether the scene's fit converged.
     pub converged: bool,
+    /// Every scored quantity whose truth lies outside ±[`super::COVERAGE_K`] standard errors.
     pub misses: Vec<Miss>,
     /// Converged with a miss beyond [`WRONG_SE`] standard errors and [`WRONG_REL`].
     pub wrong: bool,

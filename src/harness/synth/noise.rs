@@ -34,8 +34,12 @@ impl NoiseKind {
 /// Seeded noise: kind, level ε ≥ 0 and seed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Noise {
+    /// The shape: relative, absolute or Poisson-like.
     pub kind: NoiseKind,
+    /// The level ε ≥ 0: a fraction of L (relative), of the peak max|L| (absolute), or of √(|L|
+    /// max|L|) (Poisson-like); 0 gives the exact values.
     pub level: f64,
+    /// Seed of the `StdRng` that draws the standard normal z of every value, in order.
     pub seed: u64,
 }
 
@@ -53,7 +57,9 @@ impl Noise {
 /// Noisy values and their standard deviations (one per exact value).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Noisy {
+    /// The noisy values, in the unit of the exact ones.
     pub value: Vec<f64>,
+    /// The standard deviation σ_L of each value's noise (0 everywhere without noise).
     pub sigma_l: Vec<f64>,
 }
 

@@ -161,6 +161,7 @@ pub struct Truth {
     pub layout: String,
     /// `--samples`, when the layout was subsampled.
     pub subsample: Option<usize>,
+    /// The noise added to the exact values: kind, level ε and seed.
     pub noise: Noise,
     /// Number of samples written.
     pub n: usize,

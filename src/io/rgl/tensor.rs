@@ -25,12 +25,15 @@ pub const MAGIC: &[u8; 12] = b"tensor_file\0";
 /// One field of a tensor file: where its header and its data are.
 #[derive(Debug, Clone)]
 pub struct Field {
+    /// The field's name as stored (UTF-8).
     pub name: String,
     /// Byte offset of the field's header entry.
     pub header_at: usize,
+    /// Its element type code (see the module doc; [`FLOAT32`], [`UINT8`], …).
     pub dtype: u8,
     /// Byte offset of the data.
     pub offset: usize,
+    /// Its size along each dimension, outermost first (the element count is their product).
     pub shape: Vec<usize>,
 }
 
@@ -38,6 +41,7 @@ pub struct Field {
 #[derive(Debug)]
 pub struct TensorFile<'a> {
     bytes: &'a [u8],
+    /// The fields in the order the header lists them.
     pub fields: Vec<Field>,
 }
 

@@ -89,7 +89,9 @@ pub struct Runs {
     pub runs: usize,
     /// Signs counted (sequences of one sample contribute their one run, and no variance).
     pub signs: usize,
+    /// Expected number of runs under independent signs, Σ (1 + 2n₊n₋/n) per sequence.
     pub expected: f64,
+    /// Variance of the number of runs under independent signs, summed over the sequences.
     pub variance: f64,
 }
 
