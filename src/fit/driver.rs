@@ -267,11 +267,11 @@ fn best_of_rivals(
     kept
 }
 
-/// Relative steps of each nonlinear parameter at which [`leave_small_basins`] probes a
+/// Relative steps of each nonlinear parameter at which `leave_small_basins` probes a
 /// converged log-residual fit (each way).
 pub const PROBE_STEPS: [f64; 2] = [0.01, 0.04];
 
-/// Most solves [`leave_small_basins`] starts from probes.
+/// Most solves `leave_small_basins` starts from probes.
 pub const PROBE_ROUNDS: usize = 4;
 
 /// Relative cost by which a probe must lie below the converged point to be solved from.

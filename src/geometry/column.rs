@@ -9,6 +9,9 @@ use std::sync::Arc;
 /// cloning a column or a geometry, or slicing a contiguous range of samples
 /// ([`Geometry::slice`]), copies nothing, so a fit's evaluation blocks and its input hold
 /// one copy of the geometry between them.
+///
+/// [`Geometry`]: crate::geometry::Geometry
+/// [`Geometry::slice`]: crate::geometry::Geometry::slice
 #[derive(Debug, Clone, Default)]
 pub struct Column {
     data: Arc<Vec<f64>>,

@@ -173,7 +173,7 @@ pub enum Sink {
 }
 
 /// Decide how `path` is written (see the module docs). A symlink the kernel would not
-/// follow (see [`resolve_symlinks`]) or a loop of symlinks is an [`Error::File`].
+/// follow (see `resolve_symlinks`) or a loop of symlinks is an [`Error::File`].
 pub fn sink_of(path: &Path) -> Result<Sink> {
     if path.as_os_str() == "-" {
         return Ok(Sink::Stdout);

@@ -164,7 +164,7 @@ pub fn table(rows: &[Row]) -> String {
 }
 
 /// The adequacy verdict with its reason codes, as in the table: `misfit (runs,floor)`; past
-/// [`ADEQUACY_WIDTH`] characters of codes the rest are counted (`+2`; the CSV has them all).
+/// `ADEQUACY_WIDTH` characters of codes the rest are counted (`+2`; the CSV has them all).
 pub fn adequacy_cell(r: &Row) -> String {
     if r.adequacy_reasons.is_empty() {
         return r.adequacy.name().to_string();

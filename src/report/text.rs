@@ -35,7 +35,7 @@ fn sci(v: f64) -> String {
     }
 }
 
-/// The condition number of the Jacobian: [`sci`], or in words for a singular
+/// The condition number of the Jacobian: `sci`, or in words for a singular
 /// (rank-deficient) one, whose condition number is infinite.
 pub fn condition_text(v: f64) -> String {
     if v.is_infinite() {
@@ -51,7 +51,7 @@ pub fn sci7(v: f64, computed: bool) -> String {
     if_computed(computed || v.is_finite(), || format!("{v:.7e}"))
 }
 
-/// `text()` when a figure was `computed`, else [`NOT_COMPUTED`].
+/// `text()` when a figure was `computed`, else `NOT_COMPUTED`.
 pub fn if_computed(computed: bool, text: impl FnOnce() -> String) -> String {
     if computed {
         text()

@@ -291,7 +291,7 @@ pub fn fit_dataset(spec: &DatasetFit, label: String, ds: Dataset) -> Result<Outc
 
 /// [`fit_dataset`], each candidate model first started at its optimum in `near` (the fit
 /// of a neighbouring dataset, e.g. the texel before this one) and kept when that is an
-/// optimum as good as a search would find ([`fit_near_or_search`]); otherwise searched as
+/// optimum as good as a search would find (`fit_near_or_search`); otherwise searched as
 /// by [`fit_dataset`].
 pub fn fit_dataset_near(
     spec: &DatasetFit,
@@ -382,7 +382,7 @@ fn fit_candidates<'c>(
 
 /// The fraction of the data's variance a fit leaves unexplained (1 − R² in the fitted
 /// space), relative to the neighbour's, beyond which a fit started at the neighbour's
-/// optimum is searched again ([`fit_near_or_search`]). The fraction does not change with
+/// optimum is searched again (`fit_near_or_search`). The fraction does not change with
 /// the texel's brightness; between neighbouring texels of the benchmark batch
 /// (benches/texels.py: σ, T/σ and scale drawn anew per texel) the ratio has median 1, and
 /// 99 % of pairs lie below 3.8, while a valley that is not the texel's optimum leaves a

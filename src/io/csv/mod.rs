@@ -7,7 +7,7 @@
 //! | `theta_i` | `theta_i` | incidence angle from the normal |
 //! | `theta_r` | `theta_r` | view angle from the normal |
 //! | `phi_r` | `phi_r` | view azimuth from the plane of incidence, 0 = forward/specular side |
-//! | `L` | `L`, `value` or `brdf` | measured radiance (or BRDF: a column named `brdf`, or a `# quantity: brdf` comment before the header, states a BRDF; see [`super::quantity`]) |
+//! | `L` | `L`, `value` or `brdf` | measured radiance (or BRDF: a column named `brdf`, or a `# quantity: brdf` comment before the header, states a BRDF; see `io::quantity`) |
 //! | `weight` | `weight` | per-sample weight w > 0 |
 //! | `sigma_L` | `sigma_L` | standard uncertainty of L (> 0); w = 1/σ² |
 //! | `wavelength` | `wavelength` | per-sample wavelength (> 0), unit of σ and T |
