@@ -33,12 +33,13 @@ pub struct ParamResult {
     pub value: f64,
     /// Standard error; None when fixed or undetermined.
     pub stderr: Option<f64>,
-    /// Whether the data determines it: free, not on a direction of the null space, not reduced
-    /// away by a rough or smooth verdict, not at a lower bound, and with a finite standard
-    /// error small enough (relative, for log-transformed parameters).
+    /// Whether the data determines it: free, not reduced away by a rough or smooth verdict,
+    /// outside the Jacobian's null space, with a finite standard error (for a
+    /// log-transformed parameter one of ln p at most 1), not at a lower bound, and for a
+    /// Fresnel parameter reached by some sample's local incidence angle.
     pub determined: bool,
-    /// Whether the value was held fixed by the user (σ held by a regime's reduced refit does
-    /// not count).
+    /// Whether the value was held fixed (`--fix`, or σ of `kbs-rough`); σ under a rough or
+    /// smooth verdict, held for the reduced refit, is reported as not fixed.
     pub fixed: bool,
     /// The model's unit of the parameter (`λ unit`, `1`, `rad`); the reports use the run's unit
     /// setting instead.
@@ -239,8 +240,8 @@ pub struct FitResult {
     pub fitted_computed: bool,
     /// Model value fᵢ of every sample at the reported point (empty when not computed).
     pub fitted: Vec<f64>,
-    /// Unweighted residual rᵢ of every sample: f − y, (f − y)/|y| or ln f − ln y, by the
-    /// residual kind (empty when not computed).
+    /// Unweighted residual rᵢ of every sample by the residual kind: f − y, (f − y)/max(|y|,
+    /// floor) or ln max(f, floor) − ln max(y, floor) (empty when not computed).
     pub residuals: Vec<f64>,
     /// Standardized residual √wᵢ rᵢ of every sample, divided by s = √(χ²/(n − p)) unless the
     /// weights are uncertainties (by the robust s under a robust loss).

@@ -54,7 +54,7 @@ pub enum Layout {
     InPlane {
         /// Incidence angles θi of the scans, degrees, one scan each.
         theta_i_deg: Vec<f64>,
-        /// Spacing of the signed θr values, degrees (> 0).
+        /// Spacing of the signed θr values, degrees.
         step_deg: f64,
         /// Largest |θr|, degrees.
         theta_r_max_deg: f64,

@@ -103,8 +103,8 @@ impl Default for WorkPrecisionConfig {
 pub struct ModeSpec {
     /// The KBS evaluation mode of the row.
     pub mode: EvalMode,
-    /// The series' relative tolerance (the model's default for the other modes, which do not
-    /// use it).
+    /// The series' relative tolerance: one of [`SERIES_TOLS`] for the series rows, the
+    /// model's default for the smooth, rough and auto rows.
     pub tol: f64,
 }
 

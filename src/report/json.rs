@@ -138,7 +138,7 @@ pub struct ParamEntry {
     /// Value, standard error, determination and intervals (flattened into the entry).
     #[serde(flatten)]
     pub estimate: Estimate,
-    /// Whether the user held it fixed.
+    /// Whether it was held fixed (`--fix`, or σ of `kbs-rough`) rather than fitted.
     pub fixed: bool,
     /// Its unit in the run's unit setting (`nm`, `unit of λ`, `sr⁻¹`, `1`, `rad`, …).
     pub unit: String,

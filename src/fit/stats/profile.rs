@@ -309,8 +309,8 @@ pub struct Profiler<'a, 'p> {
     pub x_cov: DMatrix<f64>,
     /// Whether the weights are true inverse variances: thresholds z² instead of s²·t².
     pub absolute: bool,
-    /// The solver settings of every refit (ftol tightened so that Δχ² is accurate to a tenth of
-    /// [`CROSS_TOL`]). accuracy).
+    /// The solver settings of every refit, with ftol tightened so that the error of Δχ² stays
+    /// a tenth of the crossing tolerance [`CROSS_TOL`].
     pub lm: LmConfig,
 }
 
