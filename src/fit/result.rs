@@ -248,7 +248,8 @@ pub struct FitResult {
     pub std_residuals: Vec<f64>,
     /// The evaluation mode of the model at every sample (empty when not computed).
     pub sample_modes: Vec<Mode>,
-    /// Full parameter values in layout order (for plotting per channel).
+    /// The parameter layout of the reported fit: names, transforms, channels and fixed values
+    /// (for plotting per channel).
     pub layout: ParamLayout,
     /// The value of every parameter in layout order, fixed ones included: the reported point.
     pub values: Vec<f64>,

@@ -104,7 +104,8 @@ pub struct RunsTest {
     /// Standard deviation of the number of runs under independent signs.
     #[serde(deserialize_with = "crate::fit::stats::json_number::nan_if_null")]
     pub sd: f64,
-    /// Signs counted (samples in the scans; a zero residual counts as negative).
+    /// Signs counted: the scans' samples, those with a residual at rounding error or exactly
+    /// fitted ([`EXACT_FIT`]) left out.
     pub signs: usize,
     /// Number of scans the signs were taken along.
     pub scans: usize,
