@@ -7,7 +7,9 @@ use std::fmt;
 /// wrong with the value and what would be accepted.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Invalid {
+    /// The option's name, or `#j` for the parameter of 0-based index `j`.
     pub name: String,
+    /// What is wrong with the value, and what would be accepted.
     pub message: String,
 }
 

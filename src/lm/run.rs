@@ -154,12 +154,16 @@ pub struct LmReport {
     pub jacobian: DMatrix<f64>,
     /// `½ ‖residuals‖²`.
     pub cost: f64,
+    /// Why the run stopped (converged by a tolerance, or not: see [`Termination`]).
     pub termination: Termination,
     /// argmin iterations = trial steps.
     pub iterations: u64,
     /// Residual evaluations (including the start).
     pub evaluations: u64,
+    /// Jacobian evaluations, including one more at the end when the solver holds none at
+    /// `x`.
     pub jacobian_evaluations: u64,
+    /// Wall-clock seconds of the run.
     pub seconds: f64,
 }
 
