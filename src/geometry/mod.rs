@@ -23,8 +23,12 @@ pub const LENGTH_RANGE: (f64, f64) = (1e-30, 1e30);
 /// One measurement direction pair, in radians.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
+    /// Polar angle of incidence from the surface normal, in [0, π/2).
     pub theta_i: f64,
+    /// Polar angle of view from the surface normal, in [0, π/2].
     pub theta_r: f64,
+    /// Azimuth of view from the plane of incidence: 0 on the forward side (the mirror
+    /// direction is θr = θi, φr = 0), π back towards the source (docs/conventions.md).
     pub phi_r: f64,
 }
 
@@ -103,8 +107,10 @@ impl Sample {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Quantity {
+    /// The reflected radiance L for a unit incident irradiance (the paper's eq. 28).
     #[default]
     Radiance,
+    /// The BRDF, L / cos θi, in sr⁻¹.
     Brdf,
 }
 
@@ -113,10 +119,13 @@ pub enum Quantity {
 /// k = 2π/λ, so they depend on angles only.
 #[derive(Debug, Clone)]
 pub struct Geometry {
+    /// θi of each sample, radians.
     pub theta_i: Column,
+    /// θr of each sample, radians.
     pub theta_r: Column,
     /// φr wrapped to (−π, π].
     pub phi_r: Column,
+    /// cos θi of each sample.
     pub cos_i: Column,
     /// Wavelength of each sample (unit of σ, T): one value for all, or a column.
     pub wavelength: PerSample,
@@ -127,6 +136,8 @@ pub struct Geometry {
     pub h: Column,
     /// v_xy²/k², computed without cancellation near the mirror direction.
     pub vxy2: Column,
+    /// Whether the samples' values are radiances or BRDF values (the models evaluate the
+    /// same quantity).
     pub quantity: Quantity,
     /// The columns of the Fresnel and shadowing factors, computed on first use
     /// ([`Geometry::factor_columns`]): a fit without factors does not hold them.

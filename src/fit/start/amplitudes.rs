@@ -41,6 +41,7 @@ pub struct Prepared {
 }
 
 impl Prepared {
+    /// The data side of `problem`'s amplitude solves, computed once per fit.
     pub fn new(problem: &FitProblem) -> Self {
         let (y, floor, kind) = (problem.y(), problem.floor, problem.kind());
         let d = problem

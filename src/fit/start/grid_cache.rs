@@ -32,6 +32,7 @@ pub struct PointBasis {
 /// not finite).
 #[derive(Debug)]
 pub struct GridBasis {
+    /// The basis of each grid point, by flat index; None where the model is not finite.
     pub points: Vec<Option<PointBasis>>,
 }
 
