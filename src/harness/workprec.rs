@@ -575,7 +575,7 @@ impl crate::plot::Picture for WorkPrecisionPlot {
         crate::plot::Picture::size(&self.chart())
     }
 
-    fn draw<DB: crate::plot::smooth::Canvas>(
+    fn draw<DB: crate::plot::stroke::Canvas>(
         &self,
         root: &plotters::drawing::DrawingArea<DB, plotters::coord::Shift>,
     ) -> std::result::Result<(), crate::plot::DrawError<DB>> {

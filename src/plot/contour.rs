@@ -233,16 +233,16 @@ pub fn draw_heatmap<DB: DrawingBackend>(
 }
 
 /// Draw the iso-lines of `grid` at `levels` with `pen`, at sub-pixel positions.
-pub fn draw_contours<DB: super::smooth::Canvas>(
+pub fn draw_contours<DB: super::stroke::Canvas>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     grid: &Grid,
     levels: &[f64],
-    pen: super::smooth::Pen,
+    pen: super::stroke::Pen,
 ) -> Result<(), DrawError<DB>> {
-    let map = super::smooth::PixelMap::of_linear(chart);
+    let map = super::stroke::PixelMap::of_linear(chart);
     for &level in levels {
         for line in grid.contour_lines(level) {
-            super::smooth::draw_data_polyline(chart.plotting_area(), &map, &line, pen)?;
+            super::stroke::draw_data_polyline(chart.plotting_area(), &map, &line, pen)?;
         }
     }
     Ok(())

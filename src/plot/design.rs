@@ -170,7 +170,7 @@ impl Picture for DesignPlot {
         (1300, 620)
     }
 
-    fn draw<DB: super::smooth::Canvas>(
+    fn draw<DB: super::stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {

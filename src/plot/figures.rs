@@ -266,7 +266,7 @@ impl Picture for Figure4 {
         (3 * FIG4_PANEL.0, FIG4_TOP + 2 * FIG4_PANEL.1 + FIG4_BOTTOM)
     }
 
-    fn draw<DB: super::smooth::Canvas>(
+    fn draw<DB: super::stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
@@ -434,7 +434,7 @@ impl Picture for ContourPlot {
         self.size
     }
 
-    fn draw<DB: super::smooth::Canvas>(
+    fn draw<DB: super::stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
@@ -472,7 +472,7 @@ impl Picture for ContourPlot {
             &mut chart,
             &self.grid,
             &self.levels,
-            super::smooth::Pen::solid(BLACK, 1.0),
+            super::stroke::Pen::solid(BLACK, 1.0),
         )?;
         for (_, pts, color) in &self.marks {
             let color = *color;

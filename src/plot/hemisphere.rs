@@ -15,7 +15,7 @@
 
 use super::fit::input::{checked_groups, group_label, quantity_desc, FitPlotInput, Group};
 use super::legend::{sequential_color, text_width, Entry, Glyph, Marker};
-use super::smooth::{draw_polyline, Canvas, Pen};
+use super::stroke::{draw_polyline, Canvas, Pen};
 use super::ticks::{linear_ticks, log_ticks, nice_step};
 use super::{fmt_num, fmt_tick, font, DrawError, Picture};
 use crate::error::Result;

@@ -4,7 +4,7 @@
 //! palette has colours.
 
 use super::marks::arrow_glyph;
-use super::smooth::{draw_polyline, Canvas, Pen};
+use super::stroke::{draw_polyline, Canvas, Pen};
 use super::{font, DrawError};
 use plotters::coord::Shift;
 use plotters::prelude::*;

@@ -1,12 +1,14 @@
 //! Pictures: rendered spheres, the paper's Figures 4–7, and the plots a fit needs.
 //!
-//! Everything is drawn with plotters, to PNG or SVG chosen by the file extension. Text uses
-//! the bundled DejaVu Sans (registered once through plotters' ab_glyph support), so no system
-//! fonts or fontconfig are needed.
+//! Everything is drawn with plotters into an SVG document in memory; a PNG is that document
+//! rendered by resvg at the picture's size in pixels. Text uses the bundled DejaVu Sans
+//! both for plotters' layout (registered once through its ab_glyph support) and for resvg
+//! (the only font it knows), so no system fonts or fontconfig are needed.
 //!
 //! A picture is a value implementing [`Picture`]: its data are computed when it is built
 //! (so tests can check the data the picture shows), and [`Picture::draw`] only draws.
-//! [`write_picture`] writes a file, [`svg_string`] and [`rgb_buffer`] render in memory.
+//! [`write_picture`] writes a file, [`svg_string`], [`png_bytes`] and [`rgb_buffer`] render
+//! in memory.
 
 pub mod contour;
 pub mod design;
@@ -16,8 +18,9 @@ pub mod hemisphere;
 pub mod legend;
 pub mod marks;
 pub mod overview;
-pub mod smooth;
 pub mod sphere;
+pub mod stroke;
+pub mod svg;
 pub mod ticks;
 pub mod xy;
 
@@ -25,8 +28,9 @@ use crate::error::{Error, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{FontDesc, FontStyle};
+use resvg::{tiny_skia, usvg};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// The font family every picture uses.
 pub const FONT: &str = "sans-serif";
@@ -63,8 +67,8 @@ pub trait Picture {
     fn size(&self) -> (u32, u32);
 
     /// Draw on `root` (already filled white, of [`Picture::size`]); curves go through
-    /// [`smooth::Canvas`] at sub-pixel positions.
-    fn draw<DB: smooth::Canvas>(
+    /// [`stroke::Canvas`] at sub-pixel positions.
+    fn draw<DB: stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>>;
@@ -130,7 +134,8 @@ pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
     crate::io::write_bytes(path, &bytes)
 }
 
-/// Render `pic` to a PNG file's bytes in memory.
+/// Render `pic` to a PNG file's bytes in memory: its SVG document ([`svg_string`])
+/// rendered at [`Picture::size`] pixels, 8-bit RGB.
 pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     use image::ImageEncoder;
     let ((w, h), rgb) = rendered(pic)?;
@@ -159,18 +164,18 @@ pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
     let here = Path::new("<svg in memory>");
     let strokes = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
     {
-        let root =
-            smooth::SvgCanvas::new(&mut out, pic.size(), strokes.clone()).into_drawing_area();
+        let root = svg::SvgCanvas::new(&mut out, pic.size(), strokes.clone()).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error(here))?;
         pic.draw(&root).map_err(plot_error(here))?;
         root.present().map_err(plot_error(here))?;
     }
-    let out = smooth::SvgCanvas::finish(&out, &strokes.borrow());
+    let out = svg::SvgCanvas::finish(&out, &strokes.borrow());
     // plotters-svg 0.3.7 labels embedded bitmaps "data:png"; viewers need the MIME type.
     Ok(out.replace("href=\"data:png;base64,", "href=\"data:image/png;base64,"))
 }
 
-/// Render `pic` to an RGB buffer in memory (row-major, 3 bytes per pixel, top row first).
+/// Render `pic` to an RGB buffer in memory (row-major, 3 bytes per pixel, top row first),
+/// exactly the pixels of [`png_bytes`].
 pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     Ok(rendered(pic)?.1)
 }
@@ -179,16 +184,58 @@ pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
 /// the font loaded: a picture with a legend sizes itself by its text widths).
 fn rendered<P: Picture>(pic: &P) -> Result<((u32, u32), Vec<u8>)> {
     ensure_font()?;
-    let (w, h) = pic.size();
-    let mut buf = vec![0u8; w as usize * h as usize * 3];
-    let here = Path::new("<bitmap in memory>");
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_error(here))?;
-        pic.draw(&root).map_err(plot_error(here))?;
-        root.present().map_err(plot_error(here))?;
-    }
-    Ok(((w, h), buf))
+    let size = pic.size();
+    let svg = svg_string(pic)?;
+    Ok((size, svg_to_rgb(&svg, size)?))
+}
+
+/// The SVG document `svg` rendered by resvg (anti-aliased) onto a white bitmap of `w` × `h`
+/// pixels, its view box stretched to fill it: RGB, row-major, top row first. Text is set in
+/// the bundled font whatever family it names; embedded PNG images are drawn.
+pub fn svg_to_rgb(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
+    let here = Path::new("<png in memory>");
+    let options = usvg::Options {
+        font_family: FONT_FAMILY.to_string(),
+        fontdb: font_database(),
+        ..usvg::Options::default()
+    };
+    let tree = usvg::Tree::from_str(svg, &options).map_err(plot_error(here))?;
+    let mut pixmap = tiny_skia::Pixmap::new(w, h).ok_or_else(|| {
+        plot_error(here)(format!(
+            "a {w} × {h} picture cannot be drawn (empty or too large)"
+        ))
+    })?;
+    pixmap.fill(tiny_skia::Color::WHITE);
+    let view = tree.size();
+    let fit = tiny_skia::Transform::from_scale(w as f32 / view.width(), h as f32 / view.height());
+    resvg::render(&tree, fit, &mut pixmap.as_mut());
+    // Every pixel is opaque (white below everything), so the premultiplied colour is the
+    // colour itself.
+    Ok(pixmap
+        .data()
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect())
+}
+
+/// The family name of the bundled font.
+const FONT_FAMILY: &str = "DejaVu Sans";
+
+/// resvg's font database: the bundled font alone, also under every generic family name
+/// (plotters writes `font-family="sans-serif"`). Built once per process.
+fn font_database() -> Arc<usvg::fontdb::Database> {
+    static DB: OnceLock<Arc<usvg::fontdb::Database>> = OnceLock::new();
+    DB.get_or_init(|| {
+        let mut db = usvg::fontdb::Database::new();
+        db.load_font_data(FONT_BYTES.to_vec());
+        db.set_sans_serif_family(FONT_FAMILY);
+        db.set_serif_family(FONT_FAMILY);
+        db.set_monospace_family(FONT_FAMILY);
+        db.set_cursive_family(FONT_FAMILY);
+        db.set_fantasy_family(FONT_FAMILY);
+        Arc::new(db)
+    })
+    .clone()
 }
 
 /// How many colours [`series_color`] has before it repeats.

@@ -225,7 +225,7 @@ impl Picture for SpherePicture {
         (self.image.size, self.image.size)
     }
 
-    fn draw<DB: super::smooth::Canvas>(
+    fn draw<DB: super::stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {

@@ -3,7 +3,7 @@
 //! Figures 5 and 6, the fit plots and the work-precision plot are built from it.
 //!
 //! Honest by construction: curves are drawn at sub-pixel positions
-//! ([`super::smooth`]), lines are clipped at the chart's edges (interpolated, not
+//! ([`super::stroke`]), lines are clipped at the chart's edges (interpolated, not
 //! clamped), measured points above the y range are drawn as arrows at the top edge and
 //! counted in the legend, logarithmic axes get labelled ticks for any range
 //! ([`super::ticks::log_ticks`]), and a chart with more series than the palette holds can
@@ -11,7 +11,7 @@
 
 use super::legend::{self, ColorKey, Entry, Glyph, Marker};
 use super::marks::{self, Beyond, Rect};
-use super::smooth::{draw_data_polyline, Canvas, Pen, PixelMap};
+use super::stroke::{draw_data_polyline, Canvas, Pen, PixelMap};
 use super::ticks::log_ticks;
 use super::{font, DrawError, Picture};
 use plotters::coord::ranged1d::{Ranged, ValueFormatter};
@@ -608,8 +608,8 @@ impl XyPlot {
         let (w, h) = self.size();
         let lay = self.layout_in(w, h);
         let top = titles_height(&self.title, &self.subtitle, w);
-        let mut buf = vec![0u8; w as usize * h as usize * 3];
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let mut svg = String::new();
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
         let (_, body) = root.split_vertically(top);
         let (main, _) = body.split_horizontally(lay.chart.w as u32);
         let (x0, x1) = self.x_range;

@@ -17,7 +17,7 @@ mod merl;
 mod model_props;
 mod nist;
 mod plot;
-mod plot_smooth;
+mod plot_sharp;
 mod rgl;
 mod stiff;
 mod validity;

@@ -120,7 +120,7 @@ impl Picture for FitPicture {
         }
     }
 
-    fn draw<DB: super::smooth::Canvas>(
+    fn draw<DB: super::stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {

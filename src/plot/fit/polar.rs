@@ -7,7 +7,7 @@ use super::{
 use crate::error::Result;
 use crate::plot::legend::{Entry, Glyph};
 use crate::plot::marks::Beyond;
-use crate::plot::smooth::{draw_data_polyline, Pen, PixelMap};
+use crate::plot::stroke::{draw_data_polyline, Pen, PixelMap};
 use crate::plot::xy::Kind;
 use crate::plot::{fmt_num, font, series_color, DrawError, Picture};
 use plotters::coord::types::RangedCoordf64;
@@ -140,7 +140,7 @@ impl Picture for PolarPlot {
         (900, 620)
     }
 
-    fn draw<DB: crate::plot::smooth::Canvas>(
+    fn draw<DB: crate::plot::stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawError<DB>> {
@@ -223,7 +223,7 @@ impl Picture for PolarPlot {
 
 impl PolarPlot {
     /// The rings at L / L_max = 0.25 … 1 and the spokes every 15° (labelled every 30°).
-    fn draw_grid<DB: crate::plot::smooth::Canvas>(
+    fn draw_grid<DB: crate::plot::stroke::Canvas>(
         &self,
         chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     ) -> std::result::Result<(), DrawError<DB>> {

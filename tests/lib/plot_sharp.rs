@@ -1,13 +1,19 @@
-//! Curves are drawn at sub-pixel positions (src/plot/smooth.rs): measured on the rendered
-//! bitmap, the intensity-weighted centre of a line across each pixel column lies on the
-//! exact line, where plotters' integer pixel coordinates leave it up to half a pixel off
-//! (stair steps); the SVG gets the same vertices to 0.01 px.
+//! PNG pictures are sharp and exact. Curves are drawn at sub-pixel positions
+//! (src/plot/stroke.rs): measured on the rendered bitmap, the intensity-weighted centre of a
+//! line across each pixel column lies on the exact line, where integer pixel coordinates
+//! leave it up to half a pixel off (stair steps); the SVG gets the same vertices to 0.01 px.
+//! Edges are anti-aliased (partly covered pixels along a slanted line) and not blurred (a
+//! 1-pixel axis line is one fully dark pixel wide, a 2-pixel curve has fully covered pixels
+//! in every column); text is set at the size it is laid out with; embedded images are drawn
+//! pixel for pixel.
 
 use goniofit::plot::figures::{figure5, figure6};
 use goniofit::plot::marks::Rect;
-use goniofit::plot::smooth::PixelMap;
+use goniofit::plot::sphere::{sphere_radiance, SpherePicture};
+use goniofit::plot::stroke::{Canvas, PixelMap};
 use goniofit::plot::xy::{Kind, Series, XyPlot};
-use goniofit::plot::{rgb_buffer, svg_string, Picture};
+use goniofit::plot::{ensure_font, font, rgb_buffer, svg_string, svg_to_rgb, DrawError, Picture};
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 /// A 600 × 400 chart on [0, 1]² with one black line through `pts` (none if empty).
@@ -118,6 +124,7 @@ fn a_straight_line_is_centred_on_the_exact_line_in_every_column() {
     assert!((slope.abs() - 0.363).abs() < 0.01, "slope {slope}");
     let mut worst = 0.0f64;
     let mut intermediate = 0;
+    let mut faintest_core = 1.0f64;
     for &(i, c, s) in &centres {
         worst = worst.max((c - exact(i as f64 + 0.5)).abs());
         // The column's total coverage is the stroke's vertical extent, 2 / cos θ.
@@ -131,25 +138,36 @@ fn a_straight_line_is_centred_on_the_exact_line_in_every_column() {
             .filter(|a| *a > 0.02 && *a < 0.98)
             .count();
         intermediate += usize::from(partial > 0);
+        // A 2.13 px extent holds a whole pixel: the darkest one is fully covered.
+        let core = (0..h as usize)
+            .map(|j| alpha[j * w as usize + i])
+            .fold(0.0f64, f64::max);
+        faintest_core = faintest_core.min(core);
     }
     eprintln!("sub-pixel line: worst column centre {worst:.4} px off");
     assert!(
         worst < 0.1,
         "worst column centre {worst} px off the exact line"
     );
-    // The stroke's 2.13 px extent never fills whole pixels: partly covered ones in (almost)
-    // every column (plotters' own wide lines are filled polygons, without any).
+    // Anti-aliased: the stroke's 2.13 px extent never fills whole pixels only, so (almost)
+    // every column has partly covered ones (an aliased render has none).
     assert!(
         intermediate * 100 >= 95 * centres.len(),
         "{intermediate} of {} columns have partly covered pixels",
         centres.len()
     );
+    // Not blurred: every column has a fully covered pixel in the stroke's middle (a blur
+    // spreads the same ink over more, fainter pixels).
+    assert!(
+        faintest_core > 0.95,
+        "a column's darkest pixel is covered {faintest_core}"
+    );
 }
 
 #[test]
 fn the_same_line_at_whole_pixels_fails_that_measure() {
-    // The measure above is sharp: the line drawn through plotters' own integer pixel
-    // coordinates (what the charts did before) is more than 0.1 px off in some column.
+    // The measure above is sharp: the line drawn through whole pixels (plotters' integer
+    // pixel coordinates) is more than 0.1 px off in some column.
     let setup = Setup::straight();
     let (pts, (w, h), rect, map) = (setup.pts, setup.size, setup.rect, setup.map);
     let px: Vec<(f64, f64)> = pts
@@ -159,17 +177,18 @@ fn the_same_line_at_whole_pixels_fails_that_measure() {
             (q.0 + rect.x, q.1 + rect.y)
         })
         .collect();
-    let mut with = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut with, (w, h)).into_drawing_area();
-        let whole: Vec<(i32, i32)> = px
-            .iter()
-            .map(|p| ((p.0 - 0.5).round() as i32, (p.1 - 0.5).round() as i32))
-            .collect();
-        root.draw(&PathElement::new(whole, BLACK.stroke_width(2)))
-            .unwrap();
-        root.present().unwrap();
+    // The same 2-pixel polyline with each vertex moved to its pixel's centre, rendered the
+    // way every picture is.
+    let mut points = String::new();
+    for p in &px {
+        points.push_str(&format!("{},{} ", p.0.floor() + 0.5, p.1.floor() + 0.5));
     }
+    let svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
+         viewBox=\"0 0 {w} {h}\"><polyline fill=\"none\" stroke=\"#000000\" \
+         stroke-width=\"2\" stroke-linejoin=\"round\" points=\"{points}\"/></svg>"
+    );
+    let with = svg_to_rgb(&svg, (w, h)).unwrap();
     let alpha = black_alpha(&with, &vec![255u8; (w * h * 3) as usize]);
     let exact = |x: f64| px[0].1 + (x - px[0].0) * (px[60].1 - px[0].1) / (px[60].0 - px[0].0);
     let cols = (rect.x as usize + 20)..(rect.x + rect.w) as usize - 20;
@@ -270,4 +289,88 @@ fn figures_5_and_6_draw_every_curve_as_a_sub_pixel_polyline() {
         let bitmap = rgb_buffer(&plot).unwrap();
         assert_eq!(bitmap.len(), (plot.size().0 * plot.size().1 * 3) as usize);
     }
+}
+
+/// The darkness (255 − green) of row `j` of an RGB bitmap `w` pixels wide.
+fn darkness_row(rgb: &[u8], w: usize, j: usize) -> Vec<u8> {
+    (0..w).map(|i| 255 - rgb[(j * w + i) * 3 + 1]).collect()
+}
+
+#[test]
+fn a_one_pixel_axis_line_is_one_fully_dark_pixel_wide() {
+    // The y axis, 1 px black, seen across a row in the middle of a chart whose x range
+    // starts between ticks (no grid line beside the axis): one pixel at full intensity,
+    // white on both sides. A line half a pixel off would be two grey pixels; a blurred one,
+    // a fainter, wider profile.
+    let mut plot = chart(&[]);
+    plot.x_range = (0.03, 0.97);
+    plot.y_range = (0.03, 0.97);
+    let (w, _) = plot.size();
+    let (rect, _) = plot.plotting_area();
+    let rgb = rgb_buffer(&plot).unwrap();
+    let row = darkness_row(&rgb, w as usize, (rect.y + 0.5 * rect.h) as usize);
+    let window = (rect.x as usize - 6)..(rect.x as usize + 4);
+    let profile: Vec<u8> = row[window.clone()].to_vec();
+    let darkest = window.clone().max_by_key(|&i| row[i]).unwrap();
+    assert_eq!(row[darkest], 255, "the axis pixel is black: {profile:?}");
+    assert!(
+        row[darkest - 1] < 5 && row[darkest + 1] < 5,
+        "its neighbours are white: {profile:?}"
+    );
+    // The ink across the line is one pixel's worth.
+    let ink: u32 = profile.iter().map(|&d| d as u32).sum();
+    assert!(ink <= 255 + 10, "{ink}: {profile:?}");
+}
+
+/// A line of text at 24 px, as the pictures set it.
+struct Words;
+
+const WORDS: &str = "measured and fitted radiance (σ = 190 nm)";
+
+impl Picture for Words {
+    fn size(&self) -> (u32, u32) {
+        (640, 60)
+    }
+
+    fn draw<DB: Canvas>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), DrawError<DB>> {
+        root.draw(&Text::new(WORDS, (20, 15), font(24.0).color(&BLACK)))
+    }
+}
+
+#[test]
+fn text_is_set_at_the_size_it_is_laid_out_with() {
+    // Layouts (legend panels, label areas) are sized by plotters' measure of the text; the
+    // rendered text's ink is as wide, to within its side bearings.
+    ensure_font().unwrap();
+    let (measured, _) = font(24.0).box_size(WORDS).unwrap();
+    let (w, h) = Words.size();
+    let rgb = rgb_buffer(&Words).unwrap();
+    let inked: Vec<usize> = (0..w as usize)
+        .filter(|&i| (0..h as usize).any(|j| rgb[(j * w as usize + i) * 3 + 1] < 128))
+        .collect();
+    let ink = (inked.last().unwrap() - inked[0] + 1) as f64;
+    eprintln!("text: ink {ink} px, measured {measured} px");
+    assert!(
+        (ink - measured as f64).abs() < 0.02 * measured as f64 + 3.0,
+        "ink {ink} px wide, measured {measured} px"
+    );
+    assert!(
+        (20..=23).contains(&inked[0]),
+        "the text starts where it is placed, at x = 20 (plus its bearing): {}",
+        inked[0]
+    );
+}
+
+#[test]
+fn embedded_images_are_drawn_pixel_for_pixel() {
+    // A sphere is embedded in the SVG as one PNG image; the rendered picture has exactly
+    // its pixels (no resampling blur, no shift).
+    let model = goniofit::model::by_name("lambert", &Default::default()).unwrap();
+    let image = sphere_radiance(model.as_ref(), &[1.0], 45.0, 1.0, 64).unwrap();
+    let pic = SpherePicture {
+        image: image.clone(),
+        negative: false,
+        marks: false,
+    };
+    assert_eq!(rgb_buffer(&pic).unwrap(), image.to_rgb(false));
 }
