@@ -19,8 +19,9 @@ use plotters_backend::text_anchor::Pos;
 use plotters_backend::{
     BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingErrorKind,
 };
-use std::collections::HashSet;
+use std::collections::HashMap;
 use std::fmt::Write;
+use std::hash::{Hash, Hasher};
 
 /// A backend writing an SVG document: plotters' [`SVGBackend`], where the elements this
 /// canvas writes itself (sub-pixel polylines, pixel-aligned strokes and circles) are left
@@ -28,9 +29,14 @@ use std::fmt::Write;
 pub struct SvgCanvas<'a> {
     inner: SVGBackend<'a>,
     elements: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
-    /// The ids of the clip paths already defined in the document.
-    clips: HashSet<String>,
+    /// The clip rectangles defined in the document so far (x, y, w, h as written), each
+    /// with its number in the clip paths' ids.
+    clips: HashMap<String, usize>,
 }
+
+/// Stands for the document's own token in the ids this canvas writes, until
+/// [`SvgCanvas::finish`] knows the document.
+const DOCUMENT_TOKEN: &str = "@document@";
 
 /// The y coordinate of the placeholders: no picture is drawn there.
 const PLACEHOLDER_Y: i32 = -7777;
@@ -47,13 +53,18 @@ impl<'a> SvgCanvas<'a> {
         SvgCanvas {
             inner: SVGBackend::with_string(buf, size),
             elements,
-            clips: HashSet::new(),
+            clips: HashMap::new(),
         }
     }
 
     /// The finished document `svg` with each placeholder replaced by its element
-    /// (`elements`, in drawing order).
+    /// (`elements`, in drawing order). The ids in those elements carry a hash of the whole
+    /// document, so that pictures inlined in one page never share an id.
     pub fn finish(svg: &str, elements: &[String]) -> String {
+        let mut hasher = rustc_hash::FxHasher::default();
+        svg.hash(&mut hasher);
+        elements.hash(&mut hasher);
+        let document = format!("{:016x}", hasher.finish());
         let mut out =
             String::with_capacity(svg.len() + elements.iter().map(String::len).sum::<usize>());
         let mut rest = svg;
@@ -66,7 +77,11 @@ impl<'a> SvgCanvas<'a> {
                 break;
             };
             out.push_str(&rest[..start]);
-            out.push_str(tag);
+            if tag.contains(DOCUMENT_TOKEN) {
+                out.push_str(&tag.replace(DOCUMENT_TOKEN, &document));
+            } else {
+                out.push_str(tag);
+            }
             rest = &rest[end + needle.len()..];
         }
         out.push_str(rest);
@@ -85,16 +100,21 @@ impl<'a> SvgCanvas<'a> {
     }
 
     /// The clip-path attribute that keeps a drawing inside `clip`, with the clip path's
-    /// definition when the document does not have it yet. The id names the rectangle, so
-    /// pictures inlined in one page that share an id share its rectangle too.
+    /// definition when the document does not have it yet.
     fn clip_path(&mut self, clip: Rect) -> (String, String) {
         let Rect { x, y, w, h } = clip;
-        let id = format!("goniofit-clip-{x}-{y}-{w}-{h}").replace('.', "_");
-        let definition = if self.clips.insert(id.clone()) {
-            format!(
-                "<clipPath id=\"{id}\"><rect x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\"/>\
-                 </clipPath>\n"
-            )
+        let rect = format!("x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\"");
+        let next = self.clips.len();
+        let (n, new) = match self.clips.get(&rect) {
+            Some(&n) => (n, false),
+            None => {
+                self.clips.insert(rect.clone(), next);
+                (next, true)
+            }
+        };
+        let id = format!("goniofit-clip-{DOCUMENT_TOKEN}-{n}");
+        let definition = if new {
+            format!("<clipPath id=\"{id}\"><rect {rect}/></clipPath>\n")
         } else {
             String::new()
         };
@@ -377,5 +397,121 @@ impl DrawingBackend for SvgCanvas<'_> {
         src: &[u8],
     ) -> DrawResult<Self::ErrorType> {
         self.inner.blit_bitmap(pos, size, src)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    /// The document of a 100 × 60 canvas after `draw`.
+    fn document(draw: impl Fn(&mut SvgCanvas<'_>)) -> String {
+        let mut buf = String::new();
+        let elements = Rc::new(RefCell::new(Vec::new()));
+        {
+            let mut canvas = SvgCanvas::new(&mut buf, (100, 60), elements.clone());
+            draw(&mut canvas);
+            canvas.present().unwrap();
+        }
+        let elements = elements.borrow();
+        SvgCanvas::finish(&buf, &elements)
+    }
+
+    const AREA: Rect = Rect {
+        x: 10.0,
+        y: 5.0,
+        w: 80.0,
+        h: 50.0,
+    };
+
+    #[test]
+    fn a_polyline_inside_its_clip_keeps_its_sub_pixel_vertices_unclipped() {
+        let svg = document(|c| {
+            c.stroke_polyline(&[(15.0, 20.304), (60.0, 20.25)], 2.0, BLACK, AREA)
+                .unwrap()
+        });
+        assert!(
+            svg.contains(
+                "<polyline fill=\"none\" stroke=\"#000000\" stroke-width=\"2\" \
+                 stroke-linejoin=\"round\" points=\"15.00,20.30 60.00,20.25\"/>"
+            ),
+            "{svg}"
+        );
+        assert!(!svg.contains("clip") && !svg.contains(&PLACEHOLDER_Y.to_string()));
+    }
+
+    #[test]
+    fn polylines_reaching_outside_their_clip_share_one_clip_path_per_rectangle() {
+        // Half the stroke's width past the area's bottom edge is enough to need the clip.
+        let draw = |c: &mut SvgCanvas<'_>| {
+            for y in [54.5, 40.0, 54.0] {
+                c.stroke_polyline(&[(15.0, y), (85.0, y)], 3.0, BLACK, AREA)
+                    .unwrap();
+            }
+        };
+        let svg = document(draw);
+        assert_eq!(svg.matches("<clipPath").count(), 1, "{svg}");
+        assert!(svg.contains("<rect x=\"10\" y=\"5\" width=\"80\" height=\"50\"/></clipPath>"));
+        let id = svg.split("<clipPath id=\"").nth(1).unwrap();
+        let id = &id[..id.find('"').unwrap()];
+        assert!(
+            id.starts_with("goniofit-clip-") && !id.contains(DOCUMENT_TOKEN),
+            "{id}"
+        );
+        // Two of the three reach outside, and the ids are the same in the same document.
+        assert_eq!(
+            svg.matches(&format!("clip-path=\"url(#{id})\"")).count(),
+            3 - 1
+        );
+        assert_eq!(document(draw), svg);
+        // Another picture has other ids.
+        let other = document(|c| {
+            c.stroke_polyline(&[(15.0, 54.9), (95.0, 54.9)], 3.0, BLACK, AREA)
+                .unwrap()
+        });
+        assert!(!other.contains(id));
+    }
+
+    #[test]
+    fn one_pixel_strokes_and_discs_sit_on_pixel_centres() {
+        let svg = document(|c| {
+            c.draw_line((10, 20), (50, 20), &Color::stroke_width(&BLACK, 1))
+                .unwrap();
+            c.draw_line((10, 30), (50, 30), &Color::stroke_width(&BLACK, 2))
+                .unwrap();
+            c.draw_circle((40, 40), 4, &BLACK.filled(), true).unwrap();
+            c.draw_rect((5, 5), (20, 15), &Color::stroke_width(&BLACK, 1), false)
+                .unwrap();
+        });
+        assert!(svg.contains(
+            "<polyline fill=\"none\" stroke=\"#000000\" stroke-width=\"1\" \
+             stroke-linecap=\"square\" points=\"10.5,20.5 50.5,20.5\"/>"
+        ));
+        assert!(svg.contains("stroke-width=\"2\" points=\"10,30 50,30\"/>"));
+        assert!(svg.contains("<circle cx=\"40.5\" cy=\"40.5\" r=\"4.5\" fill=\"#000000\""));
+        assert!(svg.contains("<rect x=\"5.5\" y=\"5.5\" width=\"15\" height=\"10\" fill=\"none\""));
+    }
+
+    #[test]
+    fn text_is_written_at_the_size_plotters_measures() {
+        // plotters' SVG backend writes size / 1.24; scaled, that is the em of a size-20
+        // DejaVu Sans text as ab_glyph sets it, 20 · 2048 / 2384.
+        crate::plot::ensure_font().unwrap();
+        let svg = document(|c| {
+            c.draw_text("x", &crate::plot::font(20.0).color(&BLACK), (5, 5))
+                .unwrap()
+        });
+        let size: f64 = svg
+            .split("font-size=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((size - 20.0 * 2048.0 / 2384.0).abs() < 1e-9, "{size}");
     }
 }
