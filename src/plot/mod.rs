@@ -113,23 +113,47 @@ fn plot_error<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
 /// old picture intact.
 pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
     let format = Format::of(path)?;
-    ensure_font()?;
+    let svg = svg_string(pic).map_err(named(path))?;
+    write_rendered(&svg, pic.size(), format, path)
+}
+
+/// Write `pic` as `dir/stem.png` and `dir/stem.svg` (drawn once, the PNG rendered from the
+/// SVG), each as [`write_picture`] does; returns both paths.
+pub fn write_png_svg<P: Picture>(pic: &P, dir: &Path, stem: &str) -> Result<Vec<PathBuf>> {
+    let paths = vec![
+        dir.join(format!("{stem}.png")),
+        dir.join(format!("{stem}.svg")),
+    ];
+    let svg = svg_string(pic).map_err(named(&paths[0]))?;
+    let size = pic.size();
+    write_rendered(&svg, size, Format::Png, &paths[0])?;
+    write_rendered(&svg, size, Format::Svg, &paths[1])?;
+    Ok(paths)
+}
+
+/// A picture error renamed after the file it was meant for.
+fn named(path: &Path) -> impl Fn(Error) -> Error + '_ {
+    move |e| match e {
+        Error::Plot { message, .. } => Error::Plot {
+            path: path.to_path_buf(),
+            message,
+        },
+        other => other,
+    }
+}
+
+/// Write the SVG document `svg` of a picture of `size` pixels to `path` in `format`,
+/// atomically, creating the parent folder if needed.
+fn write_rendered(svg: &str, size: (u32, u32), format: Format, path: &Path) -> Result<()> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|source| Error::File {
             path: parent.to_path_buf(),
             message: format!("cannot create the folder: {}", source.kind()),
         })?;
     }
-    let renamed = |e: Error| match e {
-        Error::Plot { message, .. } => Error::Plot {
-            path: path.to_path_buf(),
-            message,
-        },
-        other => other,
-    };
     let bytes = match format {
-        Format::Png => png_bytes(pic).map_err(renamed)?,
-        Format::Svg => svg_string(pic).map_err(renamed)?.into_bytes(),
+        Format::Png => svg_to_png(svg, size).map_err(named(path))?,
+        Format::Svg => svg.as_bytes().to_vec(),
     };
     crate::io::write_bytes(path, &bytes)
 }
@@ -137,8 +161,14 @@ pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
 /// Render `pic` to a PNG file's bytes in memory: its SVG document ([`svg_string`])
 /// rendered at [`Picture::size`] pixels, 8-bit RGB.
 pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
+    svg_to_png(&svg_string(pic)?, pic.size())
+}
+
+/// The SVG document `svg` rendered as [`svg_to_rgb`] does, as a PNG file's bytes (8-bit
+/// RGB).
+pub fn svg_to_png(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
     use image::ImageEncoder;
-    let ((w, h), rgb) = rendered(pic)?;
+    let rgb = svg_to_rgb(svg, (w, h))?;
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out)
         .write_image(&rgb, w, h, image::ColorType::Rgb8)
@@ -146,30 +176,19 @@ pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     Ok(out)
 }
 
-/// Write `pic` as `dir/stem.png` and `dir/stem.svg`; returns both paths.
-pub fn write_png_svg<P: Picture>(pic: &P, dir: &Path, stem: &str) -> Result<Vec<PathBuf>> {
-    let mut paths = Vec::with_capacity(2);
-    for ext in ["png", "svg"] {
-        let path = dir.join(format!("{stem}.{ext}"));
-        write_picture(pic, &path)?;
-        paths.push(path);
-    }
-    Ok(paths)
-}
-
 /// Render `pic` to an SVG document in memory.
 pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
     ensure_font()?;
     let mut out = String::new();
     let here = Path::new("<svg in memory>");
-    let strokes = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let elements = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
     {
-        let root = svg::SvgCanvas::new(&mut out, pic.size(), strokes.clone()).into_drawing_area();
+        let root = svg::SvgCanvas::new(&mut out, pic.size(), elements.clone()).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error(here))?;
         pic.draw(&root).map_err(plot_error(here))?;
         root.present().map_err(plot_error(here))?;
     }
-    let out = svg::SvgCanvas::finish(&out, &strokes.borrow());
+    let out = svg::SvgCanvas::finish(&out, &elements.borrow());
     // plotters-svg 0.3.7 labels embedded bitmaps "data:png"; viewers need the MIME type.
     Ok(out.replace("href=\"data:png;base64,", "href=\"data:image/png;base64,"))
 }
@@ -177,16 +196,7 @@ pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
 /// Render `pic` to an RGB buffer in memory (row-major, 3 bytes per pixel, top row first),
 /// exactly the pixels of [`png_bytes`].
 pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
-    Ok(rendered(pic)?.1)
-}
-
-/// `pic` rendered to an RGB buffer, with the size it was rendered at (measured once, with
-/// the font loaded: a picture with a legend sizes itself by its text widths).
-fn rendered<P: Picture>(pic: &P) -> Result<((u32, u32), Vec<u8>)> {
-    ensure_font()?;
-    let size = pic.size();
-    let svg = svg_string(pic)?;
-    Ok((size, svg_to_rgb(&svg, size)?))
+    svg_to_rgb(&svg_string(pic)?, pic.size())
 }
 
 /// The SVG document `svg` rendered by resvg (anti-aliased) onto a white bitmap of `w` × `h`
