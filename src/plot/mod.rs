@@ -201,12 +201,17 @@ pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
 
 /// The SVG document `svg` rendered by resvg (anti-aliased) onto a white bitmap of `w` × `h`
 /// pixels, its view box stretched to fill it: RGB, row-major, top row first. Text is set in
-/// the bundled font whatever family it names; embedded PNG images are drawn.
+/// the bundled font (the only one known, also under every generic family name); images
+/// embedded as data URLs are drawn, and no file or other address is ever read.
 pub fn svg_to_rgb(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
     let here = Path::new("<png in memory>");
     let options = usvg::Options {
         font_family: FONT_FAMILY.to_string(),
         fontdb: font_database(),
+        image_href_resolver: usvg::ImageHrefResolver {
+            resolve_data: usvg::ImageHrefResolver::default_data_resolver(),
+            resolve_string: Box::new(|_, _| None),
+        },
         ..usvg::Options::default()
     };
     let tree = usvg::Tree::from_str(svg, &options).map_err(plot_error(here))?;
@@ -358,6 +363,21 @@ mod tests {
         assert_eq!(fmt_num(2.5e-7), "2.5e-7");
         assert_eq!(fmt_num(1e-6), "1e-6");
         assert_eq!(fmt_tick(-2.2e-16), "0");
+    }
+
+    #[test]
+    fn rendering_reads_no_file_an_svg_names() {
+        // A red PNG on disk, named by an image element: nothing is drawn from it.
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("red.png");
+        let red: Vec<u8> = [200u8, 0, 0].repeat(16);
+        image::save_buffer(&png, &red, 4, 4, image::ColorType::Rgb8).unwrap();
+        let svg = format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"4\" height=\"4\">\
+             <image href=\"{}\" x=\"0\" y=\"0\" width=\"4\" height=\"4\"/></svg>",
+            png.display()
+        );
+        assert!(svg_to_rgb(&svg, (4, 4)).unwrap().iter().all(|&b| b == 255));
     }
 
     #[test]

@@ -5,11 +5,10 @@
 //! fills pixel column 143, whose centre is at 143.5 in SVG coordinates (pixel (i, j) is the
 //! unit square [i, i+1) × [j, j+1)). Its SVG backend writes the line at 143, across two
 //! half-covered columns, which a renderer draws grey and two pixels wide. [`SvgCanvas`]
-//! writes strokes of odd width (lines, paths, outlines) and circles half a pixel on instead,
-//! so that they cover whole pixels, discs at the size plotters fills, and text at the size
-//! plotters measures it with.
-//! Filled rectangles, polygons and images are passed on unchanged (their integer corners
-//! are pixel edges already).
+//! moves strokes of odd width (lines, paths, outlines) and circles half a pixel on, so
+//! that they cover whole pixels; it draws discs at the size plotters fills and text at the
+//! size plotters measures it with. Filled rectangles, polygons and images are passed on
+//! unchanged (their integer corners are pixel edges already).
 
 use super::marks::Rect;
 use super::stroke::Canvas;
