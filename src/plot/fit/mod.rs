@@ -34,6 +34,7 @@ use crate::error::{Error, Result};
 use crate::geometry::Sample;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// The fitted model over (θr, φr) at the θi with the most samples, with that θi's sample
@@ -168,25 +169,27 @@ pub fn svg_pictures(input: &FitPlotInput) -> Result<Vec<(String, String)>> {
         .collect()
 }
 
-/// The pictures of [`fit_pictures`] rendered in memory as PNG files' bytes: (name, PNG).
+/// The pictures of [`fit_pictures`] rendered in memory as PNG files' bytes: (name, PNG),
+/// rendered side by side on the thread pool.
 pub fn png_pictures(input: &FitPlotInput) -> Result<Vec<(String, Vec<u8>)>> {
     fit_pictures(input)?
-        .into_iter()
+        .into_par_iter()
         .map(|(name, p)| Ok((name, super::png_bytes(&p)?)))
         .collect()
 }
 
 /// Write the pictures of [`fit_pictures`] into `dir` (created if needed), each as PNG and
-/// SVG. Returns the written paths.
+/// SVG, rendered side by side on the thread pool. Returns the written paths, in the order
+/// of [`PICTURES`].
 pub fn write_fit_plots(dir: &Path, input: &FitPlotInput) -> Result<Vec<PathBuf>> {
     let pictures = fit_pictures(input)?;
     std::fs::create_dir_all(dir).map_err(|source| Error::Io {
         path: dir.to_path_buf(),
         source,
     })?;
-    let mut paths = Vec::new();
-    for (name, p) in &pictures {
-        paths.extend(write_png_svg(p, dir, name)?);
-    }
-    Ok(paths)
+    let written: Vec<Vec<PathBuf>> = pictures
+        .par_iter()
+        .map(|(name, p)| write_png_svg(p, dir, name))
+        .collect::<Result<_>>()?;
+    Ok(written.into_iter().flatten().collect())
 }
