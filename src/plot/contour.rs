@@ -11,8 +11,12 @@ use std::collections::HashMap;
 /// strictly increasing.
 #[derive(Debug, Clone)]
 pub struct Grid {
+    /// The columns' x, in data units, strictly increasing.
     pub xs: Vec<f64>,
+    /// The rows' y, in data units, strictly increasing.
     pub ys: Vec<f64>,
+    /// The values, row after row: `xs.len() * ys.len()` of them, `z[j * xs.len() + i]` at
+    /// `(xs[i], ys[j])`; non-finite values are left out of [`Grid::range`].
     pub z: Vec<f64>,
 }
 

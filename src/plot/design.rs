@@ -23,18 +23,32 @@ pub const PICTURE: &str = "design";
 const DECADES: f64 = 4.0;
 
 /// One point of a panel: its position, its colour value (log10 gain relative to the best,
-/// in [−[`DECADES`], 0]; None: out of reach), and whether it is chosen.
+/// in [−4, 0]: the colour scale spans four decades; None: out of reach), and whether it is
+/// chosen.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Point {
+    /// Position in the panel's data coordinates: on the projected hemisphere
+    /// (sin θr cos φr, sin θr |sin φr|), unitless, the two sides of the plane of incidence
+    /// folded together; in the incidence panel (θi, signed θr) in degrees, θr negative
+    /// where |φr| > 90°.
     pub xy: (f64, f64),
+    /// log10 of the gain relative to the best reachable candidate, clamped to [−4, 0] (0:
+    /// the best; −4 also for no gain); None: out of the instrument's dynamic range, drawn
+    /// grey.
     pub level: Option<f64>,
+    /// Whether the design chose this geometry (ringed in red); for a merged position, true
+    /// if any geometry there was chosen.
     pub chosen: bool,
 }
 
 /// The design's picture, its data computed when built.
 #[derive(Debug, Clone)]
 pub struct DesignPlot {
+    /// The first title line: how many geometries were chosen, for which target, model and
+    /// wavelength.
     pub title: String,
+    /// The second title line: the target's relative standard error before → after the
+    /// chosen geometries.
     pub subtitle: String,
     /// The design's sentence, in lines that fit above the hemisphere.
     pub sentence: Vec<String>,
@@ -42,6 +56,8 @@ pub struct DesignPlot {
     pub hemisphere: Vec<Point>,
     /// θi against signed θr (best over φr).
     pub incidence: Vec<Point>,
+    /// The colour bar drawn right of the panels: log10 gain relative to the best, over
+    /// [−4, 0].
     pub key: ColorKey,
 }
 

@@ -37,8 +37,13 @@ pub const FIG6_T_OVER_SIGMA: f64 = 5.0;
 /// radians; NaN for the Lambertian curve) and its (x, y) points.
 #[derive(Debug, Clone)]
 pub struct Curve {
+    /// The legend text, e.g. `KBS rough, T/σ = 5` or `φr = π/4 (45°)`.
     pub label: String,
+    /// T/σ (Figure 5), φr in radians (Figure 6), or NaN for the Lambertian curve (drawn
+    /// dashed black).
     pub param: f64,
+    /// (angle in degrees, normalised L): θ of the normal from the view for Figure 5, θr for
+    /// Figure 6; L is 0 where the geometry is outside the model's domain.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -244,6 +249,8 @@ pub const LEVELS: [f64; 10] = [0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9
 /// Figure 4: six spheres in a 3×2 grid with captions.
 #[derive(Debug, Clone)]
 pub struct Figure4 {
+    /// The spheres in reading order (the five KBS ratios of [`T_OVER_SIGMA`], then the
+    /// Lambertian one), each with the caption drawn under it.
     pub spheres: Vec<(SphereImage, String)>,
 }
 
@@ -390,13 +397,20 @@ pub type Marks = (String, Vec<(f64, f64)>, RGBColor);
 /// A contour map picture: heatmap, iso-lines, colour bar, marked points, legend.
 #[derive(Debug, Clone)]
 pub struct ContourPlot {
+    /// The first title line, centred above the legend and map.
     pub title: String,
     /// A second title line; empty for none.
     pub subtitle: String,
+    /// The x axis label (under the map), naming the grid's x and its unit.
     pub x_desc: String,
+    /// The y axis label (left of the map), naming the grid's y and its unit.
     pub y_desc: String,
+    /// The colour bar's label: what z is, in which unit.
     pub z_desc: String,
+    /// The picture's width and height, pixels.
     pub size: (u32, u32),
+    /// The values mapped; the axes span its first to last x and y, the colours run from the
+    /// smaller of 0 and its lowest finite z to its highest.
     pub grid: Grid,
     /// Absolute contour levels (z units).
     pub levels: Vec<f64>,

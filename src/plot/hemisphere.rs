@@ -38,8 +38,12 @@ pub fn project(theta_r: f64, phi_r: f64) -> (f64, f64) {
 /// A colour scale for values: linear or logarithmic over [lo, hi].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ValueScale {
+    /// The value at the scale's dark (purple) end, in the values' unit; > 0 on a log scale.
     pub lo: f64,
+    /// The value at the scale's light (yellow-green) end, in the values' unit.
     pub hi: f64,
+    /// Colours by ln v between `lo` and `hi` (values ≤ 0 take the `lo` colour); false:
+    /// linearly in v.
     pub log: bool,
 }
 
@@ -124,6 +128,7 @@ pub fn diverging_color(t: f64) -> RGBColor {
 /// fitted and standardized residual values.
 #[derive(Debug, Clone)]
 pub struct HemispherePlot {
+    /// The first title line: the fit's title and this incidence angle.
     pub title: String,
     /// A second title line (the fit's status); empty for none.
     pub subtitle: String,
@@ -133,8 +138,13 @@ pub struct HemispherePlot {
     pub theta_i: f64,
     /// Per sample, its position from [`project`].
     pub points: Vec<(f64, f64)>,
+    /// Per sample, the measured value (the fit's quantity, in the data's unit), the left
+    /// disc's colours.
     pub measured: Vec<f64>,
+    /// Per sample, the fitted model's value there (same unit), the middle disc's colours.
     pub fitted: Vec<f64>,
+    /// Per sample, its standardized residual ([`FitPlotInput::std_residuals`]; unitless),
+    /// the right disc's colours: red where the fit lies above the measurement, blue below.
     pub residuals: Vec<f64>,
     /// The scale shared by measured and fitted values.
     pub scale: ValueScale,

@@ -13,9 +13,13 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 /// A point marker.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Marker {
+    /// A filled circle of radius r.
     Filled,
+    /// A circle's outline of radius r, 2 pixels wide, its inside left clear.
     Open,
+    /// A filled triangle pointing up, one pixel larger than r each way.
     Triangle,
+    /// A filled axis-aligned square, 2r pixels on a side.
     Square,
 }
 
@@ -24,24 +28,35 @@ pub enum Marker {
 pub enum Glyph {
     /// A line of `width` pixels, dashed as (on, off) pixels when given.
     Line {
+        /// The colour of the 26-pixel stroke drawn left of the label.
         color: RGBColor,
+        /// The stroke's width in pixels; widths under 2 are drawn 2 wide.
         width: u32,
+        /// (on, off) dash lengths in pixels; None: solid.
         dash: Option<(u32, u32)>,
     },
     /// A point marker of radius `r`.
     Point {
+        /// The marker's fill (or outline, for [`Marker::Open`]) colour.
         color: RGBColor,
+        /// The marker's shape, as drawn on the chart.
         marker: Marker,
+        /// The marker's radius in pixels; radii under 3 are drawn 3 in the legend.
         r: u32,
     },
     /// An arrow: values beyond the chart's edge.
-    Arrow { color: RGBColor },
+    Arrow {
+        /// The colour of the 2-pixel, right-pointing arrow drawn left of the label.
+        color: RGBColor,
+    },
 }
 
 /// One legend line: its glyph and text.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Entry {
+    /// The sample of the series' look drawn at the line's left (34 pixels with its gap).
     pub glyph: Glyph,
+    /// The text after the glyph, one line in the legend font; its width sets the legend's.
     pub label: String,
 }
 
@@ -212,8 +227,13 @@ pub fn sequential_color(t: f64) -> RGBColor {
 /// (marked on the bar).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ColorKey {
+    /// The quantity's name and unit, written above the bar after `colour: `.
     pub label: String,
+    /// The values (the quantity's unit) at the scale's ends: `range.0` dark purple at the
+    /// bar's bottom, `range.1` yellow-green at its top; values outside take the end colours.
     pub range: (f64, f64),
+    /// The series' values, each marked by a short tick on the bar's left edge; empty: no
+    /// marks.
     pub values: Vec<f64>,
 }
 

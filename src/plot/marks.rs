@@ -7,7 +7,9 @@ use super::fmt_num;
 /// The values beyond a limit: how many, and the largest.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Beyond {
+    /// How many finite values exceed the limit (NaN and infinities are not counted).
     pub count: usize,
+    /// The largest of them, in the values' own unit; 0 when `count` is 0.
     pub worst: f64,
 }
 
@@ -73,9 +75,13 @@ pub fn arrow_glyph((x, y): (i32, i32), len: i32) -> Vec<(i32, i32)> {
 /// A pixel rectangle: left, top, width, height.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rect {
+    /// The left edge, pixels from the drawing area's left (grows rightwards).
     pub x: f64,
+    /// The top edge, pixels from the drawing area's top (grows downwards).
     pub y: f64,
+    /// The width in pixels: the box spans `x` to `x + w`.
     pub w: f64,
+    /// The height in pixels: the box spans `y` down to `y + h`.
     pub h: f64,
 }
 
@@ -98,8 +104,13 @@ impl Rect {
 /// the point, and whether a leader line joins them (a label moved away from its point).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Placed {
+    /// Pixels from the point to the text box's left edge (negative: the box starts left of
+    /// the point).
     pub dx: f64,
+    /// Pixels from the point down to the text box's top edge (negative: above the point).
     pub dy: f64,
+    /// The label sits beyond the first ring of positions, so a line is drawn from the point
+    /// to the nearest point of the label's box.
     pub leader: bool,
 }
 

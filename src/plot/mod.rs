@@ -77,7 +77,9 @@ pub trait Picture {
 /// Output format, chosen by the file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
+    /// `.png`: the picture's SVG rendered by resvg at its pixel size, 8-bit RGB.
     Png,
+    /// `.svg`: the SVG document as drawn, text as text, bitmaps embedded as data URLs.
     Svg,
 }
 

@@ -11,8 +11,12 @@ use super::{series_color, ticks::nice_step};
 /// determined). Non-finite values are left out.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Quantity {
+    /// The quantity's name (`T/σ` or a model parameter's): the chart's title and y label.
     pub name: String,
+    /// Its unit, shown in brackets after the name on the y axis; empty: none shown.
     pub unit: String,
+    /// One per fit: x (wavelength or row, as the caller's x description says), the value
+    /// in `unit`, and whether the data determines it (filled circle) or not (open circle).
     pub points: Vec<(f64, f64, bool)>,
 }
 

@@ -215,8 +215,12 @@ pub fn draw_sphere<DB: DrawingBackend>(
 /// One rendered sphere as a picture of exactly `size`×`size` pixels.
 #[derive(Debug, Clone)]
 pub struct SpherePicture {
+    /// The rendered radiance; its `size` is the picture's width and height in pixels.
     pub image: SphereImage,
+    /// Draw as a negative (darker = more light, on white) as in the paper's Figure 4;
+    /// false: brighter = more light, on black.
     pub negative: bool,
+    /// Draw the disc's outline and the red view (+), light (×) and specular (○) marks.
     pub marks: bool,
 }
 

@@ -84,7 +84,9 @@ pub fn dashes(pts: &[(f64, f64)], on: f64, off: f64) -> Vec<Vec<(f64, f64)>> {
 pub struct PixelMap {
     /// Width and height of the plotting area in pixels.
     pub size: (u32, u32),
+    /// The data x at the plotting area's left and right edges (both > 0 on a log axis).
     pub x_range: (f64, f64),
+    /// The data y at the plotting area's bottom and top edges (both > 0 on a log axis).
     pub y_range: (f64, f64),
     /// Logarithmic x and y axes.
     pub log: (bool, bool),
@@ -167,8 +169,12 @@ impl<DB: Canvas> Drawable<DB> for Smooth<'_> {
 /// A line style: width in pixels, and a dash pattern (on, off pixels) or none.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pen {
+    /// The stroke's colour, opaque.
     pub color: RGBColor,
+    /// The stroke's width in pixels (sub-pixel widths allowed).
     pub width: f64,
+    /// Dashes `on` pixels long, `off` pixels apart, measured along the line (the pattern
+    /// runs on across vertices); None: a solid line.
     pub dash: Option<(f64, f64)>,
 }
 

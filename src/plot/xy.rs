@@ -78,35 +78,56 @@ impl Kind {
 pub struct Series {
     /// Legend text; `None` keeps the series out of the legend.
     pub label: Option<String>,
+    /// The colour of its line or markers (and of its above-the-top arrows) and of its
+    /// legend glyph.
     pub color: RGBColor,
+    /// Line (with its dash pattern) or marker shape, with its width or radius in pixels.
     pub kind: Kind,
+    /// (x, y) in data units. A line joins them in this order, cut at the axes' ends and
+    /// broken at non-finite values; markers outside the x range or below the y range are
+    /// not drawn, those above it are arrows at the top edge.
     pub points: Vec<(f64, f64)>,
 }
 
 /// A text label beside a data point (placed so that labels do not overlap).
 #[derive(Debug, Clone)]
 pub struct Annotation {
+    /// The labelled point, in data units; the label goes beside it, joined by a leader
+    /// line when it had to move away.
     pub at: (f64, f64),
+    /// The label, one line at 13 pixels.
     pub text: String,
+    /// The colour of the text (and, paler, of its leader line).
     pub color: RGBColor,
 }
 
 /// An x–y chart.
 #[derive(Debug, Clone)]
 pub struct XyPlot {
+    /// The first title line, centred at the top; its font shrinks (21 to 12 pixels) to fit
+    /// the width.
     pub title: String,
     /// A second title line (the fit's status); empty for none.
     pub subtitle: String,
+    /// The x axis label, under the axis: the quantity and its unit.
     pub x_desc: String,
+    /// The y axis label, beside the axis: the quantity and its unit.
     pub y_desc: String,
     /// Size of the chart in pixels; the legend panel is added to the right of it.
     pub size: (u32, u32),
+    /// The x axis' left and right ends, in data units; lines are cut there and points
+    /// beyond them are not drawn.
     pub x_range: (f64, f64),
+    /// The y axis' bottom and top ends, in data units; lines are cut there, points above
+    /// the top are drawn as arrows at the top edge and counted in the legend
+    /// ([`XyPlot::above_top`]).
     pub y_range: (f64, f64),
     /// Logarithmic x axis (x_range must then be positive; points at x ≤ 0 are dropped).
     pub log_x: bool,
     /// Logarithmic y axis (y_range must then be positive; values ≤ 0 are dropped).
     pub log_y: bool,
+    /// The curves and point sets, drawn in this order (later ones on top), after the
+    /// reference lines.
     pub series: Vec<Series>,
     /// Horizontal reference lines (thin grey).
     pub hlines: Vec<f64>,

@@ -16,12 +16,22 @@ pub struct FitPlotInput<'a> {
     /// The fit's status under the title: T/σ, the verdict, converged or why not; empty for
     /// none.
     pub subtitle: String,
+    /// The fitted model, evaluated along the plane of incidence for the fit curves and on
+    /// the (θr, φr) grid of the contour map.
     pub model: &'a dyn Model,
+    /// The model's fitted parameters, in the model's order; used for every sample when
+    /// [`Channels::params`] is empty.
     pub params: &'a [f64],
     /// Sample geometry (radians), quantity, wavelength.
     pub geo: &'a Geometry,
+    /// Per sample (the order of `geo`), the measured value of `geo`'s quantity in the
+    /// data's unit (a radiance L in the file's unit, or a BRDF in sr⁻¹).
     pub measured: &'a [f64],
+    /// Per sample, the fitted model's value, in the unit of `measured`.
     pub fitted: &'a [f64],
+    /// Per sample, the standardized residual, unitless: √w·r, r the residual (fitted against
+    /// measured, as the fit's residual kind defines it), divided by s = √(χ²/(n − p))
+    /// unless the weights are uncertainties.
     pub std_residuals: &'a [f64],
     /// The unit of λ (`nm`, `µm`), shown with the wavelengths; `None` for a bare number.
     pub wavelength_unit: Option<&'a str>,
@@ -65,10 +75,16 @@ const PLANE_TOL: f64 = PI / 180.0;
 /// Samples sharing an incidence angle, wavelength and channel.
 #[derive(Debug, Clone)]
 pub struct Group {
+    /// The shared incidence angle, radians (of the group's first sample; the others lie
+    /// within 1e-4° of it).
     pub theta_i: f64,
+    /// The shared wavelength, in the data's unit of λ (see
+    /// [`FitPlotInput::wavelength_unit`]).
     pub wavelength: f64,
     /// The joint fit's channel (0 for a single fit).
     pub channel: usize,
+    /// The group's samples: indices into the fit's samples (`geo`, `measured`, …), in
+    /// increasing order.
     pub idx: Vec<usize>,
 }
 
