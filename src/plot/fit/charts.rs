@@ -17,6 +17,8 @@ use plotters::prelude::*;
 /// in the legend) and, when there are several wavelengths, the wavelength by line style
 /// and marker (named in the legend; the four styles repeat beyond four wavelengths).
 pub struct GroupStyles {
+    /// Per group (in the order of the groups given), the colour of its curve and points: a
+    /// palette colour, or its θi's colour on [`GroupStyles::key`].
     pub colors: Vec<RGBColor>,
     /// Index into [`Kind::LINES`] / [`Kind::POINTS`] per group.
     pub style: Vec<usize>,

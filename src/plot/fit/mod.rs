@@ -105,9 +105,15 @@ pub const PICTURES: [&str; 6 + MAX_HEMISPHERES] = [
 
 /// One picture of a fit, of any kind.
 pub enum FitPicture {
+    /// An x–y chart: measured vs fitted over signed θr (linear or log y), or the
+    /// standardized residuals over θr or φr.
     Xy(XyPlot),
+    /// The fitted lobe in the plane of incidence, in polar form, at the θi with the most
+    /// samples.
     Polar(PolarPlot),
+    /// The fitted model's contours over (θr, φr) at that θi, the samples' positions marked.
     Contour(ContourPlot),
+    /// Measured, fitted and residual discs on the projected hemisphere at one θi.
     Hemisphere(HemispherePlot),
 }
 

@@ -18,9 +18,12 @@ use plotters::prelude::*;
 /// the signed view angle from the normal.
 #[derive(Debug, Clone)]
 pub struct PolarPlot {
+    /// The first title line: the fit's title, θi and (for a joint fit) the channel.
     pub title: String,
     /// A second title line; empty for none.
     pub subtitle: String,
+    /// The incidence angle shown, radians; the source (−θi) and mirror (+θi) directions are
+    /// drawn as dashed spokes.
     pub theta_i: f64,
     /// (signed θr in degrees, L / L_max) of the fitted model.
     pub curve: Vec<(f64, f64)>,
