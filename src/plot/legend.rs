@@ -56,7 +56,8 @@ pub enum Glyph {
 pub struct Entry {
     /// The sample of the series' look drawn at the line's left (34 pixels with its gap).
     pub glyph: Glyph,
-    /// The text after the glyph, one line in the legend font; its width sets the legend's.
+    /// The text after the glyph, one line in the legend font; the longest label sets the
+    /// legend column's width.
     pub label: String,
 }
 
