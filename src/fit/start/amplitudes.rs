@@ -151,15 +151,15 @@ fn log_start(
     leave_plateau(basis, p, linear, floor, &cost, best);
 }
 
-/// Steps per decade of [`leave_plateau`]'s scan in its first decade above the floor (a
+/// Steps per decade of `leave_plateau`'s scan in its first decade above the floor (a
 /// factor 1.037: with weights that follow the values, 1/σ_L² with σ_L ∝ L, the valley just
 /// above the floor can be a few per cent wide).
 pub const PLATEAU_STEPS_NEAR: usize = 64;
 
-/// Steps per decade of [`leave_plateau`]'s scan beyond its first decade.
+/// Steps per decade of `leave_plateau`'s scan beyond its first decade.
 pub const PLATEAU_STEPS_FAR: usize = 16;
 
-/// Decades above the floor [`leave_plateau`] scans.
+/// Decades above the floor `leave_plateau` scans.
 pub const PLATEAU_DECADES: usize = 12;
 
 /// When every model value at `p` lies at or below the floor (the log residual is flat
@@ -406,7 +406,7 @@ fn set(
 }
 
 /// Largest share of the model's peak value the column of an amplitude at its bound 0 adds
-/// after [`set`] (a start for the solver, invisible in the cost).
+/// after `set` (a start for the solver, invisible in the cost).
 pub const AT_BOUND: f64 = 1e-9;
 
 /// The model value of sample `i` at `p` from the basis.

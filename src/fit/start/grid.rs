@@ -416,7 +416,7 @@ fn pick_distinct(
     picked.into_iter().map(|(c, p, _)| (c, p)).collect()
 }
 
-/// Grid candidates kept per regime band for KBS models (see [`pick_distinct`]).
+/// Grid candidates kept per regime band for KBS models (see `pick_distinct`).
 pub const PER_BAND: usize = 2;
 
 /// Relative grid cost above the grid's best within which a band's second lobe is kept: a

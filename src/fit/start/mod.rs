@@ -289,7 +289,7 @@ impl<'m> Refiners<'m> {
 }
 
 /// Factor by which a Fresnel parameter freed after the lobe settled must move for the
-/// settled point to be solved on the whole data as well ([`Refiners::run_settled`]), the
+/// settled point to be solved on the whole data as well (`Refiners::run_settled`), the
 /// index n measured by the factor's shape r₀ = |n − 1|/(n + 1) (the grazing rise is
 /// 1/r₀²), κ as it is: the grid's index steps by about 2 in r₀, so a smaller move stays
 /// in the valley the grid point was in.
