@@ -261,13 +261,8 @@ fn goodness(
             .filter(|(r, s)| (*r * *s).abs() > c)
             .count()
     });
-    let mut std_residuals =
-        standardized_residuals(&residuals, sw, n_free, weights_are_uncertainties);
-    if !linear && !weights_are_uncertainties && objective > 0.0 {
-        // s from the robust objective: s_robust / s_χ² rescales every standardized residual.
-        let ratio = (chi2 / objective).sqrt();
-        std_residuals.iter_mut().for_each(|z| *z *= ratio);
-    }
+    let std_residuals =
+        standardized_residuals(problem, &residuals, n_free, weights_are_uncertainties);
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     let r2 = r_squared(problem, input, &fitted);
@@ -543,21 +538,28 @@ fn g_range(layout: &ParamLayout, input: &FitInput, p: &[f64]) -> Option<(f64, f6
     )
 }
 
-/// Standardized residuals √wᵢ rᵢ / s with s² = χ²/(n − p), or √wᵢ rᵢ when the weights are
-/// inverse variances from stated uncertainties (or s = 0).
+/// Standardized residuals √wᵢ rᵢ / s of `problem`'s raw `residuals` at a fit with `n_free`
+/// free parameters: s² = χ²/(n − p), under a robust loss the robust objective 2·cost/(n − p)
+/// (the s² of the covariance, so that a few outliers do not shrink every other residual);
+/// √wᵢ rᵢ when the weights are inverse variances from stated uncertainties (or s = 0).
 pub fn standardized_residuals(
+    problem: &FitProblem,
     residuals: &[f64],
-    sqrt_w: &crate::geometry::PerSample,
     n_free: usize,
     weights_are_uncertainties: bool,
 ) -> Vec<f64> {
-    let chi2: f64 = residuals
-        .iter()
-        .zip(sqrt_w.iter())
-        .map(|(r, s)| (r * s).powi(2))
-        .sum();
+    let sqrt_w = problem.sqrt_weight();
+    let objective = if problem.loss().is_linear() {
+        residuals
+            .iter()
+            .zip(sqrt_w.iter())
+            .map(|(r, s)| (r * s).powi(2))
+            .sum()
+    } else {
+        2.0 * problem.cost_of(residuals)
+    };
     let dof = residuals.len().saturating_sub(n_free).max(1) as f64;
-    let s_hat = (chi2 / dof).sqrt();
+    let s_hat = (objective / dof).sqrt();
     let scale = if weights_are_uncertainties || s_hat == 0.0 {
         1.0
     } else {

@@ -427,3 +427,32 @@ fn a_jacobian_not_cached_is_not_evaluated_after_a_stop() {
             .all(|v| v.is_nan()));
     });
 }
+
+/// Under a robust loss the pictures standardize the residuals as the report does (by the
+/// robust objective), not by χ².
+#[test]
+fn pictures_standardize_residuals_as_the_report_does_under_a_robust_loss() {
+    use goniofit::fit::problem::loss::{Loss, LossKind};
+    let input = synthetic("lambert", &[0.3], Layout::hemisphere(), 0.05, 5, 1.0);
+    let config = FitConfig {
+        model: "lambert".into(),
+        loss: Loss::new(LossKind::Cauchy, 0.002).unwrap(),
+        ..FitConfig::default()
+    };
+    let r = fit(&input, &config).unwrap();
+    let drawn = goniofit::plot::fit::with_plot_input(
+        &config,
+        &input,
+        (&r.layout, &r.values, Some(&r.fitted)),
+        ("", &[]),
+        None,
+        |p| Ok(p.std_residuals.to_vec()),
+    )
+    .unwrap();
+    assert_eq!(drawn, r.std_residuals);
+    // The robust objective's s is not χ²'s here: the check above tells them apart.
+    let n = r.residuals.len() as f64;
+    let chi2: f64 = r.residuals.iter().map(|e| e * e).sum();
+    let by_chi2 = r.residuals[0] / (chi2 / (n - 1.0)).sqrt();
+    assert!((by_chi2 / r.std_residuals[0] - 1.0).abs() > 0.01);
+}

@@ -72,15 +72,16 @@ pub fn with_plot_input<T>(
         input,
         config.residual,
         floor,
-    )?;
+    )?
+    .with_loss(config.loss);
     let fitted = match fitted.filter(|f| f.len() == input.y.len()) {
         Some(f) => f.to_vec(),
         None => problem.model_values(values, false).0,
     };
     let residuals = problem.raw_residuals(&fitted);
     let std_residuals = driver::standardized_residuals(
+        &problem,
         &residuals,
-        problem.sqrt_weight(),
         layout.free().len(),
         config.weights_are_uncertainties,
     );
