@@ -3,7 +3,8 @@
 //! chosen ones ringed, those out of the instrument's dynamic range in grey.
 //!
 //! Left: the viewing direction on the projected hemisphere (x = sin θr cos φr,
-//! y = sin θr sin φr; φr = 0 the specular side, to the right), each point the best over θi.
+//! y = sin θr |sin φr|: φr and −φr, which an isotropic surface cannot tell apart, share a
+//! point; φr = 0 the specular side, to the right), each point the best over θi.
 //! Right: θi against the signed θr (< 0 on the back side, |φr| > 90°), each point the best
 //! over φr.
 
@@ -208,7 +209,7 @@ impl Picture for DesignPlot {
         hemi.configure_mesh()
             .disable_mesh()
             .x_desc("sin θr cos φr   (φr = 0: specular side)")
-            .y_desc("sin θr sin φr")
+            .y_desc("sin θr |sin φr|")
             .label_style(font(14.0))
             .axis_desc_style(font(15.0))
             .x_label_formatter(&|v| super::fmt_tick(*v))

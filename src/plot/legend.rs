@@ -310,8 +310,10 @@ pub fn draw_color_key<DB: DrawingBackend>(
     let note = font(12.0)
         .color(&RGBColor(90, 90, 90))
         .pos(Pos::new(HPos::Left, VPos::Top));
-    for (k, line) in ["left marks: the", "values drawn"].iter().enumerate() {
-        area.draw_text(line, &note, (x - 6, top + h + 4 + 14 * k as i32))?;
+    if !key.values.is_empty() {
+        for (k, line) in ["left marks: the", "values drawn"].iter().enumerate() {
+            area.draw_text(line, &note, (x - 6, top + h + 4 + 14 * k as i32))?;
+        }
     }
     Ok(())
 }
