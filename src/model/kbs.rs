@@ -36,7 +36,7 @@
 //! approximations (eq. 42, 43), exact only in their limits.
 
 use super::fresnel::{complex_ratio, real_ratio, schlick_ratio, Fresnel, FresnelValue};
-use super::shadowing::{ShadowValue, Shadowing};
+use super::shadowing::{self, ShadowValue, Shadowing};
 use super::{series, EvalMode, Mode, Model, ModelOptions, ParamSpec};
 use crate::error::{Error, Result};
 use crate::geometry::{FactorColumns, Geometry};
@@ -271,20 +271,16 @@ impl Kbs {
         let g = |li, lr| shadowing.combine(li, lr);
         match &fc.polar {
             Some(polar) => {
-                let lam: Vec<(f64, f64)> = (polar.cot_tan.iter())
-                    .map(|&ct| Shadowing::direction(ct, k))
-                    .collect();
+                let lam = lambdas(&polar.cot_tan, k);
                 let (at_i, at_r) = (&polar.incidence, &polar.view);
                 (0..n)
                     .map(|i| each(i, g(lam[at_i[i] as usize], lam[at_r[i] as usize])))
                     .collect()
             }
-            None => (0..n)
-                .map(|i| {
-                    let li = Shadowing::direction(fc.incidence[i], k);
-                    each(i, g(li, Shadowing::direction(fc.view[i], k)))
-                })
-                .collect(),
+            None => {
+                let (li, lr) = (lambdas(&fc.incidence, k), lambdas(&fc.view, k));
+                (0..n).map(|i| each(i, g(li[i], lr[i]))).collect()
+            }
         }
     }
 
@@ -370,6 +366,14 @@ impl Kbs {
             d_scale,
         }
     }
+}
+
+/// Λ and ν ∂Λ/∂ν of each direction's (cot θ, tan θ) at `(k, 1/k)`, k = T/(2σ)
+/// ([`shadowing::directions`]: four at a time).
+fn lambdas(cot_tan: &[(f64, f64)], k: (f64, f64)) -> Vec<(f64, f64)> {
+    let mut out = vec![(0.0, 0.0); cot_tan.len()];
+    shadowing::directions(cot_tan, k, &mut out);
+    out
 }
 
 /// The point times the factors F and G of its sample, with ∂L/∂n and ∂L/∂κ

@@ -513,7 +513,7 @@ pub fn ln_q_batch(g: &[f64], a: &[f64], mode: EvalMode, tol: f64, out: &mut [LnQ
 
 /// A computation written for any [`F64x4`], run by [`with_lanes`] with the lanes this CPU
 /// has.
-trait LanesFn {
+pub(crate) trait LanesFn {
     type Out;
     fn call<V: F64x4>(self) -> Self::Out;
 }
@@ -524,7 +524,7 @@ trait LanesFn {
 /// the same code and returns the same bits; the AVX2 + FMA lanes give the bits of the
 /// fused portable lanes (tested op by op, and the scalar code around them is the same).
 #[inline(always)]
-fn with_lanes<F: LanesFn>(f: F) -> F::Out {
+pub(crate) fn with_lanes<F: LanesFn>(f: F) -> F::Out {
     #[cfg(target_arch = "x86_64")]
     if super::lanes::has_avx2_fma() {
         #[target_feature(enable = "avx2,fma")]

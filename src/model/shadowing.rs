@@ -27,6 +27,9 @@
 //! dataset ([`crate::geometry::FactorColumns`]), so that ν = (T/2σ) cot θ and
 //! y = (2σ/T) tan θ are products.
 
+mod lanes;
+pub(crate) use lanes::directions;
+
 /// Which shadowing–masking factor multiplies the KBS lobe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
