@@ -33,6 +33,9 @@
 //! index n < 1 (and n = 1, κ = 0 at exact grazing). Beyond that critical angle F has a
 //! kink at κ = 0, and ∂F/∂κ there is the derivative from κ > 0.
 
+mod lanes;
+pub(crate) use lanes::conductor;
+
 /// Which Fresnel factor multiplies the KBS lobe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -122,6 +125,15 @@ pub struct FresnelValue {
     pub d_n: f64,
     /// ∂F/∂κ (0 for the dielectric and Schlick forms).
     pub d_kappa: f64,
+}
+
+impl FresnelValue {
+    /// No factor: F = 1.
+    pub const ONE: FresnelValue = FresnelValue {
+        f: 1.0,
+        d_n: 0.0,
+        d_kappa: 0.0,
+    };
 }
 
 pub use crate::geometry::cos_local;

@@ -37,6 +37,12 @@ pub(crate) trait F64x4: Copy {
     fn max(self, o: Self) -> Self;
     /// The smaller of the two (the second when they are unordered).
     fn min(self, o: Self) -> Self;
+    /// self / o, correctly rounded.
+    fn div(self, o: Self) -> Self;
+    /// √self, correctly rounded.
+    fn sqrt(self) -> Self;
+    /// `if_ge` where self ≥ o (ordered), `otherwise` elsewhere.
+    fn select_ge(self, o: Self, if_ge: Self, otherwise: Self) -> Self;
     /// 2^k for lanes that hold k + 1.5·2⁵² exactly (k an integer in [−1022, 1023]; what
     /// x + 1.5·2⁵² rounds x to): the low bits of the sum are k in two's complement.
     fn pow2_of_rounded(self) -> Self;
@@ -171,6 +177,24 @@ impl<const FUSED: bool> F64x4 for Portable<FUSED> {
         }))
     }
     #[inline(always)]
+    fn div(self, o: Self) -> Self {
+        Portable(std::array::from_fn(|i| self.0[i] / o.0[i]))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Portable(self.0.map(f64::sqrt))
+    }
+    #[inline(always)]
+    fn select_ge(self, o: Self, if_ge: Self, otherwise: Self) -> Self {
+        Portable(std::array::from_fn(|i| {
+            if self.0[i] >= o.0[i] {
+                if_ge.0[i]
+            } else {
+                otherwise.0[i]
+            }
+        }))
+    }
+    #[inline(always)]
     fn pow2_of_rounded(self) -> Self {
         Portable(
             self.0
@@ -284,6 +308,21 @@ mod avx {
             unsafe { Avx(_mm256_min_pd(self.0, o.0)) }
         }
         #[inline(always)]
+        fn div(self, o: Self) -> Self {
+            unsafe { Avx(_mm256_div_pd(self.0, o.0)) }
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            unsafe { Avx(_mm256_sqrt_pd(self.0)) }
+        }
+        #[inline(always)]
+        fn select_ge(self, o: Self, if_ge: Self, otherwise: Self) -> Self {
+            unsafe {
+                let m = _mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0);
+                Avx(_mm256_blendv_pd(otherwise.0, if_ge.0, m))
+            }
+        }
+        #[inline(always)]
         fn pow2_of_rounded(self) -> Self {
             unsafe {
                 let k = _mm256_add_epi64(_mm256_castpd_si256(self.0), _mm256_set1_epi64x(1023));
@@ -390,7 +429,13 @@ mod tests {
                     v.map(|x| (x * 1e3).clamp(-1022.0, 1023.0).round() + 6_755_399_441_055_744.0)
                 };
                 let (pk, ak) = (P::from_array(rounded(x)), Avx::from_array(rounded(x)));
-                let pairs: [([f64; 4], [f64; 4]); 11] = [
+                let pairs: [([f64; 4], [f64; 4]); 14] = [
+                    (px.div(py).to_array(), ax.div(ay).to_array()),
+                    (px.sqrt().to_array(), ax.sqrt().to_array()),
+                    (
+                        px.select_ge(py, pz, px).to_array(),
+                        ax.select_ge(ay, az, ax).to_array(),
+                    ),
                     (px.min(py).to_array(), ax.min(ay).to_array()),
                     (
                         pk.pow2_of_rounded().to_array(),
