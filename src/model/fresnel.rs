@@ -34,7 +34,7 @@
 //! kink at κ = 0, and ∂F/∂κ there is the derivative from κ > 0.
 
 mod lanes;
-pub(crate) use lanes::conductor;
+pub(crate) use lanes::{conductor, dielectric};
 
 /// Which Fresnel factor multiplies the KBS lobe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]

@@ -35,7 +35,7 @@
 //! worst measured relative error of L 3e-12). `smooth` and `rough` are the paper's
 //! approximations (eq. 42, 43), exact only in their limits.
 
-use super::fresnel::{self, complex_ratio, real_ratio, schlick_ratio, Fresnel, FresnelValue};
+use super::fresnel::{self, complex_ratio, schlick_ratio, Fresnel, FresnelValue};
 use super::shadowing::{self, ShadowValue, Shadowing};
 use super::{series, EvalMode, Mode, Model, ModelOptions, ParamSpec};
 use crate::error::{Error, Result};
@@ -196,15 +196,16 @@ impl Kbs {
                 // G of every sample first, F and its derivatives beside the lobe.
                 let shadows = fc.map(|fc| (fc, self.shadow_each(fc, corr / sigma, |_, sh| sh)));
                 let (fresnel, fp) = (self.opts.fresnel, &p[3..]);
-                let conductor = (fresnel == Fresnel::Conductor && shadows.is_some())
-                    .then(|| conductor_each(&geo.factor_columns().cos_loc, fp));
+                let lanes = matches!(fresnel, Fresnel::Conductor | Fresnel::Dielectric);
+                let fresnels = (lanes && shadows.is_some())
+                    .then(|| fresnel_each(fresnel, &geo.factor_columns().cos_loc, fp));
                 let shared = (1.0 / sigma, 1.0 / corr);
                 let (j_sigma, rest) = j.split_at_mut(n);
                 let (j_corr, j_s) = rest.split_at_mut(n);
                 for i in 0..n {
                     let (pt, d_n, d_kappa) = match &shadows {
                         Some((fc, sh)) => {
-                            let f = match &conductor {
+                            let f = match &fresnels {
                                 Some(f) => f[i],
                                 None => fresnel.eval(fc.cos_loc[i], fp),
                             };
@@ -241,14 +242,15 @@ impl Kbs {
             Fresnel::None => self.shadow_each(fc, t_over_sigma, |_, sh| {
                 each(Fresnel::None.eval(0.0, fp), sh)
             }),
-            Fresnel::Dielectric if fp[0] > 1.0 => self.shadow_each(fc, t_over_sigma, |i, sh| {
-                each(real_ratio(cos_loc[i], fp[0]), sh)
-            }),
+            Fresnel::Dielectric if fp[0] > 1.0 => {
+                let f = fresnel_each(self.opts.fresnel, cos_loc, fp);
+                self.shadow_each(fc, t_over_sigma, |i, sh| each(f[i], sh))
+            }
             Fresnel::Dielectric => self.shadow_each(fc, t_over_sigma, |i, sh| {
                 each(complex_ratio(cos_loc[i], fp[0], 0.0), sh)
             }),
             Fresnel::Conductor => {
-                let f = conductor_each(cos_loc, fp);
+                let f = fresnel_each(self.opts.fresnel, cos_loc, fp);
                 self.shadow_each(fc, t_over_sigma, |i, sh| each(f[i], sh))
             }
             Fresnel::Schlick => self.shadow_each(fc, t_over_sigma, |i, sh| {
@@ -374,11 +376,15 @@ impl Kbs {
     }
 }
 
-/// The conductor's F with ∂F/∂n, ∂F/∂κ at each `cos_loc` for the Fresnel parameters
-/// `fp` = (n, κ) ([`fresnel::conductor`]: four at a time).
-fn conductor_each(cos_loc: &[f64], fp: &[f64]) -> Vec<FresnelValue> {
+/// F with ∂F/∂n, ∂F/∂κ at each `cos_loc` for the Fresnel parameters `fp` ((n, κ) or n)
+/// of the conductor or dielectric form `fresnel` ([`fresnel::conductor`],
+/// [`fresnel::dielectric`]: four at a time).
+fn fresnel_each(fresnel: Fresnel, cos_loc: &[f64], fp: &[f64]) -> Vec<FresnelValue> {
     let mut out = vec![FresnelValue::ONE; cos_loc.len()];
-    fresnel::conductor(cos_loc, fp[0], fp[1], &mut out);
+    match fresnel {
+        Fresnel::Conductor => fresnel::conductor(cos_loc, fp[0], fp[1], &mut out),
+        _ => fresnel::dielectric(cos_loc, fp[0], &mut out),
+    }
     out
 }
 

@@ -1,15 +1,26 @@
-//! The conductor's factor of many samples four at a time ([`conductor`]): [`super::complex_ratio`]'s
-//! formulas in the lanes [`with_lanes`] picks (AVX2 + FMA where the CPU has them), the
-//! branch on the sign of Re w² as a lane select, U⁻¹ and D⁻¹ as two divisions.
+//! The Fresnel factor of many samples four at a time ([`conductor`], [`dielectric`]):
+//! [`super::complex_ratio`]'s and [`super::real_ratio`]'s formulas in the lanes
+//! [`with_lanes`] picks (AVX2 + FMA where the CPU has them); for the conductor the branch
+//! on the sign of Re w² as a lane select and U⁻¹, D⁻¹ as two divisions.
 //!
-//! The same F, ∂F/∂n and ∂F/∂κ as [`super::complex_ratio`] up to rounding (fused
-//! multiply-adds, the divisions): within 1e-14 (|F| + |∂F|) of it (unit-tested over n
-//! 0.05–10, κ 1e-3–10, cos θ_loc 0–1, with the bits of the AVX2 lanes equal to those of
-//! the fused portable lanes), so to the module's accuracy against the reference.
+//! The same F, ∂F/∂n and ∂F/∂κ as the scalar forms up to rounding (fused multiply-adds,
+//! the divisions): within 1e-14 (|F| + |∂F|) of them (unit-tested over n 0.05–10,
+//! κ 1e-3–10 and n 1.001–10 for the dielectric, cos θ_loc 0–1, with the bits of the AVX2
+//! lanes equal to those of the fused portable lanes), so to the module's accuracy against
+//! the reference.
 
 use super::{complex_ratio, FresnelValue};
 use crate::model::lanes::F64x4;
 use crate::model::series::{with_lanes, LanesFn};
+
+/// Which form [`each`] evaluates.
+#[derive(Debug, Clone, Copy)]
+enum Form {
+    /// η = n + iκ with n > 0, κ > 0, 2nκ > 0 finite.
+    Conductor(f64, f64),
+    /// Real n > 1.
+    Dielectric(f64),
+}
 
 /// F(θ_loc; n + iκ) with ∂F/∂n and ∂F/∂κ at every `cos_loc` (∈ [0, 1]) into `out`, for
 /// n > 0, κ > 0 with 2nκ > 0 a finite double (elsewhere each sample by
@@ -23,35 +34,60 @@ pub(crate) fn conductor(cos_loc: &[f64], n: f64, kappa: f64, out: &mut [FresnelV
         }
         return;
     }
-    struct Call<'s>(&'s [f64], (f64, f64), &'s mut [FresnelValue]);
+    each(cos_loc, Form::Conductor(n, kappa), out);
+}
+
+/// F(θ_loc; n) with ∂F/∂n (∂F/∂κ = 0) at every `cos_loc` (∈ [0, 1]) into `out`, for a
+/// real index n > 1 ([`super::real_ratio`]'s domain; elsewhere each sample by
+/// [`super::complex_ratio`] at κ = 0). Panics if the slices differ in length.
+pub(crate) fn dielectric(cos_loc: &[f64], n: f64, out: &mut [FresnelValue]) {
+    assert_eq!(cos_loc.len(), out.len());
+    if n.is_nan() || n <= 1.0 {
+        for (o, &c) in out.iter_mut().zip(cos_loc) {
+            *o = complex_ratio(c, n, 0.0);
+        }
+        return;
+    }
+    each(cos_loc, Form::Dielectric(n), out);
+}
+
+/// `form`'s F at every `cos_loc` into `out` (of the same length), four at a time; the last
+/// few samples padded with normal incidence.
+fn each(cos_loc: &[f64], form: Form, out: &mut [FresnelValue]) {
+    struct Call<'s>(&'s [f64], Form, &'s mut [FresnelValue]);
     impl LanesFn for Call<'_> {
         type Out = ();
         #[inline(always)]
         fn call<V: F64x4>(self) {
-            let Call(cos_loc, eta, out) = self;
+            let Call(cos_loc, form, out) = self;
             let mut chunks = cos_loc.chunks_exact(4);
             let mut outs = out.chunks_exact_mut(4);
             for (c, o) in (&mut chunks).zip(&mut outs) {
-                four::<V>([c[0], c[1], c[2], c[3]], eta, o);
+                four::<V>([c[0], c[1], c[2], c[3]], form, o);
             }
             let (rest, o) = (chunks.remainder(), outs.into_remainder());
             if !rest.is_empty() {
-                // The last few samples padded with normal incidence.
                 let mut c = [1.0; 4];
                 c[..rest.len()].copy_from_slice(rest);
                 let mut tail = [FresnelValue::ONE; 4];
-                four::<V>(c, eta, &mut tail);
+                four::<V>(c, form, &mut tail);
                 o.copy_from_slice(&tail[..rest.len()]);
             }
         }
     }
-    with_lanes(Call(cos_loc, (n, kappa), out));
+    with_lanes(Call(cos_loc, form, out));
 }
 
-/// [`conductor`] of four samples into `out[..4]`.
+/// [`each`] of four samples into `out[..4]`.
 #[inline(always)]
-fn four<V: F64x4>(c: [f64; 4], eta: (f64, f64), out: &mut [FresnelValue]) {
-    let (f, d_n, d_kappa) = ratio(V::from_array(c), eta);
+fn four<V: F64x4>(c: [f64; 4], form: Form, out: &mut [FresnelValue]) {
+    let (f, d_n, d_kappa) = match form {
+        Form::Conductor(n, kappa) => ratio(V::from_array(c), (n, kappa)),
+        Form::Dielectric(n) => {
+            let (f, d_n) = real(V::from_array(c), n);
+            (f, d_n, V::splat(0.0))
+        }
+    };
     let (f, d_n, d_kappa) = (f.to_array(), d_n.to_array(), d_kappa.to_array());
     for i in 0..4 {
         out[i] = FresnelValue {
@@ -127,20 +163,59 @@ fn ratio<V: F64x4>(c: V, (n, kappa): (f64, f64)) -> (V, V, V) {
     (f, d_n, d_kappa)
 }
 
+/// F and ∂F/∂n lane by lane at cos θ_loc = `c` for a real index n > 1
+/// ([`super::real_ratio`]'s formulas: one division).
+#[inline(always)]
+fn real<V: F64x4>(c: V, n: f64) -> (V, V) {
+    let s = V::splat;
+    let n2 = n * n;
+    let c2 = c.mul(c);
+    let w = c2.add(s(n2 - 1.0)).sqrt();
+    let (u, d) = (c.add(w), c.mul_add(s(n2), w));
+    let ud = u.mul(d);
+    let inv = s(1.0).div(w.mul(ud));
+    let dw = ud.mul(inv).mul(s(n));
+    let u_inv = w.mul(d).mul(inv);
+    let a_s = u_inv.mul(u_inv);
+    let da_s = a_s.mul(dw).mul(u_inv).mul(s(-2.0));
+    let num = c2.mul_add(s(n2), c2.add(s(-1.0)));
+    let d_inv = w.mul(u).mul(inv);
+    let d_inv2 = d_inv.mul(d_inv);
+    let a_p = num.mul(d_inv2);
+    let da_p = d_inv2.mul(c2).mul(s(2.0 * n)).mul_add(
+        s(1.0),
+        a_p.mul(c.mul_add(s(2.0 * n), dw)).mul(d_inv).mul(s(-2.0)),
+    );
+    let m = a_s.mul_add(a_s, a_p.mul(a_p)).mul(s(0.5));
+    let q = (1.0 + n) * (1.0 + n);
+    let p = q * q;
+    let d_n = m.mul_add(
+        s(4.0 * q * (1.0 + n)),
+        a_s.mul_add(da_s, a_p.mul(da_p)).mul(s(p)),
+    );
+    (m.mul(s(p)), d_n)
+}
+
 #[cfg(test)]
 mod tests {
+    use super::super::real_ratio;
     use super::*;
     use crate::model::lanes::Portable;
 
     #[inline(always)]
-    fn ratio4<V: F64x4>(c: [f64; 4], eta: (f64, f64)) -> [FresnelValue; 4] {
+    fn ratio4<V: F64x4>(c: [f64; 4], (n, kappa): (f64, f64)) -> [FresnelValue; 4] {
         let mut out = [FresnelValue::ONE; 4];
-        four::<V>(c, eta, &mut out);
+        let form = if kappa == 0.0 {
+            Form::Dielectric(n)
+        } else {
+            Form::Conductor(n, kappa)
+        };
+        four::<V>(c, form, &mut out);
         out
     }
 
-    /// The indices and angles of the tests: n 0.05–10, κ 1e-3–10, cos θ_loc 0–1 with both
-    /// ends.
+    /// The indices and angles of the tests: n 0.05–10, κ 1e-3–10 (κ = 0: the dielectric,
+    /// n 1.001–10), cos θ_loc 0–1 with both ends.
     fn grid() -> Vec<((f64, f64), [f64; 4])> {
         let mut v = Vec::new();
         for n in [0.05, 0.2, 0.5, 0.9, 1.0, 1.01, 1.5, 2.5, 4.0, 10.0] {
@@ -151,16 +226,27 @@ mod tests {
                 }
             }
         }
+        for n in [1.001, 1.01, 1.2, 1.5, 2.5, 4.0, 10.0] {
+            for j in 0..64 {
+                let c: [f64; 4] = std::array::from_fn(|l| (4 * j + l) as f64 / 255.0);
+                v.push(((n, 0.0), c));
+            }
+        }
         v
     }
 
-    /// Within 1e-14 (|F| + |∂F|) of [`complex_ratio`], fused and unfused, and through
-    /// [`conductor`] (the lanes this CPU runs, and the remainder's padding).
+    /// Within 1e-14 (|F| + |∂F|) of [`complex_ratio`] and [`real_ratio`], fused and
+    /// unfused, and through [`conductor`] and [`dielectric`] (the lanes this CPU runs, and
+    /// the remainder's padding).
     #[test]
     fn lanes_match_the_scalar_form() {
         let mut worst = 0.0f64;
         let mut check = |got: FresnelValue, c: f64, (n, k): (f64, f64)| {
-            let want = complex_ratio(c, n, k);
+            let want = if k == 0.0 {
+                real_ratio(c, n)
+            } else {
+                complex_ratio(c, n, k)
+            };
             let scale = want.f.abs() + want.d_n.abs() + want.d_kappa.abs();
             for (g, w) in [
                 (got.f, want.f),
@@ -188,7 +274,11 @@ mod tests {
         for (o, &c) in out.iter().zip(&cs) {
             check(*o, c, (0.3, 2.9));
         }
-        println!("conductor lanes: worst difference from the scalar form {worst:.1e}");
+        dielectric(&cs, 1.7, &mut out);
+        for (o, &c) in out.iter().zip(&cs) {
+            check(*o, c, (1.7, 0.0));
+        }
+        println!("Fresnel lanes: worst difference from the scalar form {worst:.1e}");
     }
 
     /// The AVX2 + FMA lanes give the bits of the fused portable lanes.
