@@ -69,7 +69,8 @@ pub(crate) trait F64x4: Copy {
 /// e^x lane by lane for x ∈ [−700, 700] (clamped there; NaN gives NaN), without a table:
 /// x = k ln 2 + r with |r| ≤ ln 2/2, e^r by its degree-13 Taylor polynomial (truncation
 /// < 4e-18) in multiply-adds by Estrin's scheme, times 2^k through the exponent bits.
-/// Error ≤ 2 ulp fused and unfused (unit-tested densely over the whole domain).
+/// Relative error ≤ 2ε (ε = 2⁻⁵²) fused and unfused: tested against std's `exp` at 500 001
+/// points spread over the whole domain and its ends, worst 1.94ε.
 #[inline(always)]
 pub(crate) fn exp<V: F64x4>(x: V) -> V {
     const INV_LN2: f64 = std::f64::consts::LOG2_E;
@@ -485,7 +486,7 @@ mod tests {
     }
 
     /// [`exp`] against std's over its whole domain (a dense grid, its ends, and the clamp
-    /// beyond them), fused and unfused: at most 2 ulp.
+    /// beyond them), fused and unfused: relative error at most 2ε.
     #[test]
     fn exp_matches_std_over_its_domain() {
         fn worst<V: F64x4>() -> f64 {
@@ -514,7 +515,8 @@ mod tests {
             worst
         }
         for w in [worst::<Portable<true>>(), worst::<Portable<false>>()] {
-            assert!(w <= 2.0, "worst error {w} ulp");
+            println!("lanes exp: worst relative error {w:.2} ε");
+            assert!(w <= 2.0, "worst relative error {w} ε");
         }
         assert_eq!(exp(Portable::<true>::splat(0.0)).to_array(), [1.0; 4]);
         assert!(exp(Portable::<true>::splat(f64::NAN)).to_array()[0].is_nan());

@@ -25,7 +25,10 @@
 //! table in binary64: 3e-16 (tested at 1e-15 against the dense reference). The lobe
 //! passes cot θ and tan θ of both directions ([`Shadowing::direction`]), computed once per
 //! dataset ([`crate::geometry::FactorColumns`]), so that ν = (T/2σ) cot θ and
-//! y = (2σ/T) tan θ are products.
+//! y = (2σ/T) tan θ are products. The lobe evaluates Λ of its directions four at a time
+//! ([`directions`]: the same table, each lane's piece loaded per lane, e^{−ν²} by a
+//! Taylor `exp` of relative error ≤ 2ε), to the same 1e-15 (1 + Λ) against the dense
+//! reference.
 
 mod lanes;
 pub(crate) use lanes::directions;
