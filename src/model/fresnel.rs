@@ -268,6 +268,14 @@ mod tests {
             for n in [FLAT_INDEX, 1e30, 1e300, f64::INFINITY] {
                 let v = Fresnel::Dielectric.eval(c, &[n]);
                 assert_eq!((v.f, v.d_n, v.d_kappa), (1.0, 0.0, 0.0), "c={c} n={n}");
+                let mut out = [FresnelValue::ONE; 5];
+                out.fill(FresnelValue {
+                    f: 0.0,
+                    d_n: 1.0,
+                    d_kappa: 1.0,
+                });
+                dielectric(&[c; 5], n, &mut out);
+                assert!(out.iter().all(|v| *v == FresnelValue::ONE), "c={c} n={n}");
             }
             // Just below it the formulas give 1 within 2/(n c) and their rounding (10⁻¹⁴),
             // ∂F/∂n within 10⁻³⁰.

@@ -39,9 +39,14 @@ pub(crate) fn conductor(cos_loc: &[f64], n: f64, kappa: f64, out: &mut [FresnelV
 
 /// F(θ_loc; n) with ∂F/∂n (∂F/∂κ = 0) at every `cos_loc` (∈ [0, 1]) into `out`, for a
 /// real index n > 1 ([`super::real_ratio`]'s domain; elsewhere each sample by
-/// [`super::complex_ratio`] at κ = 0). Panics if the slices differ in length.
+/// [`super::complex_ratio`] at κ = 0); F = 1, ∂F/∂n = 0 from [`super::FLAT_INDEX`] on, as
+/// [`super::Fresnel::eval`] gives. Panics if the slices differ in length.
 pub(crate) fn dielectric(cos_loc: &[f64], n: f64, out: &mut [FresnelValue]) {
     assert_eq!(cos_loc.len(), out.len());
+    if n >= super::FLAT_INDEX {
+        out.fill(FresnelValue::ONE);
+        return;
+    }
     if n.is_nan() || n <= 1.0 {
         for (o, &c) in out.iter_mut().zip(cos_loc) {
             *o = complex_ratio(c, n, 0.0);
