@@ -268,12 +268,12 @@ mod tests {
             for n in [FLAT_INDEX, 1e30, 1e300, f64::INFINITY] {
                 let v = Fresnel::Dielectric.eval(c, &[n]);
                 assert_eq!((v.f, v.d_n, v.d_kappa), (1.0, 0.0, 0.0), "c={c} n={n}");
-                let mut out = [FresnelValue::ONE; 5];
-                out.fill(FresnelValue {
+                let unset = FresnelValue {
                     f: 0.0,
                     d_n: 1.0,
                     d_kappa: 1.0,
-                });
+                };
+                let mut out = [unset; 5];
                 dielectric(&[c; 5], n, &mut out);
                 assert!(out.iter().all(|v| *v == FresnelValue::ONE), "c={c} n={n}");
             }
