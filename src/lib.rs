@@ -7,6 +7,8 @@
 //! next); [`plot`] and [`report`]; [`harness`] (synthetic data, recovery and work–precision
 //! runs). [`settings`] validates the numeric options of every command.
 
+#![warn(missing_docs)]
+
 pub mod design;
 pub mod error;
 pub mod fit;

@@ -149,9 +149,12 @@ pub struct Geometry {
 /// ([`cot_tan`]) per sample, or per distinct polar angle when the samples share them.
 #[derive(Debug, Clone)]
 pub struct FactorColumns {
+    /// cos θ_loc = √(h/2) of each sample: the cosine of the local incidence angle on the
+    /// facet that mirrors the source into the view.
     pub cos_loc: Vec<f64>,
     /// (cot θi, tan θi) and (cot θr, tan θr) of each sample; empty when `polar` holds them.
     pub incidence: Vec<(f64, f64)>,
+    /// See `incidence`.
     pub view: Vec<(f64, f64)>,
     /// The distinct polar angles of incidence and view, when there are at most a quarter
     /// as many as samples (a gonioreflectometer measures a few incidence and view angles:
@@ -165,8 +168,9 @@ pub struct FactorColumns {
 pub struct PolarAngles {
     /// (cot θ, tan θ) of each distinct polar angle ([`cot_tan`]).
     pub cot_tan: Vec<(f64, f64)>,
-    /// Per sample: the index of θi and of θr in `cot_tan`.
+    /// Per sample: the index of θi in `cot_tan`.
     pub incidence: Vec<u32>,
+    /// Per sample: the index of θr in `cot_tan`.
     pub view: Vec<u32>,
 }
 

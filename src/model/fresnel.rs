@@ -34,7 +34,7 @@
 //! kink at κ = 0, and ∂F/∂κ there is the derivative from κ > 0.
 //!
 //! The lobe evaluates the conductor form (n, κ > 0) and the dielectric form (n > 1) four
-//! samples at a time ([`conductor`], [`dielectric`]), within 1e-14 (|F| + |∂F|) of
+//! samples at a time (`conductor`, `dielectric`), within 1e-14 (|F| + |∂F|) of
 //! [`complex_ratio`] and [`real_ratio`].
 
 mod lanes;
@@ -124,6 +124,7 @@ pub const FLAT_INDEX: f64 = 1e17;
 /// A normalised Fresnel factor F = R(θ_loc)/R(0) and its partial derivatives.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FresnelValue {
+    /// F, 1 at normal incidence.
     pub f: f64,
     /// ∂F/∂n.
     pub d_n: f64,

@@ -45,6 +45,8 @@ use std::f64::consts::PI;
 /// The KBS model with a chosen evaluation mode.
 #[derive(Debug, Clone, Copy)]
 pub struct Kbs {
+    /// The evaluation mode and tolerance, the patch size and the Fresnel and shadowing
+    /// factors.
     pub opts: ModelOptions,
 }
 

@@ -22,6 +22,7 @@ use crate::geometry::Geometry;
 /// KBS surface scattering plus a Lambertian body term.
 #[derive(Debug, Clone, Copy)]
 pub struct KbsLambert {
+    /// The KBS lobe (its options: mode, factors); the Lambertian term has none.
     pub kbs: Kbs,
 }
 

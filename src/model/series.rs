@@ -58,7 +58,7 @@
 //! advance); the forced series, too, sums every h-th term where h ≥ 4096 (a peak wider than
 //! ~6000 terms); a strided side stops after 1000 terms; and far from the specular
 //! direction on a surface with T ≳ 1e6 λ (a ≥ 1e12, a ≥ 64 g²) Q is below e^{−999 999}
-//! (proof at [`beyond_sums`]) and is returned as 0, with NaN only for NaN arguments.
+//! (proof at `beyond_sums`) and is returned as 0, with NaN only for NaN arguments.
 //!
 //! Batches ([`ln_q_batch`], what the models call): the same results bit for bit as one
 //! sample at a time; on x86-64 CPUs with AVX2 and FMA both run in a copy of this code

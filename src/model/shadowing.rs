@@ -26,7 +26,7 @@
 //! passes cot θ and tan θ of both directions ([`Shadowing::direction`]), computed once per
 //! dataset ([`crate::geometry::FactorColumns`]), so that ν = (T/2σ) cot θ and
 //! y = (2σ/T) tan θ are products. The lobe evaluates Λ of its directions four at a time
-//! ([`directions`]: the same table, each lane's piece loaded per lane, e^{−ν²} by a
+//! (`directions`: the same table, each lane's piece loaded per lane, e^{−ν²} by a
 //! Taylor `exp` of relative error ≤ 2ε), to the same 1e-15 (1 + Λ) against the dense
 //! reference.
 
@@ -145,6 +145,7 @@ impl Shadowing {
 /// A shadowing factor G and its logarithmic derivative in T (module doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShadowValue {
+    /// G in [0, 1]: the fraction of the surface both lit and seen.
     pub g: f64,
     /// ∂ln G/∂ln T; ∂ln G/∂ln σ is its negative.
     pub d_ln_t: f64,
