@@ -69,8 +69,12 @@ pub const LINE_H: u32 = 22;
 const GLYPH_W: i32 = 34;
 
 /// The width (pixels) of the text `s` at `size`, from the bundled font's metrics (an
-/// estimate of 0.6 em per character if the font cannot be measured).
+/// estimate of 0.6 em per character if the font cannot be measured). The font is
+/// registered first, so a picture's layout is the same whether or not one was drawn before.
 pub fn text_width(s: &str, size: f64) -> u32 {
+    // An unregistered font measures nothing and would give the estimate instead; an error
+    // here leaves the estimate, and the drawing itself reports it.
+    let _ = super::ensure_font();
     font(size)
         .box_size(s)
         .map(|b| b.0)

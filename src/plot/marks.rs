@@ -9,7 +9,8 @@ use super::fmt_num;
 pub struct Beyond {
     /// How many finite values exceed the limit (NaN and infinities are not counted).
     pub count: usize,
-    /// The largest of them, in the values' own unit; 0 when `count` is 0.
+    /// The farthest of them from the edge (the largest above a top, the smallest below a
+    /// bottom), in the values' own unit; 0 when `count` is 0.
     pub worst: f64,
 }
 

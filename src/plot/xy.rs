@@ -5,6 +5,7 @@
 //! Honest by construction: curves are drawn at sub-pixel positions
 //! ([`super::stroke`]), lines are clipped at the chart's edges (interpolated, not
 //! clamped), measured points above the y range are drawn as arrows at the top edge and
+//! those below it (or at y ≤ 0 on a logarithmic axis) as arrows at the bottom edge, both
 //! counted in the legend, logarithmic axes get labelled ticks for any range
 //! ([`super::ticks::log_ticks`]), and a chart with more series than the palette holds can
 //! colour them by a continuous scale with a colour bar ([`super::legend::ColorKey`]).
@@ -78,14 +79,15 @@ impl Kind {
 pub struct Series {
     /// Legend text; `None` keeps the series out of the legend.
     pub label: Option<String>,
-    /// The colour of its line or markers (and of its above-the-top arrows) and of its
-    /// legend glyph.
+    /// The colour of its line or markers (and of its arrows at the top and bottom edges)
+    /// and of its legend glyph.
     pub color: RGBColor,
     /// Line (with its dash pattern) or marker shape, with its width or radius in pixels.
     pub kind: Kind,
     /// (x, y) in data units. A line joins them in this order, cut at the axes' ends and
-    /// broken at non-finite values; markers outside the x range or below the y range are
-    /// not drawn, those above it are arrows at the top edge.
+    /// broken at non-finite values; markers outside the x range are not drawn, those above
+    /// the y range are arrows at the top edge, those below it (or at y ≤ 0 on a logarithmic
+    /// axis) arrows at the bottom edge.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -118,9 +120,9 @@ pub struct XyPlot {
     /// The x axis' left and right ends, in data units; lines are cut there and points
     /// beyond them are not drawn.
     pub x_range: (f64, f64),
-    /// The y axis' bottom and top ends, in data units; lines are cut there, points above
-    /// the top are drawn as arrows at the top edge and counted in the legend
-    /// ([`XyPlot::above_top`]).
+    /// The y axis' bottom and top ends, in data units; lines are cut there, points beyond
+    /// either end are drawn as arrows at that edge and counted in the legend
+    /// ([`XyPlot::above_top`], [`XyPlot::below_bottom`]).
     pub y_range: (f64, f64),
     /// Logarithmic x axis (x_range must then be positive; points at x ≤ 0 are dropped).
     pub log_x: bool,
@@ -218,7 +220,30 @@ impl XyPlot {
         )
     }
 
-    /// The legend's lines: the labelled series, the extra lines, and the arrows' count.
+    /// The measured points (point series, within the x range) below the y range, or at
+    /// y ≤ 0 on a logarithmic axis: drawn as arrows at the bottom edge. `worst` is the
+    /// smallest of them.
+    pub fn below_bottom(&self) -> Beyond {
+        let below = |y: f64| y < self.y_range.0 || (self.log_y && y <= 0.0);
+        self.series
+            .iter()
+            .filter(|s| s.kind.is_points())
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.0 >= self.x_range.0 && p.0 <= self.x_range.1)
+            .filter(|p| p.1.is_finite() && below(p.1))
+            .fold(
+                Beyond {
+                    count: 0,
+                    worst: 0.0,
+                },
+                |b, p| Beyond {
+                    count: b.count + 1,
+                    worst: if b.count == 0 { p.1 } else { b.worst.min(p.1) },
+                },
+            )
+    }
+
+    /// The legend's lines: the labelled series, the extra lines, and the arrows' counts.
     pub fn legend_entries(&self) -> Vec<Entry> {
         let mut out: Vec<Entry> = self
             .series
@@ -238,6 +263,19 @@ impl XyPlot {
                     color: RGBColor(60, 60, 60),
                 },
                 label: b.label("above the top", ""),
+            });
+        }
+        let b = self.below_bottom();
+        if b.count > 0 {
+            out.push(Entry {
+                glyph: Glyph::Arrow {
+                    color: RGBColor(60, 60, 60),
+                },
+                label: format!(
+                    "{} measured below the bottom (down to {})",
+                    b.count,
+                    super::fmt_num(b.worst)
+                ),
             });
         }
         out
@@ -438,12 +476,19 @@ fn draw_series_of<DB: Canvas, X: Axis, Y: Axis>(
     let base = chart.plotting_area().get_base_pixel();
     for &(x, y) in &s.points {
         let x_ok = x.is_finite() && x >= xr.0 && x <= xr.1 && (!plot.log_x || x > 0.0);
-        if !x_ok || !y.is_finite() || (plot.log_y && y <= 0.0) || y < yr.0 {
+        if !x_ok || !y.is_finite() {
             continue;
         }
-        if y > yr.1 {
-            let tip = chart.backend_coord(&(x, yr.1));
-            let path: Vec<(i32, i32)> = marks::arrow((0.0, -1.0), 20.0, 8.0)
+        let edge = if y > yr.1 {
+            Some((yr.1, -1.0))
+        } else if y < yr.0 || (plot.log_y && y <= 0.0) {
+            Some((yr.0, 1.0))
+        } else {
+            None
+        };
+        if let Some((end, dir)) = edge {
+            let tip = chart.backend_coord(&(x, end));
+            let path: Vec<(i32, i32)> = marks::arrow((0.0, dir), 20.0, 8.0)
                 .into_iter()
                 .map(|(dx, dy)| (tip.0 - base.0 + dx, tip.1 - base.1 + dy))
                 .collect();
@@ -732,5 +777,51 @@ mod tests {
             p.legend_entries()[1].label,
             "1 measured above the top (up to 2)"
         );
+    }
+
+    #[test]
+    fn points_below_the_range_are_counted_and_drawn_at_the_bottom() {
+        let mut p = XyPlot::new("t", "x", "y");
+        p.log_y = true;
+        p.series.push(Series {
+            // Longer than the count's line: the legend panel, and so the chart, keeps its
+            // width without the points below.
+            label: Some("measured values of a rather noisy dark region of the scan".into()),
+            color: BLACK,
+            kind: Kind::Points(4),
+            points: vec![
+                (0.2, 0.5),
+                (0.4, -0.003),
+                (0.6, 0.0),
+                (0.8, 1e-9),
+                (5.0, -1.0),
+            ],
+        });
+        p.x_range = (0.0, 1.0);
+        p.y_range = (0.01, 1.0);
+        // −0.003 and 0 (not on a log axis) and 1e-9 (below 0.01); x = 5 is off the chart.
+        let b = p.below_bottom();
+        assert_eq!((b.count, b.worst), (3, -0.003));
+        assert_eq!(
+            p.legend_entries()[1].label,
+            "3 measured below the bottom (down to -0.003)"
+        );
+        // Drawn: three dark arrows below the chart's bottom third, none without the points.
+        let dark = |p: &XyPlot| {
+            let (w, h) = p.size();
+            let rgb = crate::plot::rgb_buffer(p).unwrap();
+            let lay = p.layout();
+            let bottom = (lay.chart.y + lay.chart.h * 0.8) as u32;
+            let right = w.min((lay.chart.x + lay.chart.w) as u32);
+            (bottom..h.min((lay.chart.y + lay.chart.h) as u32))
+                .flat_map(|y| (0..right).map(move |x| (x, y)))
+                .filter(|&(x, y)| rgb[((y * w + x) * 3) as usize] < 60)
+                .count()
+        };
+        let with = dark(&p);
+        let chart = p.layout().chart;
+        p.series[0].points = vec![(0.2, 0.5)];
+        assert_eq!(p.layout().chart, chart);
+        assert!(with > dark(&p) + 30, "{with} against {}", dark(&p));
     }
 }
