@@ -66,20 +66,23 @@ pub(crate) trait F64x4: Copy {
     }
 }
 
-/// e^x lane by lane for x ∈ [−700, 700] (clamped there; NaN gives NaN), without a table:
-/// x = k ln 2 + r with |r| ≤ ln 2/2, e^r by its degree-13 Taylor polynomial (truncation
-/// < 4e-18) in multiply-adds by Estrin's scheme, times 2^k through the exponent bits.
-/// Relative error ≤ 2ε (ε = 2⁻⁵²) fused and unfused: tested against std's `exp` at 500 001
-/// points spread over the whole domain and its ends, worst 1.94ε.
-#[inline(always)]
-pub(crate) fn exp<V: F64x4>(x: V) -> V {
-    const INV_LN2: f64 = std::f64::consts::LOG2_E;
+/// The constants of the table-free e^x ([`exp`] lane by lane, the series' `exp_poly` one
+/// value at a time): x = k ln 2 + r with ln 2 split into a high part (k·LN2_HI exact for
+/// |k| ≤ 1010) and a low part, k rounded by adding MAGIC, and the Taylor coefficients
+/// C[i] = 1/i! of e^r to degree 13.
+pub(crate) mod exp_parts {
+    /// 1/ln 2.
+    pub(crate) const INV_LN2: f64 = std::f64::consts::LOG2_E;
+    /// ln 2 to 32 bits.
     #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
-    const LN2_HI: f64 = 0.6931471803691238;
+    pub(crate) const LN2_HI: f64 = 0.6931471803691238;
+    /// ln 2 − LN2_HI.
     #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
-    const LN2_LO: f64 = 1.9082149292705877e-10;
-    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52: adding it rounds to an integer
-    const C: [f64; 14] = {
+    pub(crate) const LN2_LO: f64 = 1.9082149292705877e-10;
+    /// 1.5 · 2^52: adding it rounds to an integer.
+    pub(crate) const MAGIC: f64 = 6_755_399_441_055_744.0;
+    /// 1/i! for i = 0..=13.
+    pub(crate) const C: [f64; 14] = {
         let mut c = [1.0f64; 14];
         let mut i = 2;
         while i < 14 {
@@ -88,6 +91,16 @@ pub(crate) fn exp<V: F64x4>(x: V) -> V {
         }
         c
     };
+}
+
+/// e^x lane by lane for x ∈ [−700, 700] (clamped there; NaN gives NaN), without a table:
+/// x = k ln 2 + r with |r| ≤ ln 2/2, e^r by its degree-13 Taylor polynomial (truncation
+/// < 4e-18) in multiply-adds by Estrin's scheme, times 2^k through the exponent bits.
+/// Relative error ≤ 2ε (ε = 2⁻⁵²) fused and unfused: tested against std's `exp` at 500 001
+/// points spread over the whole domain and its ends, worst 1.94ε.
+#[inline(always)]
+pub(crate) fn exp<V: F64x4>(x: V) -> V {
+    use exp_parts::{C, INV_LN2, LN2_HI, LN2_LO, MAGIC};
     let s = V::splat; // a function item, not a closure
     let x = s(700.0).min(s(-700.0).max(x));
     let kd = x.mul_add(s(INV_LN2), s(MAGIC));

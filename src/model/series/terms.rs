@@ -144,21 +144,7 @@ pub(super) fn ratio_parts(g: f64, a: f64, m: f64) -> (f64, f64) {
 /// multiply-adds, times 2^k through the exponent bits. Error ≤ 2 ulp (unit-tested).
 #[inline(always)]
 pub(super) fn exp_poly<V: F64x4>(x: f64) -> f64 {
-    const INV_LN2: f64 = std::f64::consts::LOG2_E;
-    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
-    const LN2_HI: f64 = 0.6931471803691238;
-    #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
-    const LN2_LO: f64 = 1.9082149292705877e-10;
-    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52: adding it rounds to an integer
-    const C: [f64; 14] = {
-        let mut c = [1.0f64; 14];
-        let mut i = 2;
-        while i < 14 {
-            c[i] = c[i - 1] / i as f64;
-            i += 1;
-        }
-        c
-    };
+    use super::super::lanes::exp_parts::{C, INV_LN2, LN2_HI, LN2_LO, MAGIC};
     let x = x.clamp(-700.0, 700.0);
     let kd = V::fma1(x, INV_LN2, MAGIC);
     let k = kd - MAGIC;
