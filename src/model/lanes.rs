@@ -388,6 +388,46 @@ mod avx {
 mod tests {
     use super::*;
 
+    /// A repeatable stream of test values: a third of them zeros of both signs,
+    /// infinities, NaN, the smallest subnormal, 1e308 and repeated values (ties), the rest
+    /// spread over forty decades.
+    #[cfg(target_arch = "x86_64")]
+    fn test_values() -> impl FnMut() -> f64 {
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            5e-324,
+            1e308,
+            0.1,
+            0.1,
+            3.0,
+        ];
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            if state % 3 == 0 {
+                special[(state >> 8) as usize % special.len()]
+            } else {
+                (((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5)
+                    * 10f64.powi((state % 40) as i32 - 20)
+            }
+        }
+    }
+
+    /// Equal bits lane by lane, or NaN in both (the compiler may commute an addition, which
+    /// changes which of two NaN operands' payloads the sum carries).
+    #[cfg(target_arch = "x86_64")]
+    fn same(p: [f64; 4], q: [f64; 4]) -> bool {
+        (p.iter().zip(&q)).all(|(x, y)| x.to_bits() == y.to_bits() || x.is_nan() && y.is_nan())
+    }
+
     /// Every operation of [`Avx`] gives the bits fused [`Portable`] lanes give, on values
     /// that include zeros of both signs, infinities, NaN, subnormals and ties.
     #[cfg(target_arch = "x86_64")]
@@ -399,38 +439,7 @@ mod tests {
         #[target_feature(enable = "avx2,fma")]
         unsafe fn run() {
             type P = Portable<true>;
-            let special = [
-                0.0,
-                -0.0,
-                1.0,
-                -1.5,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::NAN,
-                5e-324,
-                1e308,
-                0.1,
-                0.1,
-                3.0,
-            ];
-            let mut state = 0x9e37_79b9_7f4a_7c15u64;
-            let mut next = || {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                if state % 3 == 0 {
-                    special[(state >> 8) as usize % special.len()]
-                } else {
-                    (((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5)
-                        * 10f64.powi((state % 40) as i32 - 20)
-                }
-            };
-            // Equal bits, or NaN in both (the compiler may commute an addition, which
-            // changes which of two NaN operands' payloads the sum carries).
-            let same = |p: [f64; 4], q: [f64; 4]| {
-                (p.iter().zip(&q))
-                    .all(|(x, y)| x.to_bits() == y.to_bits() || x.is_nan() && y.is_nan())
-            };
+            let mut next = test_values();
             for _ in 0..20_000 {
                 let (x, y, z) = (
                     [next(), next(), next(), next()],
