@@ -308,10 +308,8 @@ fn from_report(a: &DesignArgs, saved: SavedFit) -> anyhow::Result<Setup> {
         noise: NoiseModel::new(config.residual, level)
             .with_context(|| "--noise (or the fit's √ reduced χ²)")?,
         existing,
-        source: match report.setting.input.path.as_str() {
-            "" => "the fit's data".to_string(),
-            path => path.to_string(),
-        },
+        source: super::plot::saved_input(&report)
+            .map_or("the fit's data".into(), |p| p.display().to_string()),
         fit: Some(fit),
     })
 }

@@ -44,6 +44,16 @@ pub fn setting_of(
     report::outcome::setting(ds, input, &source)
 }
 
+/// The units a dataset's fit is reported in (the `units` of [`setting_of`]), without the
+/// rest of the setting: λ's unit and the measured quantity.
+fn units_of(args: &FitArgs, ds: &Dataset) -> report::Units {
+    report::Units {
+        length: wavelength_unit(args, ds),
+        quantity: args.quantity_for(ds).0,
+        radiance: None,
+    }
+}
+
 /// The input file's absolute path, size and SHA-256.
 pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
     let io_error = |source| Error::Io {
@@ -147,13 +157,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
     if !single && rows_only(&args) {
-        return rows_batch(
-            &args,
-            (jobs, &files),
-            &stop,
-            (&pool, &heartbeat),
-            (read, t0),
-        );
+        return rows_batch(&args, jobs, &stop, (&pool, &heartbeat), (read, t0));
     }
     let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat), |o| o)?;
     let wall = t0.elapsed().as_secs_f64();
@@ -210,14 +214,13 @@ fn usable(o: &Outcome) -> bool {
 /// batch's messages, stage timing and exit code as for any batch.
 fn rows_batch(
     args: &FitArgs,
-    (jobs, files): (Vec<(String, Dataset)>, &[InputFile]),
+    jobs: Vec<(String, Dataset)>,
     stop: &Stop,
     (pool, heartbeat): (&rayon::ThreadPool, &super::heartbeat::Heartbeat),
     (read, t0): (f64, std::time::Instant),
 ) -> anyhow::Result<u8> {
     let (kept, skipped) = fit_jobs(args, jobs, stop, (pool, heartbeat), |o| {
-        let units = run_info(args, &o, files).setting.units;
-        let row = report::summary::row(&o.label, &o.result, &units);
+        let row = report::summary::row(&o.label, &o.result, &units_of(args, &o.dataset));
         (row, usable(&o), super::stages::Times::of(&o))
     })?;
     let wall = t0.elapsed().as_secs_f64();

@@ -216,12 +216,12 @@ fn svg_pictures(
 ) -> anyhow::Result<Vec<(String, String)>> {
     let config = outcome_config(args, o)?;
     let report = FitReport::of(&o.result, info);
-    let status = (report.status_line(), report.undetermined());
+    let (line, undetermined) = (report.status_line(), report.undetermined());
     let unit = wavelength_unit(args, &o.dataset);
     Ok(svg_of_outcome(
         &config,
         o,
-        (&status.0, &status.1),
+        (&line, &undetermined),
         unit.as_deref(),
     )?)
 }

@@ -39,7 +39,7 @@ impl PlotArgs {
 }
 
 /// The absolute path of the fitted file a report names (None for a fit of arrays).
-fn saved_input(report: &FitReport) -> Option<PathBuf> {
+pub(super) fn saved_input(report: &FitReport) -> Option<PathBuf> {
     let path = &report.setting.input.path;
     (!path.is_empty()).then(|| PathBuf::from(path))
 }

@@ -78,24 +78,9 @@ pub(super) fn run_lm_settled(
     range: Option<&SigmaRange>,
     trail: Option<&Trail>,
 ) -> Run {
-    let specs = problem.model.params();
-    let factor = |fp: &super::problem::FitParam| {
-        fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name)
-    };
-    if !problem.layout.params.iter().any(factor) {
-        return run_lm_in(problem, p0, config, range, trail);
-    }
-    let mut layout = problem.layout.clone();
-    for (k, fp) in layout.params.iter_mut().enumerate() {
-        if factor(fp) {
-            fp.fixed = Some(p0[k]);
-        }
-    }
-    let (kind, floor) = (problem.kind(), problem.floor);
-    let Ok(lobe) = FitProblem::new(problem.model, layout, input, kind, floor) else {
+    let Some((lobe, _)) = factors_held(problem, input, p0) else {
         return run_lm_in(problem, p0, config, range, trail);
     };
-    let lobe = lobe.with_loss(problem.loss());
     let settled = run_lm_in(&lobe, p0, config, range, None);
     if !settled.lm.cost.is_finite() {
         return run_lm_in(problem, p0, config, range, trail);
@@ -130,6 +115,32 @@ fn lifted(problem: &FitProblem, lobe: &FitProblem, mut run: Run, config: &LmConf
 /// The Fresnel factor's parameters, held while a lobe settles ([`run_lm_settled`] and the
 /// start search's refinement).
 pub(in crate::fit) const FACTOR_PARAMS: [&str; 2] = ["n", "kappa"];
+
+/// `problem` on the samples of `input`, with the same loss, with its free Fresnel
+/// parameters ([`FACTOR_PARAMS`]) held at `p`'s values (layout order), and the layout
+/// indices of those parameters; None when it has none free or the held problem cannot be
+/// built.
+pub(in crate::fit) fn factors_held<'m>(
+    problem: &FitProblem<'m>,
+    input: &FitInput,
+    p: &[f64],
+) -> Option<(FitProblem<'m>, Vec<usize>)> {
+    let specs = problem.model.params();
+    let mut layout = problem.layout.clone();
+    let mut held = Vec::new();
+    for (k, fp) in layout.params.iter_mut().enumerate() {
+        if fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name) {
+            fp.fixed = Some(p[k]);
+            held.push(k);
+        }
+    }
+    if held.is_empty() {
+        return None;
+    }
+    let (kind, floor) = (problem.kind(), problem.floor);
+    let lobe = FitProblem::new(problem.model, layout, input, kind, floor).ok()?;
+    Some((lobe.with_loss(problem.loss()), held))
+}
 
 /// Largest relative difference, in every parameter, between a point of a run and a point
 /// of an earlier run's path at which the later run counts as having joined the earlier

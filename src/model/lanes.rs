@@ -96,8 +96,9 @@ pub(crate) mod exp_parts {
 /// e^x lane by lane for x ∈ [−700, 700] (clamped there; NaN gives NaN), without a table:
 /// x = k ln 2 + r with |r| ≤ ln 2/2, e^r by its degree-13 Taylor polynomial (truncation
 /// < 4e-18) in multiply-adds by Estrin's scheme, times 2^k through the exponent bits.
-/// Relative error ≤ 2ε (ε = 2⁻⁵²) fused and unfused: tested against std's `exp` at 500 001
-/// points spread over the whole domain and its ends, worst 1.94ε.
+/// Relative error ≤ 2ε (ε = 2⁻⁵²) fused and unfused, asserted against std's `exp` at 2·10⁶
+/// points of a grid over the whole domain, its ends and the clamp beyond them (measured
+/// worst 1.94ε).
 #[inline(always)]
 pub(crate) fn exp<V: F64x4>(x: V) -> V {
     use exp_parts::{C, INV_LN2, LN2_HI, LN2_LO, MAGIC};

@@ -185,8 +185,7 @@ fn lambda_ny(nu: f64, y: f64) -> (f64, f64) {
 /// clamped at 0).
 #[inline]
 pub fn cot(theta: f64) -> f64 {
-    let (s, c) = theta.sin_cos();
-    (c / s).max(0.0)
+    crate::geometry::cot_tan(theta).0
 }
 
 /// One piece of the table of erfcx (module doc), for ν from `nu_lo` up to the next

@@ -4,39 +4,57 @@
 
 use super::fmt_num;
 
-/// The values beyond a limit: how many, and the largest.
+/// The values beyond a limit: how many, and the farthest.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Beyond {
-    /// How many finite values exceed the limit (NaN and infinities are not counted).
+    /// How many finite values lie beyond the limit (NaN and infinities are not counted).
     pub count: usize,
     /// The farthest of them from the edge (the largest above a top, the smallest below a
     /// bottom), in the values' own unit; 0 when `count` is 0.
     pub worst: f64,
+    /// Whether the values lie below a bottom (else above a top).
+    pub below: bool,
 }
 
 impl Beyond {
     /// The finite values above `limit`.
     pub fn above(values: impl IntoIterator<Item = f64>, limit: f64) -> Beyond {
-        values
-            .into_iter()
-            .filter(|v| v.is_finite() && *v > limit)
-            .fold(
-                Beyond {
-                    count: 0,
-                    worst: 0.0,
-                },
-                |b, v| Beyond {
-                    count: b.count + 1,
-                    worst: b.worst.max(v),
-                },
-            )
+        let beyond = values.into_iter().filter(|v| v.is_finite() && *v > limit);
+        Beyond::gather(beyond, false)
     }
 
-    /// The legend text: "3 measured beyond the rim (up to 55.14× L_max)"; `what` names
-    /// the edge ("beyond the rim"), `unit` follows the largest value ("× L_max" or "").
+    /// The finite values below `limit`.
+    pub fn below(values: impl IntoIterator<Item = f64>, limit: f64) -> Beyond {
+        let beyond = values.into_iter().filter(|v| v.is_finite() && *v < limit);
+        Beyond::gather(beyond, true)
+    }
+
+    /// The count and the farthest of `beyond` (the smallest when `below`).
+    fn gather(beyond: impl Iterator<Item = f64>, below: bool) -> Beyond {
+        let farther = |a: f64, b: f64| if below { a.min(b) } else { a.max(b) };
+        let mut out = Beyond {
+            count: 0,
+            worst: 0.0,
+            below,
+        };
+        for v in beyond {
+            out.worst = if out.count == 0 {
+                v
+            } else {
+                farther(out.worst, v)
+            };
+            out.count += 1;
+        }
+        out
+    }
+
+    /// The legend text: "3 measured beyond the rim (up to 55.14× L_max)" ("down to" below
+    /// a bottom); `what` names the edge ("beyond the rim"), `unit` follows the farthest
+    /// value ("× L_max" or "").
     pub fn label(&self, what: &str, unit: &str) -> String {
+        let bound = if self.below { "down to" } else { "up to" };
         format!(
-            "{} measured {what} (up to {}{unit})",
+            "{} measured {what} ({bound} {}{unit})",
             self.count,
             fmt_num(self.worst)
         )
@@ -196,7 +214,8 @@ mod tests {
             b,
             Beyond {
                 count: 2,
-                worst: 55.0
+                worst: 55.0,
+                below: false,
             }
         );
         assert_eq!(

@@ -168,7 +168,7 @@ pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
 
 /// The SVG document `svg` rendered as [`svg_to_rgb`] does, as a PNG file's bytes (8-bit
 /// RGB).
-pub fn svg_to_png(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
+fn svg_to_png(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
     use image::ImageEncoder;
     let rgb = svg_to_rgb(svg, (w, h))?;
     let mut out = Vec::new();

@@ -224,23 +224,21 @@ impl XyPlot {
     /// y ≤ 0 on a logarithmic axis: drawn as arrows at the bottom edge. `worst` is the
     /// smallest of them.
     pub fn below_bottom(&self) -> Beyond {
-        let below = |y: f64| y < self.y_range.0 || (self.log_y && y <= 0.0);
-        self.series
-            .iter()
-            .filter(|s| s.kind.is_points())
-            .flat_map(|s| s.points.iter())
-            .filter(|p| p.0 >= self.x_range.0 && p.0 <= self.x_range.1)
-            .filter(|p| p.1.is_finite() && below(p.1))
-            .fold(
-                Beyond {
-                    count: 0,
-                    worst: 0.0,
-                },
-                |b, p| Beyond {
-                    count: b.count + 1,
-                    worst: if b.count == 0 { p.1 } else { b.worst.min(p.1) },
-                },
-            )
+        // On a logarithmic axis y ≤ 0 lies below any bottom it can have.
+        let bottom = if self.log_y {
+            self.y_range.0.max(f64::MIN_POSITIVE)
+        } else {
+            self.y_range.0
+        };
+        Beyond::below(
+            self.series
+                .iter()
+                .filter(|s| s.kind.is_points())
+                .flat_map(|s| s.points.iter())
+                .filter(|p| p.0 >= self.x_range.0 && p.0 <= self.x_range.1)
+                .map(|p| p.1),
+            bottom,
+        )
     }
 
     /// The legend's lines: the labelled series, the extra lines, and the arrows' counts.
@@ -271,11 +269,7 @@ impl XyPlot {
                 glyph: Glyph::Arrow {
                     color: RGBColor(60, 60, 60),
                 },
-                label: format!(
-                    "{} measured below the bottom (down to {})",
-                    b.count,
-                    super::fmt_num(b.worst)
-                ),
+                label: b.label("below the bottom", ""),
             });
         }
         out

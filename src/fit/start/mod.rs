@@ -15,7 +15,7 @@ pub mod grid_cache;
 
 use super::config::FitConfig;
 use super::problem::{FitInput, FitProblem, ParamLayout};
-use super::solve::{run_lm, Run, FACTOR_PARAMS};
+use super::solve::{factors_held, run_lm, Run};
 use crate::error::Result;
 use crate::lm::{LmConfig, Stop};
 use crate::model::{self, EvalMode, Model, ModelOptions};
@@ -247,20 +247,8 @@ impl<'m> Refiners<'m> {
         coarse: &LmConfig,
     ) -> (Run, Option<Vec<f64>>) {
         let specs = problem.model.params();
-        let mut layout = problem.layout.clone();
-        let mut held = Vec::new();
-        for (k, fp) in layout.params.iter_mut().enumerate() {
-            if fp.fixed.is_none() && FACTOR_PARAMS.contains(&specs[fp.spec].name) {
-                fp.fixed = Some(start[k]);
-                held.push(k);
-            }
-        }
-        let (kind, floor) = (problem.kind(), problem.floor);
-        let lobe = (!held.is_empty())
-            .then(|| FitProblem::new(problem.model, layout, &self.sub, kind, floor).ok())
-            .flatten();
-        match lobe {
-            Some(lobe) if !stopped(coarse.stop.as_ref()) => {
+        match factors_held(problem, &self.sub, start) {
+            Some((lobe, held)) if !stopped(coarse.stop.as_ref()) => {
                 let settled = run_lm(&lobe, start, coarse);
                 let run = run_lm(problem, &settled.values, coarse);
                 let ran_away = held.iter().any(|&k| {
