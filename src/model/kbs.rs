@@ -35,7 +35,7 @@
 //! worst measured relative error of L 3e-12). `smooth` and `rough` are the paper's
 //! approximations (eq. 42, 43), exact only in their limits.
 
-use super::fresnel::{self, complex_ratio, schlick_ratio, Fresnel, FresnelValue};
+use super::fresnel::{self, schlick_ratio, Fresnel, FresnelValue};
 use super::shadowing::{self, ShadowValue, Shadowing};
 use super::{series, EvalMode, Mode, Model, ModelOptions, ParamSpec};
 use crate::error::{Error, Result};
@@ -195,12 +195,14 @@ impl Kbs {
                 }
             }
             (Some((j, j_f)), fc) => {
-                // G of every sample first, F and its derivatives beside the lobe.
+                // G of every sample first, and F with its derivatives four samples at a
+                // time where the form has lanes; then the lobe times them.
                 let shadows = fc.map(|fc| (fc, self.shadow_each(fc, corr / sigma, |_, sh| sh)));
                 let (fresnel, fp) = (self.opts.fresnel, &p[3..]);
                 let lanes = matches!(fresnel, Fresnel::Conductor | Fresnel::Dielectric);
-                let fresnels = (lanes && shadows.is_some())
-                    .then(|| fresnel_each(fresnel, &geo.factor_columns().cos_loc, fp));
+                let fresnels = fc
+                    .filter(|_| lanes)
+                    .map(|fc| fresnel_each(fresnel, &fc.cos_loc, fp));
                 let shared = (1.0 / sigma, 1.0 / corr);
                 let (j_sigma, rest) = j.split_at_mut(n);
                 let (j_corr, j_s) = rest.split_at_mut(n);
@@ -244,14 +246,7 @@ impl Kbs {
             Fresnel::None => self.shadow_each(fc, t_over_sigma, |_, sh| {
                 each(Fresnel::None.eval(0.0, fp), sh)
             }),
-            Fresnel::Dielectric if fp[0] > 1.0 => {
-                let f = fresnel_each(self.opts.fresnel, cos_loc, fp);
-                self.shadow_each(fc, t_over_sigma, |i, sh| each(f[i], sh))
-            }
-            Fresnel::Dielectric => self.shadow_each(fc, t_over_sigma, |i, sh| {
-                each(complex_ratio(cos_loc[i], fp[0], 0.0), sh)
-            }),
-            Fresnel::Conductor => {
+            Fresnel::Dielectric | Fresnel::Conductor => {
                 let f = fresnel_each(self.opts.fresnel, cos_loc, fp);
                 self.shadow_each(fc, t_over_sigma, |i, sh| each(f[i], sh))
             }
