@@ -1,7 +1,7 @@
 //! goniofit: fit physical light-scattering models to gonioreflectometer measurements.
 //!
-//! Layers, from the bottom: [`error`]; [`lm`] (Levenberg–Marquardt as an argmin solver,
-//! importing nothing of the rest of the crate); [`geometry`] (angles, per-sample
+//! Layers, from the bottom: [`error`]; [`lm`] (Levenberg–Marquardt as an argmin solver, its
+//! own crate, `goniofit-lm`, importing nothing of this one); [`geometry`] (angles, per-sample
 //! quantities, measurement layouts); [`io`] (readers and writers); [`model`] (one file per
 //! model); [`fit`] (the fit pipeline and its statistics); [`design`] (what to measure
 //! next); [`plot`] and [`report`]; [`harness`] (synthetic data, recovery and work–precision
@@ -15,10 +15,11 @@ pub mod fit;
 pub mod geometry;
 pub mod harness;
 pub mod io;
-pub mod lm;
 pub mod model;
 pub mod plot;
 pub mod report;
 pub mod settings;
 
 pub use error::{Error, Result};
+/// The Levenberg–Marquardt solver, the workspace crate `goniofit-lm` (lm/).
+pub use goniofit_lm as lm;

@@ -91,6 +91,7 @@
 //!   `progress.rs`: the progress line.
 //! * `transform.rs`: [`Transformed`] (log and fixed parameters); `fd.rs`: finite differences.
 
+mod closure;
 mod fd;
 mod invalid;
 mod lmpar;
@@ -103,7 +104,7 @@ mod step;
 pub mod stop;
 mod termination;
 #[cfg(test)]
-pub(crate) mod tests;
+mod tests;
 mod transform;
 mod work;
 
@@ -116,6 +117,7 @@ use argmin::core::{
 };
 use nalgebra::{DMatrix, DVector};
 
+pub use closure::Closure;
 pub use fd::finite_difference_jacobian;
 pub use invalid::Invalid;
 pub use run::{minimize, ArgminAdapter, LeastSquaresProblem, LmConfig, LmReport, StepResiduals};

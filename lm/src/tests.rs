@@ -1,5 +1,4 @@
-//! Unit tests of the solver: stopping rules, robustness, argmin integration; the problems
-//! ([`Closure`], [`decay`]) serve the covariance tests of the fit layer too.
+//! Unit tests of the solver: stopping rules, robustness, argmin integration.
 
 use super::*;
 use approx::assert_relative_eq;
@@ -8,25 +7,7 @@ use std::cell::Cell;
 use std::sync::atomic::AtomicU64;
 use std::time::Duration;
 
-/// A problem from closures: residuals and Jacobian.
-pub(crate) struct Closure<R, J> {
-    pub(crate) r: R,
-    pub(crate) j: J,
-}
-impl<R, J> LeastSquaresProblem for Closure<R, J>
-where
-    R: Fn(&DVector<f64>) -> DVector<f64>,
-    J: Fn(&DVector<f64>) -> DMatrix<f64>,
-{
-    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
-        (self.r)(x)
-    }
-    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
-        (self.j)(x)
-    }
-}
-
-pub(crate) fn v(xs: &[f64]) -> DVector<f64> {
+fn v(xs: &[f64]) -> DVector<f64> {
     DVector::from_column_slice(xs)
 }
 
@@ -46,7 +27,7 @@ fn rosenbrock() -> impl LeastSquaresProblem {
     }
 }
 
-pub(crate) fn decay_data() -> (Vec<f64>, Vec<f64>) {
+fn decay_data() -> (Vec<f64>, Vec<f64>) {
     let t: Vec<f64> = (0..20).map(|i| i as f64 * 0.25).collect();
     let y = t
         .iter()
@@ -57,7 +38,7 @@ pub(crate) fn decay_data() -> (Vec<f64>, Vec<f64>) {
 }
 
 /// y = a·exp(−b t) + deterministic pseudo-noise: a non-zero-residual problem.
-pub(crate) fn decay() -> impl LeastSquaresProblem {
+fn decay() -> impl LeastSquaresProblem {
     let (t, y) = decay_data();
     let t2 = t.clone();
     Closure {
