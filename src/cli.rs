@@ -1,23 +1,24 @@
-//! Command-line definition (clap derive) and dispatch. Each subcommand's arguments live
-//! beside its implementation in `commands/`.
+//! The command line: its definition (clap derive), dispatch, and exit codes ([`main`]). Each
+//! subcommand's arguments live beside its implementation in `commands/`.
 
 use crate::commands::{
     self, bench, convert, design, eval, figures, fit, plot, recover, render, synth,
 };
+use crate::io::FileSet;
 use clap::{Parser, Subcommand};
-use goniofit::io::FileSet;
+use std::process::ExitCode;
 
 /// Fit physical light-scattering models (Kirchhoff–Beckmann–Spizzichino, Lambertian,
 /// specular) to gonioreflectometer measurements.
 #[derive(Debug, Parser)]
 #[command(name = "goniofit", version, about, long_about = None)]
-pub struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     pub command: Command,
 }
 
 #[derive(Debug, Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Evaluate a model at the angles of a CSV file; prints the rows with `L_model` appended.
     Eval(commands::eval::EvalArgs),
     /// Fit a model to a measurement file (CSV, ASTM E1392, RGL `.bsdf`, MERL `.binary`, ALTA
@@ -67,7 +68,7 @@ impl Command {
 /// Run the parsed command line, once its files passed [`FileSet::check`] (no output is an
 /// input or another output, every output path can be written): nothing is read or written
 /// before.
-pub fn run(cli: Cli) -> anyhow::Result<u8> {
+fn run(cli: Cli) -> anyhow::Result<u8> {
     cli.command.files()?.check()?;
     match cli.command {
         Command::Eval(a) => eval::run(a),
@@ -81,6 +82,53 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Render(a) => render::run(a),
         Command::Figures(a) => figures::run(a),
     }
+}
+
+/// The command line: parse the process's arguments, run the subcommand, and map the outcome
+/// to an exit code. Exit codes: 0 success, 1 internal failure, 2 bad usage or bad input, 3 a
+/// fit that ran but did not converge or was stopped (its report is printed when it has a
+/// point), 130 a signal while nothing was being computed.
+pub fn main() -> ExitCode {
+    // Ctrl-C, SIGTERM, SIGHUP: a running fit stops and reports (exit 3); anything else ends
+    // with exit 130 and leaves no unfinished output file behind.
+    commands::signals::install();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match run(cli) {
+        Ok(code) => ExitCode::from(code),
+        Err(e) => {
+            // A stop with nothing to report is no error: it says what was stopped (exit 3).
+            let kind = if commands::is_stopped(&e) {
+                ""
+            } else {
+                "error: "
+            };
+            eprintln!("goniofit: {kind}{}", error_chain(&e));
+            ExitCode::from(commands::exit_code_of(&e))
+        }
+    }
+}
+
+/// The error and its causes, joined by ": ", leaving out a cause whose text the message
+/// already contains (errors that show their source in their own message).
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if !out.contains(&text) {
+            if !out.is_empty() {
+                out.push_str(": ");
+            }
+            out.push_str(&text);
+        }
+    }
+    out
 }
 
 #[cfg(test)]

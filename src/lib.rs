@@ -9,6 +9,8 @@
 
 #![warn(missing_docs)]
 
+pub mod cli;
+mod commands;
 pub mod design;
 pub mod error;
 pub mod fit;

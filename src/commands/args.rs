@@ -1,20 +1,20 @@
 //! Command-line argument types shared by several subcommands.
 
+use crate::fit::problem::loss::LossKind;
+use crate::geometry::Quantity;
+use crate::model::fresnel::Fresnel;
+use crate::model::shadowing::Shadowing;
+use crate::model::{EvalMode, ModelOptions};
 use clap::ValueEnum;
-use goniofit::fit::problem::loss::LossKind;
-use goniofit::geometry::Quantity;
-use goniofit::model::fresnel::Fresnel;
-use goniofit::model::shadowing::Shadowing;
-use goniofit::model::{EvalMode, ModelOptions};
 
 /// A wavelength on the command line: the number and its unit (`nm`, `µm`), or no unit for
 /// a bare number (then it is in the unit of σ and T, whatever that is).
 pub type Wavelength = (f64, Option<&'static str>);
 
 /// `--wavelength` of every command: a positive number with an optional unit (`633nm`,
-/// `633 nm`, `0.633um`, `0.633µm`) or a bare number ([`goniofit::io::parse_length`]).
+/// `633 nm`, `0.633um`, `0.633µm`) or a bare number ([`crate::io::parse_length`]).
 pub fn parse_wavelength(text: &str) -> Result<Wavelength, String> {
-    goniofit::io::parse_length(text).map_err(|e| e.to_string())
+    crate::io::parse_length(text).map_err(|e| e.to_string())
 }
 
 /// The measured quantity, as chosen on the command line.
@@ -91,9 +91,9 @@ impl From<LossArg> for LossKind {
 }
 
 /// Parse `X,Y` patch half-sizes.
-pub fn parse_patch(text: &str) -> goniofit::Result<(f64, f64)> {
+pub fn parse_patch(text: &str) -> crate::Result<(f64, f64)> {
     let bad = || {
-        goniofit::Error::Usage(format!(
+        crate::Error::Usage(format!(
             "--patch '{text}': expected two positive numbers X,Y"
         ))
     };
@@ -178,12 +178,12 @@ pub fn table_read_options(
     (radians, signed_theta_r): (bool, bool),
     (channel, subsample): (Option<String>, usize),
     require_value: bool,
-) -> anyhow::Result<goniofit::io::ReadOptions> {
+) -> anyhow::Result<crate::io::ReadOptions> {
     let mut parsed = Vec::new();
     for c in columns {
-        parsed.extend(goniofit::io::csv::parse_columns(c)?);
+        parsed.extend(crate::io::csv::parse_columns(c)?);
     }
-    Ok(goniofit::io::ReadOptions {
+    Ok(crate::io::ReadOptions {
         radians,
         signed_theta_r,
         columns: parsed,
@@ -195,8 +195,8 @@ pub fn table_read_options(
 
 /// The files of a command that reads `file` and writes one table to `out` (standard output
 /// when none).
-pub fn table_files(file: &std::path::Path, out: Option<&std::path::Path>) -> goniofit::io::FileSet {
-    let set = goniofit::io::FileSet::new().input("input", file);
+pub fn table_files(file: &std::path::Path, out: Option<&std::path::Path>) -> crate::io::FileSet {
+    let set = crate::io::FileSet::new().input("input", file);
     match out {
         Some(out) => set.output("--out", out),
         None => set.stdout(),

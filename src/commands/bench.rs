@@ -1,9 +1,9 @@
 //! `goniofit bench`: benchmarks that print a table (criterion benches live in `benches/`).
 
+use crate::harness::workprec::{self, WorkPrecisionConfig};
+use crate::io::FileSet;
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
-use goniofit::harness::workprec::{self, WorkPrecisionConfig};
-use goniofit::io::FileSet;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -60,7 +60,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<u8> {
 
 fn work_precision(args: WorkPrecisionArgs) -> anyhow::Result<u8> {
     if args.repeats == 0 {
-        return Err(goniofit::Error::Usage("--repeats must be at least 1".into()).into());
+        return Err(crate::Error::Usage("--repeats must be at least 1".into()).into());
     }
     let bar = super::recover::progress_bar(workprec::steps() as u64, "work-precision");
     let wp = workprec::run(
@@ -75,14 +75,14 @@ fn work_precision(args: WorkPrecisionArgs) -> anyhow::Result<u8> {
     .context("work-precision benchmark")?;
     bar.finish_and_clear();
     let paths = workprec::write_plot(&wp, &args.out)
-        .with_context(|| format!("writing the plot to {}", goniofit::io::shown(&args.out)))?;
+        .with_context(|| format!("writing the plot to {}", crate::io::shown(&args.out)))?;
     if args.json {
-        goniofit::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&wp)?))?;
+        crate::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&wp)?))?;
     } else {
-        goniofit::io::print_stdout(&wp.table())?;
+        crate::io::print_stdout(&wp.table())?;
     }
     for p in &paths {
-        eprintln!("goniofit bench: wrote {}", goniofit::io::shown(p));
+        eprintln!("goniofit bench: wrote {}", crate::io::shown(p));
     }
     Ok(0)
 }

@@ -8,9 +8,9 @@
 //! opens with the comment `# quantity: brdf`, so reading the table back gives the same
 //! quantity. Values are written with full precision (shortest round-tripping decimal).
 
+use crate::geometry::Quantity;
+use crate::io::{self, FileSet};
 use clap::Args;
-use goniofit::geometry::Quantity;
-use goniofit::io::{self, FileSet};
 use std::io::Write;
 use std::path::PathBuf;
 

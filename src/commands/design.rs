@@ -1,19 +1,19 @@
 //! `goniofit design`: the next geometries to measure, chosen to determine a target
-//! ([`goniofit::design`]), from a fit's report or a model with parameter values.
+//! ([`crate::design`]), from a fit's report or a model with parameter values.
 
 use super::args::{parse_wavelength, QuantityArg, Wavelength};
 use super::fit_args::ResidualArg;
 use super::plot::{read_saved_fit, SavedFit};
+use crate::design::{self, candidates::Grid, simulate, NoiseModel, Request, Scene};
+use crate::fit::driver::FitConfig;
+use crate::fit::problem::ResidualKind;
+use crate::geometry::{Quantity, Sample};
+use crate::io::{self, FileSet};
+use crate::model::{by_name, parse_params, Model, ModelOptions};
+use crate::report::design::{self as report, Run};
+use crate::Error;
 use anyhow::Context;
 use clap::Args;
-use goniofit::design::{self, candidates::Grid, simulate, NoiseModel, Request, Scene};
-use goniofit::fit::driver::FitConfig;
-use goniofit::fit::problem::ResidualKind;
-use goniofit::geometry::{Quantity, Sample};
-use goniofit::io::{self, FileSet};
-use goniofit::model::{by_name, parse_params, Model, ModelOptions};
-use goniofit::report::design::{self as report, Run};
-use goniofit::Error;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -118,7 +118,7 @@ impl DesignArgs {
         }
         set = set.output_opt("--out", self.out.as_deref());
         match &self.plot {
-            Some(dir) => set.pictures("--plot", dir, &[goniofit::plot::design::PICTURE]),
+            Some(dir) => set.pictures("--plot", dir, &[crate::plot::design::PICTURE]),
             None => set,
         }
     }
@@ -197,8 +197,8 @@ fn write_outputs(a: &DesignArgs, run: &Run) -> anyhow::Result<u8> {
         io::write_bytes(out, report::csv(run.design).as_bytes())?;
     }
     if let Some(dir) = &a.plot {
-        let pic = goniofit::plot::design::DesignPlot::new(run.design, run.scene)?;
-        goniofit::plot::write_png_svg(&pic, dir, goniofit::plot::design::PICTURE)?;
+        let pic = crate::plot::design::DesignPlot::new(run.design, run.scene)?;
+        crate::plot::write_png_svg(&pic, dir, crate::plot::design::PICTURE)?;
     }
     let text = if a.json {
         let mut s = serde_json::to_string_pretty(&report::json(run)).context("formatting JSON")?;
@@ -241,7 +241,7 @@ fn alternatives(a: &DesignArgs, main: &(f64, Option<String>)) -> anyhow::Result<
     };
     text.split(',')
         .map(|t| {
-            let (v, u) = goniofit::io::parse_length(t)?;
+            let (v, u) = crate::io::parse_length(t)?;
             Ok(v * factor(u)?)
         })
         .collect()

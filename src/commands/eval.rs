@@ -11,12 +11,12 @@
 //! specular models do not depend on λ.
 
 use super::args::{parse_patch, ModeArg, QuantityArg};
+use crate::geometry::Geometry;
+use crate::io::{self, FileSet};
+use crate::model;
+use crate::settings::{self, Front};
 use anyhow::Context;
 use clap::Args;
-use goniofit::geometry::Geometry;
-use goniofit::io::{self, FileSet};
-use goniofit::model;
-use goniofit::settings::{self, Front};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -99,7 +99,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let wavelength: Vec<f64> = match (args.wavelength.map(|w| w.0), &ds.wavelength) {
         (Some(l), _) => {
             if !(l.is_finite() && l > 0.0) {
-                return Err(goniofit::Error::Usage(format!(
+                return Err(crate::Error::Usage(format!(
                     "--wavelength {l} must be finite and positive"
                 ))
                 .into());
@@ -108,22 +108,18 @@ pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
         }
         (None, Some(w)) => w.clone(),
         (None, None) if needs_wavelength => {
-            return Err(goniofit::Error::Usage(format!(
+            return Err(crate::Error::Usage(format!(
                 "model {} needs a wavelength: give --wavelength L (the unit of sigma and T) or a wavelength column in {}",
                 args.model,
-                goniofit::io::shown(&args.file)
+                crate::io::shown(&args.file)
             ))
             .into())
         }
         (None, None) => vec![1.0],
     };
 
-    let geo = Geometry::new(&ds.samples, &wavelength, args.quantity.into()).with_context(|| {
-        format!(
-            "preparing the samples of {}",
-            goniofit::io::shown(&args.file)
-        )
-    })?;
+    let geo = Geometry::new(&ds.samples, &wavelength, args.quantity.into())
+        .with_context(|| format!("preparing the samples of {}", crate::io::shown(&args.file)))?;
     for w in model::domain::accuracy_warnings(model.as_ref(), &params, &geo) {
         eprintln!("goniofit: warning: {w}");
     }

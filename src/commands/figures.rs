@@ -1,8 +1,8 @@
 //! `goniofit figures`: regenerate the paper's Figures 4–7 as PNG and SVG.
 
+use crate::io::FileSet;
 use anyhow::Context;
 use clap::Args;
-use goniofit::io::FileSet;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -16,16 +16,16 @@ impl FiguresArgs {
     /// The figures in the `--out` folder, and their names on standard output.
     pub fn files(&self) -> FileSet {
         FileSet::new()
-            .pictures("--out", &self.out, &goniofit::plot::figures::FIGURES)
+            .pictures("--out", &self.out, &crate::plot::figures::FIGURES)
             .stdout()
     }
 }
 
 pub fn run(args: FiguresArgs) -> anyhow::Result<u8> {
-    let paths = goniofit::plot::figures::write_all(&args.out)
-        .with_context(|| format!("writing figures into {}", goniofit::io::shown(&args.out)))?;
+    let paths = crate::plot::figures::write_all(&args.out)
+        .with_context(|| format!("writing figures into {}", crate::io::shown(&args.out)))?;
     for p in paths {
-        goniofit::io::print_stdout(&format!("{}\n", goniofit::io::shown(&p)))?;
+        crate::io::print_stdout(&format!("{}\n", crate::io::shown(&p)))?;
     }
     Ok(0)
 }

@@ -2,16 +2,16 @@
 
 use super::args::LossArg;
 use super::fit_args::{fit_config, wavelength_unit, FitArgs, CLI};
+use crate::fit::dataset::{batch, fit_dataset_near, DatasetFit, Outcome};
+use crate::fit::driver::FitInput;
+use crate::fit::problem::loss::LossKind;
+use crate::io::{self, Dataset, ReadOptions};
+use crate::lm::Stop;
+use crate::report::outcome::SettingSource;
+use crate::report::{self, RunInfo};
+use crate::settings;
+use crate::Error;
 use anyhow::Context;
-use goniofit::fit::dataset::{batch, fit_dataset_near, DatasetFit, Outcome};
-use goniofit::fit::driver::FitInput;
-use goniofit::fit::problem::loss::LossKind;
-use goniofit::io::{self, Dataset, ReadOptions};
-use goniofit::lm::Stop;
-use goniofit::report::outcome::SettingSource;
-use goniofit::report::{self, RunInfo};
-use goniofit::settings;
-use goniofit::Error;
 use std::path::{Path, PathBuf};
 
 /// The whole setting of one dataset's fit, for the report (`report::Setting`).
@@ -193,7 +193,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<u8> {
 /// outputs were written) still says the run was interrupted: every output is complete, and
 /// the exit code is 3.
 fn exit_code(all_usable: bool, skipped: &[String], stop: &Stop) -> u8 {
-    let interrupted = stop.requested() == Some(goniofit::lm::Termination::Interrupted);
+    let interrupted = stop.requested() == Some(crate::lm::Termination::Interrupted);
     if all_usable && !interrupted && skipped.is_empty() {
         0
     } else {
@@ -261,7 +261,7 @@ fn read_jobs(
         );
         let ds = ds?;
         bar.finish_and_clear();
-        goniofit::fit::dataset::check_magnitudes(&ds)?;
+        crate::fit::dataset::check_magnitudes(&ds)?;
         files.push((file.clone(), info?));
         if !args.by_group {
             jobs.push((io::shown(file), ds));

@@ -2,15 +2,15 @@
 //! fit configuration and the unit of the fitted lengths.
 
 use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
+use crate::fit::driver::FitConfig;
+use crate::fit::problem::loss::Loss;
+use crate::fit::problem::ResidualKind;
+use crate::geometry::Quantity;
+use crate::io::{self, Dataset, FileSet, ReadOptions};
+use crate::lm::LmConfig;
+use crate::model::parse_assignments;
+use crate::settings::{self, Front};
 use clap::{Args, ValueEnum};
-use goniofit::fit::driver::FitConfig;
-use goniofit::fit::problem::loss::Loss;
-use goniofit::fit::problem::ResidualKind;
-use goniofit::geometry::Quantity;
-use goniofit::io::{self, Dataset, FileSet, ReadOptions};
-use goniofit::lm::LmConfig;
-use goniofit::model::parse_assignments;
-use goniofit::settings::{self, Front};
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -200,7 +200,7 @@ impl FitArgs {
             .output_opt("--html", self.html.as_deref())
             .output_opt("--summary", self.summary.as_deref());
         match &self.plot {
-            Some(dir) => set.pictures("--plot", dir, &goniofit::plot::fit::PICTURES),
+            Some(dir) => set.pictures("--plot", dir, &crate::plot::fit::PICTURES),
             None => set,
         }
     }
@@ -246,7 +246,7 @@ impl FitArgs {
 }
 
 /// The fit configuration from the arguments, for a given model name; every numeric option
-/// checked ([`goniofit::settings`], as the Python package checks its keywords).
+/// checked ([`crate::settings`], as the Python package checks its keywords).
 pub fn fit_config(
     args: &FitArgs,
     model: &str,

@@ -3,12 +3,12 @@
 //! page with every fit, one folder per fit).
 
 use super::fit_args::{fit_config, wavelength_unit, FitArgs};
-use goniofit::fit::dataset::Outcome;
-use goniofit::fit::driver::{FitConfig, FitResult};
-use goniofit::io::{self, Dataset};
-use goniofit::plot::fit::{plot_fit, svg_of_outcome};
-use goniofit::report::json::FitReport;
-use goniofit::report::{self, RunInfo};
+use crate::fit::dataset::Outcome;
+use crate::fit::driver::{FitConfig, FitResult};
+use crate::io::{self, Dataset};
+use crate::plot::fit::{plot_fit, svg_of_outcome};
+use crate::report::json::FitReport;
+use crate::report::{self, RunInfo};
 use std::path::{Path, PathBuf};
 
 /// The outputs of a single fit: `--residuals`, `--html`, `--plot`.
@@ -142,7 +142,7 @@ fn overview(
     outcomes: &[Outcome],
     infos: &[RunInfo],
 ) -> anyhow::Result<(String, Vec<(String, String)>)> {
-    use goniofit::plot::overview::{overview_charts, Quantity};
+    use crate::plot::overview::{overview_charts, Quantity};
     let wl: Vec<Option<f64>> = infos
         .iter()
         .map(|i| match i.setting.wavelength.values.as_slice() {
@@ -202,7 +202,7 @@ fn overview(
     }
     let mut out = Vec::new();
     for chart in overview_charts(&x_desc, &quantities) {
-        out.push((chart.title.clone(), goniofit::plot::svg_string(&chart)?));
+        out.push((chart.title.clone(), crate::plot::svg_string(&chart)?));
     }
     Ok((x_desc, out))
 }

@@ -1,6 +1,6 @@
 //! One module per subcommand; each exposes `run(args) -> anyhow::Result<u8>` (the exit code)
 //! and lists every file it reads and writes (`files`), which `cli::run` checks together
-//! before the command starts ([`goniofit::io::FileSet`]).
+//! before the command starts ([`crate::io::FileSet`]).
 
 pub mod args;
 pub mod bench;
@@ -20,12 +20,12 @@ pub mod stages;
 pub mod synth;
 
 /// Whether `e` is a stop request that came before anything could be reported
-/// ([`goniofit::Error::Stopped`] anywhere in its chain).
+/// ([`crate::Error::Stopped`] anywhere in its chain).
 pub fn is_stopped(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
         matches!(
-            c.downcast_ref::<goniofit::Error>(),
-            Some(goniofit::Error::Stopped(_))
+            c.downcast_ref::<crate::Error>(),
+            Some(crate::Error::Stopped(_))
         )
     })
 }
@@ -36,12 +36,12 @@ pub fn exit_code_of(e: &anyhow::Error) -> u8 {
     if is_stopped(e) {
         return 3;
     }
-    match e.downcast_ref::<goniofit::Error>() {
+    match e.downcast_ref::<crate::Error>() {
         Some(ge) if !ge.is_user_error() => 1,
         Some(_) => 2,
         None => {
             if e.chain().any(|c| {
-                c.downcast_ref::<goniofit::Error>()
+                c.downcast_ref::<crate::Error>()
                     .is_some_and(|g| g.is_user_error())
             }) {
                 2

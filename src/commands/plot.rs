@@ -4,14 +4,14 @@
 
 use super::fit::input_of;
 use super::fit_args::fit_config;
+use crate::fit::driver::{FitConfig, FitInput};
+use crate::fit::problem::ParamLayout;
+use crate::io::{self, FileSet};
+use crate::plot::fit::plot_fit;
+use crate::report::json::FitReport;
+use crate::Error;
 use anyhow::Context;
 use clap::Args;
-use goniofit::fit::driver::{FitConfig, FitInput};
-use goniofit::fit::problem::ParamLayout;
-use goniofit::io::{self, FileSet};
-use goniofit::plot::fit::plot_fit;
-use goniofit::report::json::FitReport;
-use goniofit::Error;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
@@ -34,7 +34,7 @@ impl PlotArgs {
         if let Some(data) = data {
             set = set.input("the report's input", &data);
         }
-        set.pictures("--out", &self.out, &goniofit::plot::fit::PICTURES)
+        set.pictures("--out", &self.out, &crate::plot::fit::PICTURES)
     }
 }
 
@@ -87,14 +87,14 @@ pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
         None => fa.file.first().ok_or_else(|| bad("no input file"))?.clone(),
     };
     let ds = io::read_dataset(&file, &opts)
-        .with_context(|| format!("re-reading the data of {}", goniofit::io::shown(path)))?;
+        .with_context(|| format!("re-reading the data of {}", crate::io::shown(path)))?;
     let want = &report.setting.input.sha256;
     if !want.is_empty() {
         let now = super::fit::input_info(&file)?.sha256;
         if &now != want {
             eprintln!(
                 "goniofit: warning: {} changed since the fit (sha256 {now}, the report has {want}); what follows uses the file as it is now",
-                goniofit::io::shown(&file)
+                crate::io::shown(&file)
             );
         }
     }
@@ -106,7 +106,7 @@ pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
         .model_opts
         .with_factors_of(&format!("{model} {factors}"))
         .1;
-    let m = goniofit::model::by_name(&model, &config.model_opts)?;
+    let m = crate::model::by_name(&model, &config.model_opts)?;
     let layout = ParamLayout::new(m.as_ref(), &input.channel_names);
     if layout.len() != values.len() {
         return Err(bad("parameter count does not match the model").into());
@@ -144,7 +144,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     eprintln!(
         "goniofit: wrote {} pictures to {}",
         written.len(),
-        goniofit::io::shown(&args.out)
+        crate::io::shown(&args.out)
     );
     Ok(0)
 }

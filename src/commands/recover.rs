@@ -1,9 +1,9 @@
 //! `goniofit recover`: synthetic recovery across regimes, with coverage of the reported
 //! uncertainties.
 
+use crate::harness::recover::{self, RecoverConfig};
+use crate::lm::Stop;
 use clap::Args;
-use goniofit::harness::recover::{self, RecoverConfig};
-use goniofit::lm::Stop;
 use std::io::IsTerminal as _;
 use std::time::Duration;
 
@@ -48,18 +48,17 @@ pub struct RecoverArgs {
 
 /// Run `goniofit recover`.
 pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
-    goniofit::settings::scenes(goniofit::settings::Front::Cli, args.scenes)?;
+    crate::settings::scenes(crate::settings::Front::Cli, args.scenes)?;
     if !(args.noise.is_finite() && args.noise > 0.0) {
-        return Err(goniofit::Error::Usage(format!(
+        return Err(crate::Error::Usage(format!(
             "--noise {} must be positive (coverage needs noise)",
             args.noise
         ))
         .into());
     }
-    let fit_timeout =
-        goniofit::settings::timeout(goniofit::settings::Front::Cli, Some(args.timeout))?;
+    let fit_timeout = crate::settings::timeout(crate::settings::Front::Cli, Some(args.timeout))?;
     if let Some(bad) = args.only.iter().flatten().find(|&&id| id >= args.scenes) {
-        return Err(goniofit::Error::Usage(format!(
+        return Err(crate::Error::Usage(format!(
             "--only {bad}: scene ids run from 0 to {} (--scenes {})",
             args.scenes - 1,
             args.scenes
@@ -83,16 +82,16 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     let report = recover::run(&config, &stop, &|_r| bar.inc(1));
     bar.finish_and_clear();
     let report = match report {
-        Err(e @ goniofit::Error::Stopped(_)) => {
+        Err(e @ crate::Error::Stopped(_)) => {
             eprintln!("goniofit: stopped: {e}");
             return Ok(SIGNALLED);
         }
         r => r?,
     };
     if args.json {
-        goniofit::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report)?))?;
+        crate::io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report)?))?;
     } else {
-        goniofit::io::print_stdout(&report.table())?;
+        crate::io::print_stdout(&report.table())?;
     }
     Ok(0)
 }

@@ -1,11 +1,11 @@
 //! `goniofit render sphere`: a sphere lit from one side, each pixel's radiance from a model.
 
+use crate::io::FileSet;
+use crate::model::{by_name, parse_params, ModelOptions};
+use crate::plot::sphere::{sphere_radiance, SpherePicture};
+use crate::plot::write_picture;
 use anyhow::Context;
 use clap::{Args, Subcommand};
-use goniofit::io::FileSet;
-use goniofit::model::{by_name, parse_params, ModelOptions};
-use goniofit::plot::sphere::{sphere_radiance, SpherePicture};
-use goniofit::plot::write_picture;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -77,17 +77,16 @@ fn sphere(a: SphereArgs) -> anyhow::Result<u8> {
         negative: a.negative,
         marks: a.marks,
     };
-    write_picture(&pic, &a.out)
-        .with_context(|| format!("writing {}", goniofit::io::shown(&a.out)))?;
+    write_picture(&pic, &a.out).with_context(|| format!("writing {}", crate::io::shown(&a.out)))?;
     eprintln!(
         "goniofit: wrote {} ({}×{} px, a sphere lit from θ = {}°, model {} at {})",
-        goniofit::io::shown(&a.out),
+        crate::io::shown(&a.out),
         a.size,
         a.size,
         a.light_deg,
         model.name(),
-        goniofit::io::shown_text(&a.params)
+        crate::io::shown_text(&a.params)
     );
-    goniofit::io::print_stdout(&format!("{}\n", goniofit::io::shown(&a.out)))?;
+    crate::io::print_stdout(&format!("{}\n", crate::io::shown(&a.out)))?;
     Ok(0)
 }

@@ -8,8 +8,8 @@
 /// installed, signals keep their previous behaviour.
 pub fn install() {
     let _ = ctrlc::set_handler(|| {
-        if !goniofit::lm::stop::interrupt() {
-            goniofit::io::output::remove_temporaries();
+        if !crate::lm::stop::interrupt() {
+            crate::io::output::remove_temporaries();
             std::process::exit(130);
         }
     });

@@ -5,8 +5,8 @@
 //! wall time on the thread that ran it (benches/stages.sh reads it). Without the variable
 //! nothing is measured beyond the fit's own clocks and nothing is written.
 
-use goniofit::fit::dataset::Outcome;
-use goniofit::fit::driver::StageSeconds;
+use crate::fit::dataset::Outcome;
+use crate::fit::driver::StageSeconds;
 
 /// The environment variable that asks for the stage timing.
 pub const VAR: &str = "GONIOFIT_STAGES";

@@ -6,13 +6,13 @@
 //! standard output and the truth only where `--truth` says.
 
 use super::args::{parse_patch, ModeArg, QuantityArg};
+use crate::geometry::Quantity;
+use crate::harness::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
+use crate::io::{self, FileSet};
+use crate::model::{by_name, parse_params, Model};
+use crate::settings::{self, Front};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use goniofit::geometry::Quantity;
-use goniofit::harness::synth::{self, CsvOptions, Layout, Noise, NoiseKind, Truth};
-use goniofit::io::{self, FileSet};
-use goniofit::model::{by_name, parse_params, Model};
-use goniofit::settings::{self, Front};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
@@ -122,7 +122,7 @@ pub enum NoiseKindArg {
 }
 
 fn usage(m: String) -> anyhow::Error {
-    goniofit::Error::Usage(m).into()
+    crate::Error::Usage(m).into()
 }
 
 /// Comma-separated numbers.
@@ -251,8 +251,8 @@ fn warn_accuracy(
     quantity: Quantity,
 ) {
     let samples: Vec<_> = angles.iter().map(synth::AnglesDeg::sample).collect();
-    if let Ok(geo) = goniofit::geometry::Geometry::new(&samples, &[wavelength], quantity) {
-        for w in goniofit::model::domain::accuracy_warnings(model, params, &geo) {
+    if let Ok(geo) = crate::geometry::Geometry::new(&samples, &[wavelength], quantity) {
+        for w in crate::model::domain::accuracy_warnings(model, params, &geo) {
             eprintln!("goniofit: warning: {w}");
         }
     }
@@ -274,10 +274,10 @@ fn write_outputs(a: &SynthArgs, csv_bytes: &[u8], truth: &Truth, n: usize) -> an
         eprintln!(
             "goniofit synth: wrote {} samples to {}{}",
             n,
-            goniofit::io::shown(path),
+            crate::io::shown(path),
             truth_file
                 .as_ref()
-                .map(|t| format!(" (truth: {})", goniofit::io::shown(t)))
+                .map(|t| format!(" (truth: {})", crate::io::shown(t)))
                 .unwrap_or_default()
         );
     }
