@@ -25,3 +25,13 @@ pub mod settings;
 pub use error::{Error, Result};
 /// The Levenberg–Marquardt solver, the workspace crate `goniofit-lm` (lm/).
 pub use goniofit_lm as lm;
+
+/// The library's tests against references, properties and pictures (tests/lib/).
+#[cfg(test)]
+#[path = "../tests/lib/main.rs"]
+mod lib_tests;
+
+/// Helpers the tests share (tests/common/).
+#[cfg(test)]
+#[path = "../tests/common/mod.rs"]
+mod common;

@@ -18,6 +18,7 @@ mod hostile_params;
 mod option_values_sweep;
 mod output_files;
 mod output_set;
+mod pictures;
 mod report;
 mod robust;
 mod specular_width;

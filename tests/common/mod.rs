@@ -104,3 +104,24 @@ pub fn without_progress(err: &str) -> String {
         .map(|l| format!("{l}\n"))
         .collect()
 }
+
+/// The width and height a PNG file's header states (its signature and IHDR checked).
+pub fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert!(bytes.len() > 33, "PNG too short");
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+    (w, h)
+}
+
+/// An SVG document with text whose embedded images carry a MIME type.
+pub fn assert_svg(text: &str) {
+    assert!(text.starts_with("<svg"), "starts with <svg");
+    assert!(text.trim_end().ends_with("</svg>"), "ends with </svg>");
+    assert!(text.contains("<text"), "has text");
+    assert!(
+        !text.contains("data:png;"),
+        "embedded images carry a MIME type"
+    );
+}

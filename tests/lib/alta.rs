@@ -6,7 +6,7 @@
 
 use crate::common;
 
-use goniofit::io::{read_bytes, Dataset, ReadOptions};
+use crate::io::{read_bytes, Dataset, ReadOptions};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -106,7 +106,7 @@ fn alta_file(param: &str, out: &str, vs: Option<u8>) -> String {
     s
 }
 
-fn read(text: &str, channel: Option<&str>) -> goniofit::Result<Dataset> {
+fn read(text: &str, channel: Option<&str>) -> crate::Result<Dataset> {
     let opts = ReadOptions {
         channel: channel.map(String::from),
         require_value: true,

@@ -3,7 +3,7 @@
 //! finite numbers or an error that says where (a byte offset, a field) and what was
 //! expected.
 
-use goniofit::io::{merl, read_bytes, ReadOptions};
+use crate::io::{merl, read_bytes, ReadOptions};
 use proptest::prelude::*;
 use std::path::Path;
 

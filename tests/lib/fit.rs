@@ -2,10 +2,10 @@
 //! uncertainties, identifiability verdicts in the smooth, intermediate and rough regimes,
 //! joint multi-channel fits, and the report formats.
 
-use goniofit::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
-use goniofit::geometry::{Geometry, Quantity};
-use goniofit::harness::synth::{generate, Layout, Noise, NoiseKind};
-use goniofit::model::{by_name, ModelOptions};
+use crate::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
+use crate::geometry::{Geometry, Quantity};
+use crate::harness::synth::{generate, Layout, Noise, NoiseKind};
+use crate::model::{by_name, ModelOptions};
 use std::sync::atomic::Ordering::SeqCst;
 
 /// Synthetic data for `model` at `params` on `layout`, with relative noise: one channel of
@@ -71,16 +71,16 @@ fn joint_synthetic(
 fn config(model: &str) -> FitConfig {
     FitConfig {
         model: model.into(),
-        residual: goniofit::fit::problem::ResidualKind::Relative,
+        residual: crate::fit::problem::ResidualKind::Relative,
         ..FitConfig::default()
     }
 }
 
-fn param<'a>(r: &'a FitResult, name: &str) -> &'a goniofit::fit::driver::ParamResult {
+fn param<'a>(r: &'a FitResult, name: &str) -> &'a crate::fit::driver::ParamResult {
     r.params.iter().find(|p| p.name == name).unwrap()
 }
 
-fn derived<'a>(r: &'a FitResult, name: &str) -> &'a goniofit::fit::driver::Derived {
+fn derived<'a>(r: &'a FitResult, name: &str) -> &'a crate::fit::driver::Derived {
     r.derived.iter().find(|p| p.name == name).unwrap()
 }
 
@@ -275,8 +275,8 @@ fn problem_jacobian_matches_central_differences() {
     // The solver's Jacobian (√w ∂r/∂f ∂f/∂p dp/dx, assembled per block) against central
     // differences of its residuals: every residual kind, two channels with per-channel
     // scales, unequal weights, and one parameter held fixed.
-    use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
-    use goniofit::lm::{finite_difference_jacobian, LeastSquaresProblem};
+    use crate::fit::problem::{FitProblem, ParamLayout, ResidualKind};
+    use crate::lm::{finite_difference_jacobian, LeastSquaresProblem};
     let model = by_name("kbs+lambert", &ModelOptions::default()).unwrap();
     let mut input = joint_synthetic(
         "kbs+lambert",
@@ -330,7 +330,7 @@ fn an_overflowing_fit_is_never_reported_converged() {
     let mut input = synthetic("lambert", &[0.7], Layout::inplane(), 0.0, 1, 1.0);
     input.y[5] = 1e200;
     let mut c = config("lambert");
-    c.residual = goniofit::fit::problem::ResidualKind::Absolute;
+    c.residual = crate::fit::problem::ResidualKind::Absolute;
     let r = fit(&input, &c).unwrap();
     assert!(!r.cost.is_finite() || !r.is_finite());
     assert!(!r.converged());
@@ -366,7 +366,7 @@ fn an_evaluation_stopped_before_it_starts_gives_no_number() {
         let mut config = config("kbs");
         config.lm.stop = Some(stop.clone());
         match fit(input, &config) {
-            Err(goniofit::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
+            Err(crate::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
             other => panic!("expected Error::Stopped, got {:?}", other.map(|r| r.cost)),
         }
     });
@@ -378,13 +378,13 @@ fn an_evaluation_stopped_before_it_starts_gives_no_number() {
 fn with_stoppable_kbs(
     check: impl FnOnce(
         &FitInput,
-        &goniofit::fit::problem::FitProblem,
+        &crate::fit::problem::FitProblem,
         &nalgebra::DVector<f64>,
         &std::sync::atomic::AtomicBool,
-        &goniofit::lm::Stop,
+        &crate::lm::Stop,
     ),
 ) {
-    use goniofit::fit::problem::{FitProblem, ParamLayout, ResidualKind};
+    use crate::fit::problem::{FitProblem, ParamLayout, ResidualKind};
     let input = synthetic(
         "kbs",
         &[0.3, 2.0, 1.0],
@@ -399,7 +399,7 @@ fn with_stoppable_kbs(
     let problem =
         FitProblem::new(model.as_ref(), layout, &input, ResidualKind::Absolute, 1e-9).unwrap();
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let stop = goniofit::lm::Stop::new(None, Some(flag.clone()));
+    let stop = crate::lm::Stop::new(None, Some(flag.clone()));
     check(&input, &problem, &x, &flag, &stop);
 }
 
@@ -432,7 +432,7 @@ fn a_jacobian_not_cached_is_not_evaluated_after_a_stop() {
 /// robust objective), not by χ².
 #[test]
 fn pictures_standardize_residuals_as_the_report_does_under_a_robust_loss() {
-    use goniofit::fit::problem::loss::{Loss, LossKind};
+    use crate::fit::problem::loss::{Loss, LossKind};
     let input = synthetic("lambert", &[0.3], Layout::hemisphere(), 0.05, 5, 1.0);
     let config = FitConfig {
         model: "lambert".into(),
@@ -440,7 +440,7 @@ fn pictures_standardize_residuals_as_the_report_does_under_a_robust_loss() {
         ..FitConfig::default()
     };
     let r = fit(&input, &config).unwrap();
-    let drawn = goniofit::plot::fit::with_plot_input(
+    let drawn = crate::plot::fit::with_plot_input(
         &config,
         &input,
         (&r.layout, &r.values, Some(&r.fitted)),

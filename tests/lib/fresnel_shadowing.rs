@@ -12,8 +12,8 @@
 //! F and G to 1e-13 relative; ∂F/∂n, ∂F/∂κ to 1e-12 (|∂F| + F); ∂ln G/∂ln T to
 //! 1e-13 (1 + |·|); Λ(ν) to 1e-15 (1 + Λ) (`tests/ref/smith_lambda.py`). Run with `-- --nocapture` to see the worst errors found.
 
-use goniofit::model::fresnel::{complex_ratio, schlick_ratio, Fresnel};
-use goniofit::model::shadowing::{lambda, Shadowing};
+use crate::model::fresnel::{complex_ratio, schlick_ratio, Fresnel};
+use crate::model::shadowing::{lambda, Shadowing};
 
 fn parse(s: &str) -> Option<f64> {
     (!s.is_empty()).then(|| s.parse::<f64>().unwrap())
@@ -114,7 +114,7 @@ fn smith_matches_scatmech_shadowed_facet_model() {
         };
         let [ti, tr, t, f, ill, g] = [ti, tr, t, f, ill, g].map(Option::unwrap);
         assert!(rel(g * ill, f, f) < 1e-15, "table row {r:?}");
-        let ct = |deg: f64| goniofit::geometry::cot_tan(deg.to_radians());
+        let ct = |deg: f64| crate::geometry::cot_tan(deg.to_radians());
         let got = Shadowing::Smith.eval_cot_tan(ct(ti), ct(tr), t).g;
         let e = rel(got, g, g);
         assert!(
@@ -267,9 +267,9 @@ fn smith_derivatives_match_central_differences_over_the_domain() {
 /// column's terms. Series mode (the plain lobe's own accuracy is tests/lib/kbs_reference.rs').
 #[test]
 fn the_lobe_with_factors_is_the_product_at_extreme_angles() {
-    use goniofit::geometry::{Geometry, Quantity, Sample};
-    use goniofit::model::fresnel::cos_local;
-    use goniofit::model::{by_name, EvalMode, ModelOptions};
+    use crate::geometry::{Geometry, Quantity, Sample};
+    use crate::model::fresnel::cos_local;
+    use crate::model::{by_name, EvalMode, ModelOptions};
     let lobe = |fresnel, shadowing| {
         let opts = ModelOptions {
             mode: EvalMode::Series,

@@ -5,12 +5,12 @@
 //!   |Δ ln Q| ≤ tol + rounding,   |Δ(g ∂lnQ/∂g)| ≤ tol (1 + |g ∂lnQ/∂g|) + rounding,
 //!   |Δ(a ∂lnQ/∂a)| ≤ tol (1 + |a ∂lnQ/∂a|) + rounding,
 //! where rounding = 64 ε (1 + |ln Q|) for ln Q and 64 ε (1 + √g) for the derivatives.
-//! Run with `cargo test --release --test lib -- kbs_reference:: --nocapture` to see the worst
+//! Run with `cargo test --release --lib -- kbs_reference:: --nocapture` to see the worst
 //! errors found.
 
-use goniofit::geometry::{Geometry, Quantity, Sample};
-use goniofit::model::series::{self, LnQ};
-use goniofit::model::{kbs::Kbs, EvalMode, Mode, Model, ModelOptions};
+use crate::geometry::{Geometry, Quantity, Sample};
+use crate::model::series::{self, LnQ};
+use crate::model::{kbs::Kbs, EvalMode, Mode, Model, ModelOptions};
 use std::collections::BTreeMap;
 
 const TOL: f64 = 1e-10;

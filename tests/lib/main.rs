@@ -1,9 +1,7 @@
 //! The library: the models against references and their own properties, the readers and
 //! writers, the solver on the NIST problems, fits of synthetic and stiff cases, and the
-//! pictures.
-
-#[path = "../common/mod.rs"]
-mod common;
+//! pictures. Compiled into the library's unit tests (`cargo test --lib`), so they reach
+//! what is private to the crate.
 
 mod alta;
 mod binary_fuzz;

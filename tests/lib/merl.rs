@@ -4,9 +4,9 @@
 
 use crate::common;
 
-use goniofit::fit::driver::{fit, FitConfig, FitInput};
-use goniofit::geometry::{Geometry, Quantity, Sample};
-use goniofit::io::{merl, read_dataset, ReadOptions};
+use crate::fit::driver::{fit, FitConfig, FitInput};
+use crate::geometry::{Geometry, Quantity, Sample};
+use crate::io::{merl, read_dataset, ReadOptions};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::io::Write;
 
@@ -136,7 +136,7 @@ fn a_written_merl_file_reads_back_and_fits() {
     };
     let config = FitConfig {
         model: "lambert-specular".into(),
-        residual: goniofit::fit::problem::ResidualKind::Relative,
+        residual: crate::fit::problem::ResidualKind::Relative,
         ..FitConfig::default()
     };
     let r = fit(&input, &config).unwrap();

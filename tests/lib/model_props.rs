@@ -3,11 +3,11 @@
 //! the paper's Figures 6–7 facts, the coherent (patch) term, and the lobe times its
 //! Fresnel and shadowing factors (the product of the parts, and its Jacobian).
 
-use goniofit::geometry::{Geometry, Quantity, Sample};
-use goniofit::model::fresnel::Fresnel;
-use goniofit::model::series::{self, LnQ};
-use goniofit::model::shadowing::Shadowing;
-use goniofit::model::{self, kbs::Kbs, EvalMode, Mode, Model, ModelOptions};
+use crate::geometry::{Geometry, Quantity, Sample};
+use crate::model::fresnel::Fresnel;
+use crate::model::series::{self, LnQ};
+use crate::model::shadowing::Shadowing;
+use crate::model::{self, kbs::Kbs, EvalMode, Mode, Model, ModelOptions};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 
@@ -446,7 +446,7 @@ fn incoherent_model_matches_paper_form_without_patch() {
 /// computes it from the sample's angles: cos θ_loc = √((1 + ŝ·k̂₂)/2) from the vectors.
 #[test]
 fn extended_lobe_is_the_plain_lobe_times_its_factors() {
-    use goniofit::model::shadowing::cot;
+    use crate::model::shadowing::cot;
     let (sigma, corr, n, kappa) = (0.4, 3.0, 1.7, 0.8);
     for (ti, tr, pr) in [
         (10.0, 20.0, 0.0),

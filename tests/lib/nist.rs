@@ -1,7 +1,7 @@
 //! NIST StRD nonlinear least-squares suite: all 27 problems from both starts (54 runs)
 //! against the certified values and certified standard errors.
 //!
-//! Run with `cargo test --release --test lib -- nist:: --nocapture` to see one line per run
+//! Run with `cargo test --release --lib -- nist:: --nocapture` to see one line per run
 //! (`NIST <Problem> start<k> <b1> <b2> …`, 17 significant digits) and the summary.
 //!
 //! Settings for these runs: `ftol = xtol = 1e-15`, `gtol = 0`, up to 10 000 evaluations —
@@ -12,8 +12,8 @@
 #[path = "nist/problems.rs"]
 mod problems;
 
-use goniofit::fit::stats::covariance::uncertainty;
-use goniofit::lm::{finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig};
+use crate::fit::stats::covariance::uncertainty;
+use crate::lm::{finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig};
 use nalgebra::DVector;
 use problems::{lre, Nist};
 use std::path::Path;

@@ -1,42 +1,22 @@
 //! Pictures: what each one must show (Peters 2000, Figures 4–7), and that the files are
 //! valid PNG and SVG.
 
-use crate::common;
+use crate::common::{self, assert_svg, png_size};
 
-use assert_cmd::Command;
-use goniofit::geometry::{Geometry, Quantity, Sample};
-use goniofit::model::{by_name, Model, ModelOptions};
-use goniofit::plot::figures::{
+use crate::geometry::{Geometry, Quantity, Sample};
+use crate::model::{by_name, Model, ModelOptions};
+use crate::plot::figures::{
     figure4_spheres, figure5_curves, figure6_curves, figure7_grid, Figure4, T_OVER_SIGMA,
 };
-use goniofit::plot::fit::{write_fit_plots, FitPlotInput};
-use goniofit::plot::sphere::{pixel_xy, sphere_radiance, SpherePicture};
-use goniofit::plot::{rgb_buffer, svg_string};
+use crate::plot::fit::{write_fit_plots, FitPlotInput};
+use crate::plot::sphere::{pixel_xy, sphere_radiance, SpherePicture};
+use crate::plot::{rgb_buffer, svg_string};
 
 fn model(name: &str) -> Box<dyn Model> {
     by_name(name, &ModelOptions::default()).unwrap()
 }
 
 /// Width and height from a PNG's IHDR chunk, after checking the signature.
-fn png_size(bytes: &[u8]) -> (u32, u32) {
-    assert!(bytes.len() > 33, "PNG too short");
-    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
-    assert_eq!(&bytes[12..16], b"IHDR");
-    let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
-    let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
-    (w, h)
-}
-
-fn assert_svg(text: &str) {
-    assert!(text.starts_with("<svg"), "starts with <svg");
-    assert!(text.trim_end().ends_with("</svg>"), "ends with </svg>");
-    assert!(text.contains("<text"), "has text");
-    assert!(
-        !text.contains("data:png;"),
-        "embedded images carry a MIME type"
-    );
-}
-
 /// Brightest pixel of a rendered (plain) sphere bitmap, in sphere coordinates.
 fn brightest_in_bitmap(rgb: &[u8], size: u32) -> (f64, f64) {
     let n = size as usize;
@@ -147,7 +127,7 @@ fn figure5_curves_peak_at_the_marks_and_narrow() {
         "Lambertian at the light"
     );
     // The drawn figure: six labelled curves peaking at the specular mark (Lambert: light).
-    let fig = goniofit::plot::figures::figure5().unwrap();
+    let fig = crate::plot::figures::figure5().unwrap();
     assert_eq!(fig.series.len(), 6);
     for (k, s) in fig.series.iter().enumerate() {
         assert!(s.label.is_some());
@@ -186,7 +166,7 @@ fn figure6_peaks_move_monotonically_from_the_mirror_to_the_normal() {
         "normalised to the φr = 0 peak"
     );
     // The same holds for the series the drawn figure plots.
-    let fig = goniofit::plot::figures::figure6().unwrap();
+    let fig = crate::plot::figures::figure6().unwrap();
     assert_eq!(fig.series.len(), 9);
     let drawn: Vec<f64> = fig
         .series
@@ -247,7 +227,7 @@ fn pictures_render_to_valid_svg_and_bitmaps() {
         svg.contains("data:image/png;base64,"),
         "spheres embedded as images"
     );
-    let fig6 = goniofit::plot::figures::figure6().unwrap();
+    let fig6 = crate::plot::figures::figure6().unwrap();
     let svg = svg_string(&fig6).unwrap();
     assert_svg(&svg);
     assert!(
@@ -256,85 +236,10 @@ fn pictures_render_to_valid_svg_and_bitmaps() {
     );
     let rgb = rgb_buffer(&fig6).unwrap();
     // The legend sits in a panel right of the 900 × 600 chart.
-    let (w, h) = goniofit::plot::Picture::size(&fig6);
+    let (w, h) = crate::plot::Picture::size(&fig6);
     assert!(w > 900 && h == 600, "{w} × {h}");
     assert_eq!(rgb.len(), (w * h * 3) as usize);
     assert!(rgb.iter().any(|&b| b < 128), "something is drawn");
-}
-
-#[test]
-fn figures_command_writes_all_eight_files() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("figs");
-    Command::cargo_bin("goniofit")
-        .unwrap()
-        .args(["figures", "--out"])
-        .arg(&out)
-        .assert()
-        .success();
-    for k in 4..=7 {
-        let png = std::fs::read(out.join(format!("figure{k}.png"))).unwrap();
-        let (w, h) = png_size(&png);
-        assert!(w >= 600 && h >= 500, "figure{k}: {w}×{h}");
-        let svg = std::fs::read_to_string(out.join(format!("figure{k}.svg"))).unwrap();
-        assert_svg(&svg);
-    }
-    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 8);
-}
-
-#[test]
-fn render_sphere_command_writes_png_and_svg() {
-    let dir = tempfile::tempdir().unwrap();
-    for (name, extra) in [("s.png", vec![]), ("s.svg", vec!["--negative", "--marks"])] {
-        let path = dir.path().join(name);
-        Command::cargo_bin("goniofit")
-            .unwrap()
-            .args([
-                "render",
-                "sphere",
-                "--model",
-                "kbs-rough",
-                "--params",
-                "sigma=1,T=5,scale=1",
-                "--light-deg",
-                "45",
-                "--size",
-                "64",
-                "--out",
-            ])
-            .arg(&path)
-            .args(extra)
-            .assert()
-            .success()
-            .stderr(predicates::str::contains(format!(
-                "wrote {} (64×64 px",
-                path.display()
-            )));
-        let bytes = std::fs::read(&path).unwrap();
-        if name.ends_with(".png") {
-            assert_eq!(png_size(&bytes), (64, 64));
-        } else {
-            let text = String::from_utf8(bytes).unwrap();
-            assert!(text.starts_with("<svg") && text.contains("data:image/png;base64,"));
-        }
-    }
-    // Bad input: unknown extension, bad parameters -> exit 2.
-    Command::cargo_bin("goniofit")
-        .unwrap()
-        .args([
-            "render", "sphere", "--model", "lambert", "--params", "scale=1", "--out",
-        ])
-        .arg(dir.path().join("s.jpg"))
-        .assert()
-        .code(2);
-    Command::cargo_bin("goniofit")
-        .unwrap()
-        .args([
-            "render", "sphere", "--model", "kbs", "--params", "sigma=1", "--out",
-        ])
-        .arg(dir.path().join("s.png"))
-        .assert()
-        .code(2);
 }
 
 /// A synthetic in-plane + out-of-plane dataset with its exact model values.
@@ -421,7 +326,7 @@ fn check_fit_plots(input: &FitPlotInput) {
         );
     }
     // The polar plot's lobe peaks near the mirror direction of the busiest θi (45°).
-    let polar = goniofit::plot::fit::polar_plot(input).unwrap();
+    let polar = crate::plot::fit::polar_plot(input).unwrap();
     assert!((polar.theta_i.to_degrees() - 45.0).abs() < 1e-9);
     let peak = polar
         .curve
@@ -471,7 +376,7 @@ fn fit_plots_cope_with_awkward_data() {
     // Six pictures and a hemisphere for each of the two incidence angles.
     assert_eq!(paths.len(), 16);
     // Nearest-to-plane: the 30° group shows its sample at φr = 40° (nearest), not 45°.
-    let chart = goniofit::plot::fit::fit_chart(&input, false).unwrap();
+    let chart = crate::plot::fit::fit_chart(&input, false).unwrap();
     let measured_pts: Vec<usize> = chart
         .series
         .iter()
@@ -483,7 +388,7 @@ fn fit_plots_cope_with_awkward_data() {
 
 #[test]
 fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
-    use goniofit::plot::fit::PolarPlot;
+    use crate::plot::fit::PolarPlot;
     let pic = PolarPlot {
         title: "clipped".into(),
         subtitle: String::new(),
@@ -493,7 +398,7 @@ fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
         l_max: 2.0,
     };
     assert_eq!(pic.clipped(), (2, 12.5));
-    let svg = goniofit::plot::svg_string(&pic).unwrap();
+    let svg = crate::plot::svg_string(&pic).unwrap();
     assert!(
         svg.contains("2 measured beyond the rim (up to 12.5× L_max)"),
         "legend"
@@ -536,7 +441,7 @@ fn polar_points_beyond_the_rim_are_counted_and_drawn_as_arrows() {
         ..pic
     };
     assert_eq!(inside.clipped().0, 0);
-    assert!(!goniofit::plot::svg_string(&inside)
+    assert!(!crate::plot::svg_string(&inside)
         .unwrap()
         .contains("beyond the rim"));
 }
@@ -709,7 +614,7 @@ fn filled_circles(svg: &str, x_max: f64) -> Vec<(f64, f64)> {
 
 #[test]
 fn hemisphere_dots_land_where_the_projection_puts_the_samples() {
-    use goniofit::plot::hemisphere::{hemisphere_plots, project, DISC_R};
+    use crate::plot::hemisphere::{hemisphere_plots, project, DISC_R};
     with_synthetic_input(0.03, |input| {
         let pics = hemisphere_plots(input).unwrap();
         assert_eq!(pics.len(), 3);
@@ -747,7 +652,7 @@ fn hemisphere_dots_land_where_the_projection_puts_the_samples() {
 
 #[test]
 fn hemisphere_pictures_are_capped_at_the_busiest_incidence_angles() {
-    use goniofit::plot::hemisphere::{hemisphere_plots, MAX_HEMISPHERES};
+    use crate::plot::hemisphere::{hemisphere_plots, MAX_HEMISPHERES};
     let m = model("lambert");
     let params = vec![0.2];
     // Six incidence angles; 60° and 10° have the most samples.

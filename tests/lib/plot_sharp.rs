@@ -7,12 +7,12 @@
 //! in every column); text is set at the size it is laid out with; embedded images are drawn
 //! pixel for pixel.
 
-use goniofit::plot::figures::{figure5, figure6};
-use goniofit::plot::marks::Rect;
-use goniofit::plot::sphere::{sphere_radiance, SpherePicture};
-use goniofit::plot::stroke::{Canvas, PixelMap};
-use goniofit::plot::xy::{Kind, Series, XyPlot};
-use goniofit::plot::{ensure_font, font, rgb_buffer, svg_string, svg_to_rgb, DrawError, Picture};
+use crate::plot::figures::{figure5, figure6};
+use crate::plot::marks::Rect;
+use crate::plot::sphere::{sphere_radiance, SpherePicture};
+use crate::plot::stroke::{Canvas, PixelMap};
+use crate::plot::xy::{Kind, Series, XyPlot};
+use crate::plot::{ensure_font, font, rgb_buffer, svg_string, svg_to_rgb, DrawError, Picture};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -365,7 +365,7 @@ fn text_is_set_at_the_size_it_is_laid_out_with() {
 fn embedded_images_are_drawn_pixel_for_pixel() {
     // A sphere is embedded in the SVG as one PNG image; the rendered picture has exactly
     // its pixels (no resampling blur, no shift).
-    let model = goniofit::model::by_name("lambert", &Default::default()).unwrap();
+    let model = crate::model::by_name("lambert", &Default::default()).unwrap();
     let image = sphere_radiance(model.as_ref(), &[1.0], 45.0, 1.0, 64).unwrap();
     let pic = SpherePicture {
         image: image.clone(),

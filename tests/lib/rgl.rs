@@ -2,7 +2,7 @@
 //! output tests/ref/rgl_reference.csv): the measured points' directions and BRDF values,
 //! and the interpolation at random directions, on every bundled file.
 
-use goniofit::io::rgl::{RglBrdf, RglSample};
+use crate::io::rgl::{RglBrdf, RglSample};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -165,7 +165,7 @@ fn evaluation_at_random_directions_matches_the_reference_loader() {
 /// a reflectance of 0.7–1 (f_r = ρ/π).
 #[test]
 fn white_paper_reads_as_a_near_lambertian_brdf() {
-    use goniofit::io::{read_dataset, ReadOptions};
+    use crate::io::{read_dataset, ReadOptions};
     let path = data("paper_white_rgb.bsdf");
     let opts = ReadOptions {
         channel: Some("g".into()),
@@ -174,7 +174,7 @@ fn white_paper_reads_as_a_near_lambertian_brdf() {
     };
     let ds = read_dataset(&path, &opts).unwrap();
     assert_eq!(ds.len(), load("paper_white_rgb.bsdf").samples().len());
-    assert_eq!(ds.quantity, Some(goniofit::geometry::Quantity::Brdf));
+    assert_eq!(ds.quantity, Some(crate::geometry::Quantity::Brdf));
     assert!(ds.wavelength.as_ref().unwrap().iter().all(|&w| w == 549.0));
     let values = ds.value.as_ref().unwrap();
     let mut normal: Vec<f64> = (0..ds.len())
@@ -222,7 +222,7 @@ fn shape_at(bytes: &[u8], name: &str) -> usize {
 /// what was expected.
 #[test]
 fn unreadable_files_are_located() {
-    use goniofit::io::{read_bytes, ReadOptions};
+    use crate::io::{read_bytes, ReadOptions};
     let good = std::fs::read(data("paper_white_rgb.bsdf")).unwrap();
     let opts = ReadOptions {
         channel: Some("r".into()),

@@ -3,12 +3,12 @@
 //! succeeds — the truth is recovered within the reported uncertainty or a stated tolerance —
 //! or stops with a clear reason; never NaN in a reported value, never a panic.
 
-use goniofit::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
-use goniofit::fit::problem::ResidualKind;
-use goniofit::geometry::{Geometry, Quantity};
-use goniofit::harness::synth::{generate, AnglesDeg, Layout, Noise, NoiseKind};
-use goniofit::lm::LmConfig;
-use goniofit::model::{by_name, ModelOptions};
+use crate::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
+use crate::fit::problem::ResidualKind;
+use crate::geometry::{Geometry, Quantity};
+use crate::harness::synth::{generate, AnglesDeg, Layout, Noise, NoiseKind};
+use crate::lm::LmConfig;
+use crate::model::{by_name, ModelOptions};
 use std::time::Duration;
 
 /// Angles: every θi with θr in `theta_r` and φr in `phi_r` (degrees).

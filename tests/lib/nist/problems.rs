@@ -2,7 +2,7 @@
 //! each model with its analytic Jacobian. Shared by `tests/lib/nist.rs` and `benches/nist.rs`.
 #![allow(dead_code, clippy::needless_range_loop)]
 
-use goniofit::lm::LeastSquaresProblem;
+use goniofit_lm::LeastSquaresProblem;
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 use std::path::Path;
