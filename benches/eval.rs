@@ -20,7 +20,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 mod common;
 
 use common::{geometry, sigma_for, N};
-use goniofit::model::{self, series, EvalMode, Model, ModelOptions};
+use goniofit::{series, EvalMode, ModelOptions};
 use std::time::Duration;
 
 const REGIMES: [(&str, f64); 4] = [
@@ -49,10 +49,13 @@ fn bench_kbs(c: &mut Criterion) {
             let sigma = sigma_for(g);
             let p = [sigma, 5.0 * sigma, 1.0];
             for (mname, mode) in MODES {
-                let m = model::kbs::Kbs::new(ModelOptions {
-                    mode,
-                    ..Default::default()
-                })
+                let m = goniofit::model(
+                    "kbs",
+                    &ModelOptions {
+                        mode,
+                        ..Default::default()
+                    },
+                )
                 .unwrap();
                 let mut out = vec![0.0; N];
                 group.bench_function(BenchmarkId::new(rname, mname), |b| {
@@ -61,10 +64,13 @@ fn bench_kbs(c: &mut Criterion) {
             }
             // With the Jacobian, as a fit evaluates it.
             for (mname, mode) in [("rough+jac", EvalMode::Rough), ("auto+jac", EvalMode::Auto)] {
-                let m = model::kbs::Kbs::new(ModelOptions {
-                    mode,
-                    ..Default::default()
-                })
+                let m = goniofit::model(
+                    "kbs",
+                    &ModelOptions {
+                        mode,
+                        ..Default::default()
+                    },
+                )
                 .unwrap();
                 let mut out = vec![0.0; N];
                 let mut jac = vec![0.0; 3 * N];
@@ -113,7 +119,7 @@ fn bench_models(c: &mut Criterion) {
         ("lambert-specular", vec![1.0, 1.0, 0.1]),
         ("kbs+lambert", vec![sigma, 5.0 * sigma, 1.0, 0.3]),
     ] {
-        let m = model::by_name(name, &ModelOptions::default()).unwrap();
+        let m = goniofit::model(name, &ModelOptions::default()).unwrap();
         let mut out = vec![0.0; N];
         let mut jac = vec![0.0; p.len() * N];
         group.bench_function(BenchmarkId::new(name, "values"), |b| {
@@ -130,8 +136,7 @@ fn bench_models(c: &mut Criterion) {
 /// (`kbs_factors/<regime>/<factors>[+jac]`, `auto` mode, hemisphere set): the target is
 /// the extended lobe within 1.5× of the plain one.
 fn bench_factors(c: &mut Criterion) {
-    use model::fresnel::Fresnel;
-    use model::shadowing::Shadowing;
+    use goniofit::{Fresnel, Shadowing};
     let geo = geometry(false, 7);
     let mut group = c.benchmark_group("kbs_factors");
     group
@@ -150,11 +155,14 @@ fn bench_factors(c: &mut Criterion) {
                 Shadowing::SmithCorrelated,
             ),
         ] {
-            let m = model::kbs::Kbs::new(ModelOptions {
-                fresnel,
-                shadowing,
-                ..Default::default()
-            })
+            let m = goniofit::model(
+                "kbs",
+                &ModelOptions {
+                    fresnel,
+                    shadowing,
+                    ..Default::default()
+                },
+            )
             .unwrap();
             let p = [sigma, 5.0 * sigma, 1.0, 1.5, 2.0];
             let p = &p[..3 + fresnel.param_count()];

@@ -20,10 +20,7 @@
 mod common;
 
 use common::{geometry, sigma_for, N};
-use goniofit::geometry::Geometry;
-use goniofit::model::fresnel::Fresnel;
-use goniofit::model::shadowing::Shadowing;
-use goniofit::model::{kbs::Kbs, EvalMode, Model, ModelOptions};
+use goniofit::{EvalMode, Fresnel, Geometry, Model, ModelOptions, Shadowing};
 use std::time::Instant;
 
 const PAIRS: usize = 301;
@@ -36,11 +33,16 @@ fn quartiles(mut v: Vec<f64>) -> [f64; 3] {
 
 /// Median time per sample (ns) of `a` and `b` at their parameters on `geo`, each pair timed
 /// back to back, and the quartiles of the per-pair ratio b/a.
-fn pairs(geo: &Geometry, a: (&Kbs, &[f64]), b: (&Kbs, &[f64]), jac: bool) -> (f64, f64, [f64; 3]) {
+fn pairs(
+    geo: &Geometry,
+    a: (&dyn Model, &[f64]),
+    b: (&dyn Model, &[f64]),
+    jac: bool,
+) -> (f64, f64, [f64; 3]) {
     let n = geo.len();
     let mut out = vec![0.0; n];
     let mut j = vec![0.0; 5 * n];
-    let mut time = |(m, p): (&Kbs, &[f64])| {
+    let mut time = |(m, p): (&dyn Model, &[f64])| {
         let t = Instant::now();
         let cols = &mut j[..p.len() * n];
         m.radiance(geo, p, &mut out, jac.then_some(cols));
@@ -65,11 +67,14 @@ fn pairs(geo: &Geometry, a: (&Kbs, &[f64]), b: (&Kbs, &[f64]), jac: bool) -> (f6
 /// Smith and conductor + correlated Smith.
 fn factors() {
     let model = |fresnel, shadowing| {
-        Kbs::new(ModelOptions {
-            fresnel,
-            shadowing,
-            ..Default::default()
-        })
+        goniofit::model(
+            "kbs",
+            &ModelOptions {
+                fresnel,
+                shadowing,
+                ..Default::default()
+            },
+        )
         .unwrap()
     };
     let plain = model(Fresnel::None, Shadowing::None);
@@ -78,7 +83,7 @@ fn factors() {
         ("cornell", cornell_layout()),
     ] {
         println!("{layout} layout ({} samples)", geo.len());
-        factors_on(&geo, &plain, &model);
+        factors_on(&geo, plain.as_ref(), &model);
     }
 }
 
@@ -87,16 +92,20 @@ fn factors() {
 fn cornell_layout() -> Geometry {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
-    let opts = goniofit::io::ReadOptions {
+    let opts = goniofit::ReadOptions {
         channel: Some("550nm".into()),
         ..Default::default()
     };
-    let ds = goniofit::io::read_dataset(&path, &opts).expect("the bundled Cornell file");
-    Geometry::new(&ds.samples, &[1.0], goniofit::geometry::Quantity::Radiance).unwrap()
+    let ds = goniofit::read(&path, &opts).expect("the bundled Cornell file");
+    Geometry::new(&ds.samples, &[1.0], goniofit::Quantity::Radiance).unwrap()
 }
 
 /// [`factors`] on one layout.
-fn factors_on(geo: &Geometry, plain: &Kbs, model: &dyn Fn(Fresnel, Shadowing) -> Kbs) {
+fn factors_on(
+    geo: &Geometry,
+    plain: &dyn Model,
+    model: &dyn Fn(Fresnel, Shadowing) -> Box<dyn Model>,
+) {
     println!("factors                     g     jac   plain ns  ext ns   ratio: q1  median  q3");
     for (name, fresnel, shadowing) in [
         ("dielectric", Fresnel::Dielectric, Shadowing::None),
@@ -120,7 +129,7 @@ fn factors_on(geo: &Geometry, plain: &Kbs, model: &dyn Fn(Fresnel, Shadowing) ->
             let p = [sigma, 5.0 * sigma, 1.0, 1.5, 2.0];
             let pe = &p[..3 + fresnel.param_count()];
             for jac in [false, true] {
-                let (a, b, [q1, med, q3]) = pairs(geo, (plain, &p[..3]), (&ext, pe), jac);
+                let (a, b, [q1, med, q3]) = pairs(geo, (plain, &p[..3]), (ext.as_ref(), pe), jac);
                 println!(
                     "{name:<27} {g:<6} {:<5} {a:>8.1} {b:>7.1}   {q1:>9.2} {med:>7.2} {q3:>5.2}",
                     if jac { "yes" } else { "no" },
@@ -138,10 +147,13 @@ fn main() {
         return factors();
     }
     let model = |mode| {
-        Kbs::new(ModelOptions {
-            mode,
-            ..Default::default()
-        })
+        goniofit::model(
+            "kbs",
+            &ModelOptions {
+                mode,
+                ..Default::default()
+            },
+        )
         .unwrap()
     };
     let (rough, auto) = (model(EvalMode::Rough), model(EvalMode::Auto));
@@ -154,20 +166,20 @@ fn main() {
             for jac in [false, true] {
                 let mut out = vec![0.0; N];
                 let mut j = vec![0.0; 3 * N];
-                let time = |m: &Kbs, out: &mut [f64], j: &mut [f64]| {
+                let time = |m: &dyn Model, out: &mut [f64], j: &mut [f64]| {
                     let t = Instant::now();
                     m.radiance(&geo, &p, out, jac.then_some(j));
                     t.elapsed().as_secs_f64() * 1e9 / N as f64
                 };
                 // Warm-up, then pairs.
                 for _ in 0..5 {
-                    time(&rough, &mut out, &mut j);
-                    time(&auto, &mut out, &mut j);
+                    time(rough.as_ref(), &mut out, &mut j);
+                    time(auto.as_ref(), &mut out, &mut j);
                 }
                 let (mut tr, mut ta, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
                 for _ in 0..PAIRS {
-                    let r = time(&rough, &mut out, &mut j);
-                    let a = time(&auto, &mut out, &mut j);
+                    let r = time(rough.as_ref(), &mut out, &mut j);
+                    let a = time(auto.as_ref(), &mut out, &mut j);
                     tr.push(r);
                     ta.push(a);
                     ratio.push(a / r);

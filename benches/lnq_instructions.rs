@@ -15,8 +15,8 @@
 mod common;
 
 use common::{geometry, sigma_for, N};
-use goniofit::model::series::{self, LnQ};
-use goniofit::model::EvalMode;
+use goniofit::series::{self, LnQ};
+use goniofit::EvalMode;
 use std::time::Instant;
 
 /// Evaluations of the batch per regime.

@@ -15,7 +15,6 @@
 #[path = "../tests/lib/nist/problems.rs"]
 mod problems;
 
-use goniofit::geometry::median;
 use goniofit::lm::{minimize, LeastSquaresProblem as _, LmConfig};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
@@ -252,4 +251,16 @@ fn main() {
         both.len(),
         rb_ours as f64 / rb_theirs as f64
     );
+}
+
+/// The median of `v` (the mean of the middle two for an even count).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len() / 2;
+    if s.len() % 2 == 0 {
+        0.5 * (s[m - 1] + s[m])
+    } else {
+        s[m]
+    }
 }

@@ -10,8 +10,8 @@
 //! cargo bench --bench off_specular
 //! ```
 
-use goniofit::model::series;
-use goniofit::model::EvalMode;
+use goniofit::series;
+use goniofit::EvalMode;
 use std::time::Instant;
 
 /// Samples per batch, and batches per timing run.

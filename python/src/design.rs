@@ -4,7 +4,7 @@
 
 use crate::convert::{json_to_py, to_py_err};
 use crate::{options, run};
-use goniofit::design::{self, candidates::Grid, simulate, NoiseModel, Request, Scene};
+use goniofit::design::{self, before_and_after, Grid, NoiseModel, Request, Scene, Simulation};
 use goniofit::geometry::layout::AnglesDeg;
 use goniofit::geometry::Sample;
 use goniofit::model;
@@ -151,17 +151,13 @@ fn design_and_simulate(
     request: &Request,
     simulate: usize,
     seed: u64,
-) -> goniofit::Result<(
-    design::Design,
-    Option<simulate::Simulation>,
-    Option<simulate::Simulation>,
-)> {
+) -> goniofit::Result<(design::Design, Option<Simulation>, Option<Simulation>)> {
     let d = design::design(scene, request)?;
     if simulate == 0 {
         return Ok((d, None, None));
     }
     let (before, after) =
-        simulate::before_and_after(scene, &request.existing, &d.chosen, simulate, seed, None)?;
+        before_and_after(scene, &request.existing, &d.chosen, simulate, seed, None)?;
     Ok((d, Some(after), before))
 }
 

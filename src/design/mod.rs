@@ -12,23 +12,25 @@
 //! Candidates come from a file or a grid ([`candidates`]); alternative wavelengths may be
 //! offered, each with its own amplitudes (the per-channel parameters of a joint fit).
 
-pub mod candidates;
-pub mod choose;
+pub(crate) mod candidates;
+pub(crate) mod choose;
 mod describe;
-pub mod predict;
+pub(crate) mod predict;
 mod quantities;
-pub mod simulate;
+pub(crate) mod simulate;
 
 use crate::error::{Error, Result};
 use crate::fit::problem::layout::PER_CHANNEL;
 use crate::geometry::layout::AnglesDeg;
 use crate::geometry::{Geometry, Quantity, Sample};
 use crate::model::Model;
+pub use candidates::Grid;
 use choose::Criterion;
 pub use describe::{percent, target_label, where_};
 use nalgebra::{DMatrix, DVector};
 pub use predict::NoiseModel;
 pub use quantities::{quantities, QuantityDef};
+pub use simulate::{before_and_after, Simulation};
 
 /// Largest relative standard error at which a design calls a quantity determined: beyond
 /// it a linearised error bar is not a trustworthy description of what the data pins

@@ -3,7 +3,7 @@
 //! written; `fit --model auto` runs on an RGL file.
 
 use assert_cmd::Command;
-use goniofit::io::{read_dataset, ReadOptions};
+use goniofit::{read as read_dataset, ReadOptions};
 use predicates::prelude::*;
 use std::path::{Path, PathBuf};
 

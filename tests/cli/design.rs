@@ -6,12 +6,12 @@
 use crate::common;
 
 use common::{data, goniofit, GARNET_550};
-use goniofit::design::{self, candidates::Grid, NoiseModel, Request, Scene};
-use goniofit::fit::driver::{self, FitConfig, FitInput};
-use goniofit::fit::problem::{Channels, ResidualKind};
-use goniofit::geometry::{Geometry, PerSample, Quantity, Sample};
-use goniofit::harness::synth::{self, AnglesDeg, Noise, NoiseKind};
-use goniofit::model::{by_name, Model, ModelOptions};
+use goniofit::design::{self, Grid, NoiseModel, Request, Scene};
+use goniofit::synth::{self, Noise, NoiseKind};
+use goniofit::{
+    fit_model, model as by_name, AnglesDeg, Channels, FitConfig, FitInput, Geometry, Model,
+    ModelOptions, PerSample, Quantity, ResidualKind, Sample,
+};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 
@@ -102,7 +102,7 @@ fn fit_values(
         reduce: false,
         ..FitConfig::default()
     };
-    let r = driver::fit_model(model, &input, &config).ok()?;
+    let r = fit_model(model, &input, &config).ok()?;
     r.values
         .iter()
         .all(|v| v.is_finite() && *v > 0.0)
@@ -304,12 +304,12 @@ fn garnet_red_prediction_matches_simulation() {
     let eps = fit["reduced_chi2"].as_f64().unwrap().sqrt();
     assert_eq!(d["noise"]["level"].as_f64().unwrap(), eps);
     let predicted = d["target"]["after"].as_f64().unwrap();
-    let opts = goniofit::io::ReadOptions {
+    let opts = goniofit::ReadOptions {
         channel: Some("550nm".into()),
         require_value: true,
         ..Default::default()
     };
-    let ds = goniofit::io::read_dataset(&file, &opts).unwrap();
+    let ds = goniofit::read(&file, &opts).unwrap();
     let mut samples = ds.samples.clone();
     for c in d["chosen"].as_array().unwrap() {
         let a = |k: &str| c[k].as_f64().unwrap();

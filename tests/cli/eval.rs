@@ -2,9 +2,9 @@
 //! options, exit code 2 with file/line/column for bad input, atomic `--out`.
 
 use assert_cmd::Command;
-use goniofit::geometry::{Geometry, Quantity};
-use goniofit::io::{read_dataset, ReadOptions};
-use goniofit::model::{self, EvalMode, ModelOptions};
+use goniofit::{read as read_dataset, ReadOptions};
+use goniofit::{EvalMode, ModelOptions};
+use goniofit::{Geometry, Quantity};
 use predicates::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -54,8 +54,8 @@ fn library_values(
     mopts: ModelOptions,
 ) -> Vec<f64> {
     let ds = read_dataset(file, &ReadOptions::default()).unwrap();
-    let m = model::by_name(name, &mopts).unwrap();
-    let p = model::parse_params(m.as_ref(), params).unwrap();
+    let m = goniofit::model(name, &mopts).unwrap();
+    let p = goniofit::parse_params(m.as_ref(), params).unwrap();
     let geo = Geometry::new(&ds.samples, &[wavelength], quantity).unwrap();
     let mut out = vec![0.0; geo.len()];
     m.eval(&geo, &p, &mut out, None);

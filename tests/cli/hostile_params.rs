@@ -4,7 +4,7 @@
 //! among its results. Among them the runs at the far end of the series: a correlation length of
 //! 1e17 λ, where the KBS sum's peak index passes 2⁵³, and a fit held at T = 1e20.
 
-use goniofit::model::{self, ModelOptions};
+use goniofit::ModelOptions;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -109,8 +109,8 @@ fn failure(what: &str, out: &Output, in_time: bool) -> Option<String> {
 fn cases(file: &Path) -> Vec<(String, Vec<String>)> {
     let file = file.to_string_lossy().to_string();
     let mut out = Vec::new();
-    for name in model::MODEL_NAMES {
-        let m = model::by_name(name, &ModelOptions::default()).unwrap();
+    for name in goniofit::MODEL_NAMES {
+        let m = goniofit::model(name, &ModelOptions::default()).unwrap();
         let specs = m.params();
         for (k, spec) in specs.iter().enumerate() {
             for v in VALUES {

@@ -136,10 +136,7 @@ fn json_carries_the_whole_setting() {
     let path = st["input"]["path"].as_str().unwrap();
     assert!(Path::new(path).is_absolute(), "{path}");
     let bytes = std::fs::read(repo(GARNET)).unwrap();
-    assert_eq!(
-        st["input"]["sha256"].as_str().unwrap(),
-        goniofit::report::checksum::sha256_hex(&bytes)
-    );
+    assert_eq!(st["input"]["sha256"].as_str().unwrap(), sha256_hex(&bytes));
     assert_eq!(st["input"]["bytes"].as_u64(), Some(bytes.len() as u64));
     assert_eq!(st["wavelength"]["unit"], "nm");
     assert_eq!(st["wavelength"]["source"], "channel name");
@@ -151,9 +148,9 @@ fn json_carries_the_whole_setting() {
     assert_eq!(st["loss"], "linear");
     assert_eq!(st["absolute_sigma"], false);
     // The floor (1e-6 × max L) and how many values lie below it, counted from the file.
-    let ds = goniofit::io::read_dataset(
+    let ds = goniofit::read(
         &repo(GARNET),
-        &goniofit::io::ReadOptions {
+        &goniofit::ReadOptions {
             channel: Some("550nm".into()),
             require_value: true,
             ..Default::default()
@@ -424,7 +421,7 @@ fn profile_intervals_of_a_linear_model_are_t_times_the_standard_error() {
     let (s, se) = (f(&p["value"]), f(&p["stderr"]));
     let dof = (v["n"].as_u64().unwrap() - 1) as f64;
     for (key, prob) in [("interval68", 0.682_689_492_137_086), ("interval95", 0.95)] {
-        let t = goniofit::fit::stats::profile::student_t_quantile(0.5 * (1.0 + prob), dof);
+        let t = goniofit::stats::student_t_quantile(0.5 * (1.0 + prob), dof);
         let (lo, hi) = interval(&p[key]);
         let (lo, hi) = (lo.unwrap(), hi.unwrap());
         assert!(
@@ -537,10 +534,10 @@ fn profile_ends_are_where_a_fit_holding_the_parameter_reaches_the_threshold() {
         let (lo, hi) = interval(&v["params"][name][key]);
         let end = [lo, hi][side].unwrap();
         let fix = format!("{name}={end:.17e}");
-        let th = goniofit::fit::stats::profile::threshold(prob, chi2_min, dof, false);
+        let th = goniofit::stats::profile_threshold(prob, chi2_min, dof, false);
         let delta = chi2_holding(&GARNET_550, &fix) - chi2_min;
         assert!(
-            ((delta / th).sqrt() - 1.0).abs() < 2.0 * goniofit::fit::stats::profile::CROSS_TOL,
+            ((delta / th).sqrt() - 1.0).abs() < 2.0 * goniofit::stats::CROSS_TOL,
             "{name} {key} end {end}: Δχ² {delta} against the threshold {th}"
         );
     }
@@ -563,7 +560,7 @@ fn a_profile_flat_out_to_the_domain_edge_is_open() {
     let v = fit_json(&[&args[..], &["--json", GARNET]].concat());
     let chi2_min = f(&v["chi2"]);
     let dof = v["n"].as_u64().unwrap() as usize - 4;
-    let th = goniofit::fit::stats::profile::threshold(0.95, chi2_min, dof, false);
+    let th = goniofit::stats::profile_threshold(0.95, chi2_min, dof, false);
     for name in ["sigma", "T"] {
         let (lo, hi) = interval(&v["params"][name]["interval95"]);
         assert!(lo.unwrap() < f(&v["params"][name]["value"]) && hi.is_none());
@@ -689,7 +686,7 @@ fn small_cli_texts_say_what_they_mean() {
 /// batch report.
 #[test]
 fn json_reports_read_back_into_the_typed_report() {
-    use goniofit::report::json::FitReport;
+    use goniofit::FitReport;
     let round_trip = |v: &serde_json::Value| {
         let report: FitReport = serde_json::from_value(v.clone()).unwrap();
         assert_eq!(&serde_json::to_value(&report).unwrap(), v);
@@ -744,4 +741,13 @@ fn plot_names_what_a_report_lacks() {
         &["plot", no_replay.to_str().unwrap(), "--out", "p"],
         "missing field",
     );
+}
+
+/// The SHA-256 of `bytes` as lowercase hex, by the sha2 crate.
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }

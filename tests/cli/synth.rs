@@ -2,21 +2,20 @@
 //! layouts, the truth file and the error exits.
 
 use assert_cmd::Command;
-use goniofit::geometry::{Geometry, Quantity, Sample};
-use goniofit::harness::synth::{self, Layout, Noise, NoiseKind, Truth};
-use goniofit::model::{by_name, EvalMode, ModelOptions};
+use goniofit::synth::{self, Layout, Noise, NoiseKind, Truth};
+use goniofit::{model as by_name, EvalMode, ModelOptions};
+use goniofit::{Geometry, Quantity, Sample};
 use predicates::str::contains;
 use std::path::{Path, PathBuf};
 
 const KBS: [&str; 4] = ["--model", "kbs", "--params", "sigma=0.3,T=2,scale=1"];
 
 /// `goniofit synth` writes a wavelength column for the KBS models.
-const WITH_WAVELENGTH: goniofit::harness::synth::CsvOptions =
-    goniofit::harness::synth::CsvOptions {
-        sigma: false,
-        wavelength: true,
-        signed_theta_r: false,
-    };
+const WITH_WAVELENGTH: goniofit::synth::CsvOptions = goniofit::synth::CsvOptions {
+    sigma: false,
+    wavelength: true,
+    signed_theta_r: false,
+};
 
 fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()

@@ -1,6 +1,6 @@
 //! The library: the models against references and their own properties, the readers and
-//! writers, the solver on the NIST problems, fits of synthetic and stiff cases, and the
-//! pictures. Compiled into the library's unit tests (`cargo test --lib`), so they reach
+//! writers, the solver on the NIST problems, fits of synthetic and stiff cases, a seeded
+//! recovery run, and the pictures. Compiled into the library's unit tests (`cargo test --lib`), so they reach
 //! what is private to the crate.
 
 mod alta;
@@ -16,6 +16,7 @@ mod model_props;
 mod nist;
 mod plot;
 mod plot_sharp;
+mod recover;
 mod rgl;
 mod stiff;
 mod validity;

@@ -1,8 +1,8 @@
 //! A seeded small recovery run: coverage of the reported uncertainties in a sensible band,
 //! and small recovery errors in the quantities the fits say the data determines.
 
-use goniofit::harness::recover::{self, RecoverConfig, Regime};
-use goniofit::lm::Stop;
+use crate::harness::recover::{self, RecoverConfig, Regime};
+use crate::Stop;
 
 /// Every scored quantity of `r` within `max_rel` of its truth.
 fn assert_within(r: &recover::SceneResult, max_rel: f64, run: &str) {
@@ -66,7 +66,7 @@ fn seeded_recovery_is_calibrated_and_accurate() {
     }
     // Fits that determine everything are accurate to a few percent.
     for res in &report.results {
-        if res.verdict == Some(goniofit::fit::driver::Verdict::Full) {
+        if res.verdict == Some(crate::Verdict::Full) {
             assert_within(res, 0.05, "seed 11");
         }
     }
@@ -85,13 +85,13 @@ fn scoring_follows_the_verdict() {
         let r = recover::run_scene(s, &RecoverConfig::default(), &Stop::new(None, None)).unwrap();
         let names: Vec<&str> = r.checks.iter().map(|c| c.name.as_str()).collect();
         match r.verdict.unwrap() {
-            goniofit::fit::driver::Verdict::Full => {
+            crate::Verdict::Full => {
                 assert_eq!(names, ["sigma", "T", "scale", "T/sigma"])
             }
-            goniofit::fit::driver::Verdict::Rough => assert_eq!(names, ["T/sigma", "amplitude"]),
-            goniofit::fit::driver::Verdict::Smooth => assert_eq!(names, ["T", "amplitude"]),
-            goniofit::fit::driver::Verdict::Partial => {}
-            v @ goniofit::fit::driver::Verdict::NotComputed => panic!("{v:?} without a stop"),
+            crate::Verdict::Rough => assert_eq!(names, ["T/sigma", "amplitude"]),
+            crate::Verdict::Smooth => assert_eq!(names, ["T", "amplitude"]),
+            crate::Verdict::Partial => {}
+            v @ crate::Verdict::NotComputed => panic!("{v:?} without a stop"),
         }
         for c in &r.checks {
             assert!(c.value.is_finite() && c.truth > 0.0);
@@ -232,7 +232,7 @@ fn an_interrupted_recovery_has_no_summary_and_counts_no_errors() {
         }
     });
     match report {
-        Err(goniofit::Error::Stopped(msg)) => assert!(msg.contains("of 40 scenes"), "{msg}"),
+        Err(crate::Error::Stopped(msg)) => assert!(msg.contains("of 40 scenes"), "{msg}"),
         other => panic!("not a stop: {other:?}"),
     }
     let fitted = done.load(std::sync::atomic::Ordering::SeqCst);
@@ -245,7 +245,7 @@ fn an_interrupted_recovery_has_no_summary_and_counts_no_errors() {
 /// beyond θ_loc = 60°) says n is not determined and scores no n.
 #[test]
 fn dielectric_smith_scenes_recover_n_or_say_it_is_not_determined() {
-    use goniofit::model::{fresnel::Fresnel, shadowing::Shadowing};
+    use crate::{Fresnel, Shadowing};
     let config = RecoverConfig {
         scenes: 12,
         seed: 29,
