@@ -6,13 +6,13 @@
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = std::path::PathBuf::from(args.next().ok_or("usage: read_file FILE [CHANNEL]")?);
-    let opts = goniofit::io::ReadOptions {
+    let opts = goniofit::ReadOptions {
         channel: args.next(),
         require_value: true,
         ..Default::default()
     };
     let t0 = std::time::Instant::now();
-    let ds = goniofit::io::read_dataset_columns(&path, &opts)?;
+    let ds = goniofit::read(&path, &opts)?;
     let seconds = t0.elapsed().as_secs_f64();
     let mb = std::fs::metadata(&path)?.len() as f64 / 1e6;
     println!(

@@ -138,7 +138,7 @@ pub type Result<T> = std::result::Result<T, Error>;
 /// and the bidirectional-text controls (U+061C, U+200E, U+200F, U+202A–U+202E,
 /// U+2066–U+2069) are written as escapes (`\n`, `\u{202e}`), everything else as is; so a
 /// file or group name cannot fake a line of a report or reverse the text after it.
-pub fn shown_text(s: &str) -> std::borrow::Cow<'_, str> {
+pub(crate) fn shown_text(s: &str) -> std::borrow::Cow<'_, str> {
     let hostile = |c: char| {
         c.is_control()
             || matches!(c, '\u{061c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
@@ -159,7 +159,7 @@ pub fn shown_text(s: &str) -> std::borrow::Cow<'_, str> {
 
 /// A path as printed in messages and reports: [`shown_text`] of its text (invalid UTF-8
 /// shown as U+FFFD).
-pub fn shown(path: &std::path::Path) -> String {
+pub(crate) fn shown(path: &std::path::Path) -> String {
     shown_text(&path.to_string_lossy()).into_owned()
 }
 

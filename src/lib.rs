@@ -1,23 +1,58 @@
 //! goniofit: fit physical light-scattering models to gonioreflectometer measurements.
 //!
-//! Layers, from the bottom: [`error`]; [`lm`] (Levenberg–Marquardt as an argmin solver, its
-//! own crate, `goniofit-lm`, importing nothing of this one); [`geometry`] (angles, per-sample
-//! quantities, measurement layouts); [`io`] (readers and writers); [`model`] (one file per
-//! model); [`fit`] (the fit pipeline and its statistics); [`design`] (what to measure
-//! next); [`plot`] and [`report`]; [`harness`] (synthetic data, recovery and work–precision
-//! runs). [`settings`] validates the numeric options of every command.
+//! The library's surface is what a program or a binding needs: read a file ([`read`]) or
+//! arrays ([`arrays`]) into a [`Dataset`], fit it ([`fit_dataset`] with a [`DatasetFit`],
+//! or one [`Model`] on prepared arrays with [`fit_model`]), and render the outcome
+//! ([`report`], [`plot`]); models evaluate on a [`Geometry`] of samples; [`design`] says
+//! what to measure next; [`cli::main`] is the whole command line. Everything else is
+//! private to the crate.
+//!
+//! ```
+//! use goniofit::{fit_dataset, read, DatasetFit, FitConfig, Quantity, ReadOptions, ResidualKind};
+//!
+//! // One channel of a Cornell paint: BRDF samples, λ = 550 nm from the channel's name.
+//! let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
+//! let opts = ReadOptions { channel: Some("550nm".into()), require_value: true, ..Default::default() };
+//! let ds = read(&path, &opts)?;
+//! let spec = DatasetFit {
+//!     model: "kbs+lambert".into(),
+//!     quantity: Quantity::Brdf,
+//!     wavelength: None,
+//!     config: FitConfig { residual: ResidualKind::Log, ..FitConfig::default() },
+//!     absolute_sigma: false,
+//!     intervals: false,
+//! };
+//! let outcome = fit_dataset(&spec, "garnet red 550 nm".into(), ds)?;
+//! let fit = &outcome.result;
+//! assert!(fit.converged());
+//! for p in &fit.params {
+//!     // σ and T in nm (λ's unit); a standard error where the data determines the parameter.
+//!     println!("{} = {} ± {:?} (determined: {})", p.name, p.value, p.stderr, p.determined);
+//! }
+//! println!("{}", goniofit::report::to_text(&outcome, &Default::default()));
+//! # Ok::<(), goniofit::Error>(())
+//! ```
+//!
+//! Inside, the layers run one way, from the bottom: `error`; [`lm`] (Levenberg–Marquardt
+//! as an argmin solver, its own crate, `goniofit-lm`); `geometry` (angles, per-sample
+//! quantities, measurement layouts); `io` (readers and writers); `model` (one file per
+//! model, [`series`] the KBS sum); `fit` (the fit pipeline and its statistics); [`design`];
+//! [`plot`] and [`report`]; `harness` (synthetic data, recovery and work–precision runs);
+//! the command line (`cli`, `commands`). [`settings`] validates the numeric options of
+//! every front end.
 
 #![warn(missing_docs)]
+#![warn(unreachable_pub)]
 
 pub mod cli;
 mod commands;
 pub mod design;
-pub mod error;
-pub mod fit;
-pub mod geometry;
-pub mod harness;
-pub mod io;
-pub mod model;
+mod error;
+mod fit;
+mod geometry;
+mod harness;
+mod io;
+mod model;
 pub mod plot;
 pub mod report;
 pub mod settings;
@@ -30,22 +65,32 @@ pub use goniofit_lm::Stop;
 // Measured data: reading a file, the samples' angles and per-sample quantities.
 pub use geometry::layout::AnglesDeg;
 pub use geometry::{Geometry, PerSample, Quantity, Sample};
-pub use io::{parse_length, read_dataset as read, Dataset, ReadOptions};
+pub use io::csv::parse_columns;
+pub use io::{parse_length, read_dataset_columns as read, Dataset, ReadOptions};
 
 // Models: by name, evaluated on a geometry.
+pub use model::domain::check_finite;
 pub use model::fresnel::Fresnel;
 pub use model::shadowing::Shadowing;
 pub use model::{
-    by_name as model, parse_assignments, parse_params, EvalMode, Model, ModelOptions, ParamSpec,
-    MODEL_NAMES,
+    by_name as model, check_param_count, check_param_value, parse_assignments, parse_params,
+    EvalMode, Model, ModelOptions, ParamSpec, MODEL_NAMES,
 };
 
 // Fits: a dataset's fit as the command runs it, or one model on prepared arrays.
-pub use fit::dataset::{fit_dataset, DatasetFit, Outcome, AUTO_CANDIDATES};
+pub use fit::dataset::batch::in_chains;
+pub use fit::dataset::{
+    check_magnitudes, fit_dataset, fit_dataset_near, DatasetFit, Outcome, AUTO_CANDIDATES,
+};
 pub use fit::driver::{fit_model, FitConfig, FitInput, FitResult, ParamResult, Verdict};
 pub use fit::problem::loss::{Loss, LossKind};
 pub use fit::problem::{Channels, ResidualKind};
 pub use report::json::FitReport;
+
+/// Samples from arrays: a dataset built from per-sample columns (the Python binding's input).
+pub mod arrays {
+    pub use crate::io::arrays::{dataset, Columns};
+}
 
 /// The KBS series: ln q(g, a) and its derivatives, exact over g ∈ [1e-12, 1e6].
 pub mod series {

@@ -11,7 +11,7 @@
 //! | `max_iter` | any count (0: the report of the starting point, not converged) |
 //! | `tol` | [1e-16, 0.1] |
 //! | `f_scale` | [1e-100, 1e100] (its square, the loss's scale, stays a normal number) |
-//! | `floor` | finite, > 0 (and below the largest measured value: [`crate::fit::dataset`]) |
+//! | `floor` | finite, > 0 (and below the largest measured value: `crate::fit::dataset`) |
 //! | `wavelength`, `patch` half-sizes | [1e-30, 1e30] |
 //! | `scenes` (recover) | 1 ..= 1,000,000 (every scene is drawn, so the count is memory) |
 
@@ -102,7 +102,7 @@ pub fn f_scale(front: Front, c: f64) -> Result<f64> {
 }
 
 /// The floor of relative and log residuals: finite and > 0 (None: the default,
-/// 1e-6 × max |L|). The fit of a dataset compares it with the data ([`crate::fit::dataset`]).
+/// 1e-6 × max |L|). The fit of a dataset compares it with the data (`crate::fit::dataset`).
 pub fn floor(front: Front, floor: Option<f64>) -> Result<Option<f64>> {
     match floor {
         Some(f) if !(f.is_finite() && f > 0.0) => Err(front.refuse(
@@ -114,7 +114,7 @@ pub fn floor(front: Front, floor: Option<f64>) -> Result<Option<f64>> {
     }
 }
 
-/// A length option (`wavelength`, a `patch` half-size) within [`LENGTH_RANGE`].
+/// A length option (`wavelength`, a `patch` half-size) within `LENGTH_RANGE`.
 pub fn length(front: Front, key: &str, v: f64) -> Result<f64> {
     let (lo, hi) = LENGTH_RANGE;
     if !(lo..=hi).contains(&v) {
@@ -142,7 +142,7 @@ pub fn scenes(front: Front, n: usize) -> Result<usize> {
     Ok(n)
 }
 
-/// The relative accuracy target of the KBS evaluation: within [`TOL_RANGE`].
+/// The relative accuracy target of the KBS evaluation: within `TOL_RANGE`.
 pub fn tol(front: Front, tol: f64) -> Result<f64> {
     if !(TOL_RANGE.0..=TOL_RANGE.1).contains(&tol) {
         return Err(front.refuse(

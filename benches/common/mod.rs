@@ -1,7 +1,7 @@
 //! The sample batches the evaluation benchmarks share (`benches/eval.rs`,
 //! `benches/eval_ratio.rs`).
 
-use goniofit::geometry::{Geometry, Quantity, Sample};
+use goniofit::{Geometry, Quantity, Sample};
 use rand::{Rng, SeedableRng};
 
 /// Samples per batch.

@@ -5,10 +5,8 @@
 use crate::convert::{json_to_py, to_py_err};
 use crate::{options, run};
 use goniofit::design::{self, before_and_after, Grid, NoiseModel, Request, Scene, Simulation};
-use goniofit::geometry::layout::AnglesDeg;
-use goniofit::geometry::Sample;
-use goniofit::model;
-use goniofit::report::design::{json, Run};
+use goniofit::report::{design_json as json, DesignRun as Run};
+use goniofit::{AnglesDeg, Sample};
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -73,7 +71,7 @@ pub fn _design<'py>(
     simulate: usize,
     seed: u64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let m = model::by_name(model, &model::ModelOptions::default()).map_err(to_py_err)?;
+    let m = goniofit::model(model, &goniofit::ModelOptions::default()).map_err(to_py_err)?;
     let scene = Scene {
         model: m.as_ref(),
         params: options::param_vector(m.as_ref(), params)?,

@@ -20,10 +20,8 @@ mod result;
 mod run;
 
 use convert::{json_to_py, to_py_err};
-use goniofit::geometry::Geometry;
-use goniofit::io::{self, arrays, ReadOptions};
-use goniofit::model;
 use goniofit::settings;
+use goniofit::{arrays, Geometry, ModelOptions, ReadOptions};
 use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray1};
 use options::{FitOptions, SampleArrays};
 use pyo3::prelude::*;
@@ -111,7 +109,7 @@ fn evaluate<'py>(
     fresnel: &str,
     shadowing: &str,
 ) -> PyResult<Py<PyAny>> {
-    let model_opts = model::ModelOptions {
+    let model_opts = ModelOptions {
         fresnel: options::fresnel(fresnel)?,
         shadowing: options::shadowing(shadowing)?,
         ..options::checked(settings::model_options(
@@ -121,7 +119,7 @@ fn evaluate<'py>(
             patch,
         ))?
     };
-    let m = model::by_name(model, &model_opts).map_err(to_py_err)?;
+    let m = goniofit::model(model, &model_opts).map_err(to_py_err)?;
     let p = options::param_vector(m.as_ref(), params)?;
     let quantity = options::quantity(quantity)?;
     let (ti, tr, pr) = (theta_i.as_slice()?, theta_r.as_slice()?, phi_r.as_slice()?);
@@ -185,19 +183,19 @@ fn read<'py>(
         let opts = ReadOptions {
             radians: csv_radians,
             signed_theta_r,
-            columns: io::csv::parse_columns(columns.unwrap_or(""))?,
+            columns: goniofit::parse_columns(columns.unwrap_or(""))?,
             require_value,
             channel,
             subsample,
         };
         // The file's angles (CSV: degrees, or radians with `csv_radians`; ASTM: radians)
         // are handed back in the unit asked for (`radians`).
-        let ds = io::read_dataset(&path, &opts)?;
+        let ds = goniofit::read(&path, &opts)?;
         Ok::<_, goniofit::Error>(ds)
     })?
     .map_err(to_py_err)?;
     let out = PyDict::new(py);
-    let angle = |f: fn(&goniofit::geometry::Sample) -> f64| -> Vec<f64> {
+    let angle = |f: fn(&goniofit::Sample) -> f64| -> Vec<f64> {
         ds.samples
             .iter()
             .map(|s| if radians { f(s) } else { f(s).to_degrees() })
@@ -230,8 +228,8 @@ fn read<'py>(
 #[pyfunction]
 fn models(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     let out = PyDict::new(py);
-    for name in model::MODEL_NAMES {
-        let m = model::by_name(name, &model::ModelOptions::default()).map_err(to_py_err)?;
+    for name in goniofit::MODEL_NAMES {
+        let m = goniofit::model(name, &ModelOptions::default()).map_err(to_py_err)?;
         let specs: Vec<(String, String, String)> = m
             .params()
             .iter()
@@ -261,9 +259,6 @@ fn _goniofit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design::_design, m)?)?;
     m.add_class::<FitResult>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add(
-        "AUTO_CANDIDATES",
-        goniofit::fit::dataset::AUTO_CANDIDATES.to_vec(),
-    )?;
+    m.add("AUTO_CANDIDATES", goniofit::AUTO_CANDIDATES.to_vec())?;
     Ok(())
 }

@@ -5,11 +5,8 @@
 use crate::convert::json_to_py;
 use crate::convert::to_py_err;
 use crate::options::FitOptions;
-use goniofit::fit::dataset::Outcome;
-use goniofit::fit::driver::FitConfig;
-use goniofit::plot;
-use goniofit::report::json::FitReport;
 use goniofit::report::{self, RunInfo};
+use goniofit::{plot, FitConfig, FitReport, Outcome};
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -42,8 +39,7 @@ impl FitResult {
     /// equivalent CLI command).
     pub fn new(outcome: Outcome, o: &FitOptions) -> Self {
         let args = o.cli_args();
-        let setting =
-            report::outcome::setting(&outcome.dataset, &outcome.input, &o.setting_source());
+        let setting = report::setting(&outcome.dataset, &outcome.input, &o.setting_source());
         let info = RunInfo {
             input: outcome.label.clone(),
             command: format!("goniofit {} ({})", args.join(" "), outcome.label),
@@ -76,7 +72,7 @@ impl FitResult {
     /// The CLI's report of this fit (built once).
     fn typed_report(&self) -> &FitReport {
         self.report
-            .get_or_init(|| report::outcome::report(&self.outcome, &self.info, &self.args))
+            .get_or_init(|| report::fit_report(&self.outcome, &self.info, &self.args))
     }
 
     /// The report as a JSON value (built once).
@@ -95,7 +91,7 @@ impl FitResult {
     /// The report's pictures as (name, SVG document).
     fn svg_figures(&self) -> PyResult<Vec<(String, String)>> {
         let (line, undetermined) = self.status();
-        plot::fit::svg_of_outcome(
+        plot::svg_of_outcome(
             &self.config,
             &self.outcome,
             (&line, &undetermined),
@@ -207,7 +203,7 @@ impl FitResult {
 
     /// The CLI's text report of this fit.
     fn report(&self) -> String {
-        report::outcome::to_text(&self.outcome, &self.info)
+        report::to_text(&self.outcome, &self.info)
     }
 
     /// The CLI's JSON report of this fit (``goniofit fit --json``), key for key.
@@ -238,7 +234,7 @@ impl FitResult {
             "png" | "matplotlib" => {
                 let (line, undetermined) = self.status();
                 let pngs = py.detach(|| {
-                    plot::fit::png_of_outcome(
+                    plot::png_of_outcome(
                         &self.config,
                         &self.outcome,
                         (&line, &undetermined),
@@ -269,7 +265,7 @@ impl FitResult {
     /// tables, and the fit on a log scale.
     fn _repr_html_(&self) -> String {
         let (line, undetermined) = self.status();
-        let key = plot::fit::key_svg_of_outcome(
+        let key = plot::key_svg_of_outcome(
             &self.config,
             &self.outcome,
             (&line, &undetermined),
@@ -277,10 +273,10 @@ impl FitResult {
         )
         .ok()
         .flatten();
-        report::html::fragment(
+        report::html_fragment(
             &self.outcome.result,
             &self.info,
-            &report::outcome::comparison(&self.outcome),
+            &report::comparison(&self.outcome),
             key.as_deref(),
         )
     }
@@ -313,7 +309,7 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
 }
 
 /// The result of an outcome.
-fn r(o: &Outcome) -> &goniofit::fit::driver::FitResult {
+fn r(o: &Outcome) -> &goniofit::FitResult {
     &o.result
 }
 
@@ -344,7 +340,7 @@ fn fit_columns(py: Python<'_>, out: &Bound<'_, PyDict>, outcomes: &[Outcome]) ->
     // As the JSON report spells them (report::json).
     out.set_item(
         "termination",
-        text(&|o| report::json::termination_name(r(o).termination)),
+        text(&|o| report::termination_name(r(o).termination)),
     )?;
     let verdict = |o: &Outcome| match serde_json::to_value(r(o).verdict) {
         Ok(Value::String(s)) => s,

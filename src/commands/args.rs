@@ -9,11 +9,11 @@ use clap::ValueEnum;
 
 /// A wavelength on the command line: the number and its unit (`nm`, `µm`), or no unit for
 /// a bare number (then it is in the unit of σ and T, whatever that is).
-pub type Wavelength = (f64, Option<&'static str>);
+pub(crate) type Wavelength = (f64, Option<&'static str>);
 
 /// `--wavelength` of every command: a positive number with an optional unit (`633nm`,
 /// `633 nm`, `0.633um`, `0.633µm`) or a bare number ([`crate::io::parse_length`]).
-pub fn parse_wavelength(text: &str) -> Result<Wavelength, String> {
+pub(crate) fn parse_wavelength(text: &str) -> Result<Wavelength, String> {
     crate::io::parse_length(text).map_err(|e| e.to_string())
 }
 
@@ -91,7 +91,7 @@ impl From<LossArg> for LossKind {
 }
 
 /// Parse `X,Y` patch half-sizes.
-pub fn parse_patch(text: &str) -> crate::Result<(f64, f64)> {
+pub(crate) fn parse_patch(text: &str) -> crate::Result<(f64, f64)> {
     let bad = || {
         crate::Error::Usage(format!(
             "--patch '{text}': expected two positive numbers X,Y"
@@ -108,7 +108,7 @@ pub fn parse_patch(text: &str) -> crate::Result<(f64, f64)> {
 
 /// `--fresnel` and `--shadowing`: the factors on the KBS lobe (fit, eval, synth, render).
 #[derive(Debug, Clone, Copy, Default, clap::Args)]
-pub struct FactorArgs {
+pub(crate) struct FactorArgs {
     /// Fresnel factor on the KBS lobe, normalised at normal incidence: dielectric (parameter
     /// n), conductor (n, kappa), schlick (n), or none (the paper's model).
     #[arg(long, value_enum, default_value = "none")]
@@ -121,7 +121,7 @@ pub struct FactorArgs {
 
 impl FactorArgs {
     /// `opts` with these factors.
-    pub fn apply(self, opts: ModelOptions) -> ModelOptions {
+    pub(crate) fn apply(self, opts: ModelOptions) -> ModelOptions {
         ModelOptions {
             fresnel: self.fresnel.into(),
             shadowing: self.shadowing.into(),
@@ -173,7 +173,7 @@ impl From<ShadowingArg> for Shadowing {
 /// The read options of a command that reads one table (`eval`, `convert`): its `--columns`
 /// mappings parsed, its angle flags, channel and MERL subsampling; `require_value`: whether the value column
 /// `L` must be there.
-pub fn table_read_options(
+pub(crate) fn table_read_options(
     columns: &[String],
     (radians, signed_theta_r): (bool, bool),
     (channel, subsample): (Option<String>, usize),
@@ -195,7 +195,10 @@ pub fn table_read_options(
 
 /// The files of a command that reads `file` and writes one table to `out` (standard output
 /// when none).
-pub fn table_files(file: &std::path::Path, out: Option<&std::path::Path>) -> crate::io::FileSet {
+pub(crate) fn table_files(
+    file: &std::path::Path,
+    out: Option<&std::path::Path>,
+) -> crate::io::FileSet {
     let set = crate::io::FileSet::new().input("input", file);
     match out {
         Some(out) => set.output("--out", out),

@@ -7,13 +7,13 @@ use clap::{Args, Subcommand};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
-pub struct BenchArgs {
+pub(crate) struct BenchArgs {
     #[command(subcommand)]
     pub command: BenchCommand,
 }
 
 #[derive(Debug, Subcommand)]
-pub enum BenchCommand {
+pub(crate) enum BenchCommand {
     /// Error against run time for the KBS evaluation modes (series at tol 1e-4 … 1e-14,
     /// smooth, rough, auto) and the solver settings (analytic vs finite-difference Jacobian,
     /// loose/default/tight tolerances).
@@ -28,7 +28,7 @@ largest relative error against the series at tol 1e-15; param_error = largest re
 of σ, T, scale from a fit, in that mode, of noise-free reference data (4x12x24 hemisphere, \
 σ=0.3, T=2, scale=1.5). Fit rows: the same fit in auto mode with each solver setting; \
 seconds = median solver time.")]
-pub struct WorkPrecisionArgs {
+pub(crate) struct WorkPrecisionArgs {
     /// Print `{"rows": [...]}` as JSON instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -42,7 +42,7 @@ pub struct WorkPrecisionArgs {
 
 impl BenchArgs {
     /// The plot in the `--out` folder, and the table on standard output.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         match &self.command {
             BenchCommand::WorkPrecision(a) => FileSet::new()
                 .pictures("--out", &a.out, &[workprec::PLOT_STEM])
@@ -52,7 +52,7 @@ impl BenchArgs {
 }
 
 /// Run `goniofit bench ...`.
-pub fn run(args: BenchArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: BenchArgs) -> anyhow::Result<u8> {
     match args.command {
         BenchCommand::WorkPrecision(a) => work_precision(a),
     }

@@ -15,7 +15,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
-pub struct ConvertArgs {
+pub(crate) struct ConvertArgs {
     /// The channel to convert: an ASTM channel (550nm), an RGL channel (r, g, b), a CSV
     /// group or wavelength; `all` for every channel.
     #[arg(long)]
@@ -41,12 +41,12 @@ pub struct ConvertArgs {
 
 impl ConvertArgs {
     /// The input file; the table to `--out` or standard output.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         super::args::table_files(&self.file, self.out.as_deref())
     }
 }
 
-pub fn run(args: ConvertArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: ConvertArgs) -> anyhow::Result<u8> {
     let opts = super::args::table_read_options(
         &args.columns,
         (args.radians, args.signed_theta_r),

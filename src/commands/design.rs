@@ -18,7 +18,7 @@ use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 #[command(after_help = AFTER_HELP)]
-pub struct DesignArgs {
+pub(crate) struct DesignArgs {
     /// A fit report (`goniofit fit --json > fit.json`): its model, values, wavelength,
     /// residual kind and noise (√ reduced χ²), and its data's geometries as measured.
     #[arg(long, value_name = "FIT.json", conflicts_with_all = ["model", "params", "wavelength", "quantity", "residual", "existing"])]
@@ -103,7 +103,7 @@ Examples:
 impl DesignArgs {
     /// The report and its data, or the measured and candidate geometry files; the CSV, the
     /// picture and standard output.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         let mut set = FileSet::new().stdout();
         if let Some(f) = &self.from {
             set = set.input("--from", f);
@@ -141,7 +141,7 @@ struct Setup {
     fit: Option<FitConfig>,
 }
 
-pub fn run(a: DesignArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(a: DesignArgs) -> anyhow::Result<u8> {
     let setup = match &a.from {
         Some(path) => from_report(&a, read_saved_fit(path)?)?,
         None => from_model(&a)?,

@@ -20,7 +20,7 @@ use clap::Args;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
-pub struct EvalArgs {
+pub(crate) struct EvalArgs {
     /// Model name: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular.
     #[arg(long)]
     pub model: String,
@@ -69,12 +69,12 @@ pub struct EvalArgs {
 
 impl EvalArgs {
     /// The input file; the table to `--out` or standard output.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         super::args::table_files(&self.file, self.out.as_deref())
     }
 }
 
-pub fn run(args: EvalArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let opts = super::args::table_read_options(
         &args.columns,
         (args.radians, args.signed_theta_r),

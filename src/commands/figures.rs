@@ -6,7 +6,7 @@ use clap::Args;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
-pub struct FiguresArgs {
+pub(crate) struct FiguresArgs {
     /// Output folder (created if needed); writes figure4.png, figure4.svg, … figure7.svg.
     #[arg(long)]
     pub out: PathBuf,
@@ -14,14 +14,14 @@ pub struct FiguresArgs {
 
 impl FiguresArgs {
     /// The figures in the `--out` folder, and their names on standard output.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         FileSet::new()
             .pictures("--out", &self.out, &crate::plot::figures::FIGURES)
             .stdout()
     }
 }
 
-pub fn run(args: FiguresArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: FiguresArgs) -> anyhow::Result<u8> {
     let paths = crate::plot::figures::write_all(&args.out)
         .with_context(|| format!("writing figures into {}", crate::io::shown(&args.out)))?;
     for p in paths {

@@ -15,7 +15,7 @@ use anyhow::Context;
 use std::path::{Path, PathBuf};
 
 /// The whole setting of one dataset's fit, for the report (`report::Setting`).
-pub fn setting_of(
+pub(crate) fn setting_of(
     args: &FitArgs,
     ds: &Dataset,
     input: &FitInput,
@@ -55,7 +55,7 @@ fn units_of(args: &FitArgs, ds: &Dataset) -> report::Units {
 }
 
 /// The input file's absolute path, size and SHA-256.
-pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
+pub(crate) fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
     let io_error = |source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -95,7 +95,11 @@ fn dataset_fit(args: &FitArgs, ds: &Dataset, single: bool) -> anyhow::Result<Dat
 }
 
 /// The fit input of a dataset with the quantity, wavelength, residual and floor of `args`.
-pub fn input_of(args: &FitArgs, ds: &Dataset, needs_wavelength: bool) -> anyhow::Result<FitInput> {
+pub(crate) fn input_of(
+    args: &FitArgs,
+    ds: &Dataset,
+    needs_wavelength: bool,
+) -> anyhow::Result<FitInput> {
     Ok(dataset_fit(args, ds, false)?.input(ds, needs_wavelength)?)
 }
 
@@ -115,7 +119,7 @@ fn fit_one(
     fit_dataset_near(&spec, label, ds, near).context(context)
 }
 
-pub fn run(args: FitArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: FitArgs) -> anyhow::Result<u8> {
     // Refused before any file is read.
     if args.json && summary_on_stdout(&args) {
         return Err(Error::Usage(

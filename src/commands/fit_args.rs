@@ -51,7 +51,7 @@ Examples:
 
 #[derive(Debug, Args)]
 #[command(after_help = FIT_EXAMPLES)]
-pub struct FitArgs {
+pub(crate) struct FitArgs {
     /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
     /// (fits lambert, lambert-specular, kbs, kbs+lambert and kbs+lambert with --fresnel
     /// dielectric --shadowing smith, and keeps the lowest BIC).
@@ -189,7 +189,7 @@ pub struct FitArgs {
 impl FitArgs {
     /// The measurement files; the report on standard output, `--residuals`, `--html`,
     /// `--summary` and the pictures in the `--plot` folder.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         let mut set = FileSet::new();
         for f in &self.file {
             set = set.input("input", f);
@@ -207,13 +207,13 @@ impl FitArgs {
 
     /// Whether progress is drawn: on a terminal unless `--quiet` (indicatif draws nothing
     /// when standard error is not a terminal, so `--progress` cannot force it there).
-    pub fn show_progress(&self) -> bool {
+    pub(crate) fn show_progress(&self) -> bool {
         !self.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr())
     }
 
     /// How the input files are read (`--radians`, `--signed-theta-r`, `--columns`,
     /// `--channel`); values are required.
-    pub fn read_options(&self) -> anyhow::Result<ReadOptions> {
+    pub(crate) fn read_options(&self) -> anyhow::Result<ReadOptions> {
         // --by-group needs every channel (ASTM) or every wavelength (CSV) read.
         let channel = match (&self.channel, self.by_group) {
             (None, true) => Some("all".to_string()),
@@ -231,7 +231,7 @@ impl FitArgs {
 
     /// The measured quantity for a dataset and where it came from: `--quantity`, what the
     /// file states, or radiance by default.
-    pub fn quantity_for(&self, ds: &Dataset) -> (Quantity, &'static str) {
+    pub(crate) fn quantity_for(&self, ds: &Dataset) -> (Quantity, &'static str) {
         match (self.quantity, ds.quantity) {
             (Some(q), _) => (q.into(), "--quantity"),
             (None, Some(q)) => (q, "stated by the file"),
@@ -240,14 +240,14 @@ impl FitArgs {
     }
 
     /// The wavelength given on the command line, as a number.
-    pub fn wavelength_value(&self) -> Option<f64> {
+    pub(crate) fn wavelength_value(&self) -> Option<f64> {
         self.wavelength.map(|w| w.0)
     }
 }
 
 /// The fit configuration from the arguments, for a given model name; every numeric option
 /// checked ([`crate::settings`], as the Python package checks its keywords).
-pub fn fit_config(
+pub(crate) fn fit_config(
     args: &FitArgs,
     model: &str,
     weights_are_uncertainties: bool,
@@ -279,7 +279,7 @@ pub fn fit_config(
 }
 
 /// The unit of λ the fit's σ and T are in: `--wavelength`'s, else the file's.
-pub fn wavelength_unit(args: &FitArgs, ds: &Dataset) -> Option<String> {
+pub(crate) fn wavelength_unit(args: &FitArgs, ds: &Dataset) -> Option<String> {
     match (args.wavelength, &ds.wavelength) {
         (Some((_, u)), _) => u.map(String::from),
         (None, Some(_)) => ds.wavelength_unit.clone(),
@@ -290,7 +290,7 @@ pub fn wavelength_unit(args: &FitArgs, ds: &Dataset) -> Option<String> {
 /// `goniofit fit`'s arguments from a command line without the program name (`fit …`, as
 /// a report's `replay.args` keeps it), parsed as `goniofit` parses them; Err with clap's
 /// message when they do not parse or are not a fit's.
-pub fn parse_fit_line(args: Vec<String>) -> Result<FitArgs, clap::Error> {
+pub(crate) fn parse_fit_line(args: Vec<String>) -> Result<FitArgs, clap::Error> {
     #[derive(clap::Parser)]
     #[command(name = "goniofit")]
     struct FitLine {

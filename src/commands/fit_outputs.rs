@@ -15,7 +15,11 @@ use std::path::{Path, PathBuf};
 /// A fit whose stop request cut the evaluation of its fitted values (see
 /// [`FitResult::fitted_computed`]) writes neither the residuals file nor pictures, and
 /// says so.
-pub fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
+pub(crate) fn write_single_outputs(
+    args: &FitArgs,
+    o: &Outcome,
+    info: &RunInfo,
+) -> anyhow::Result<()> {
     if !o.result.fitted_computed {
         if args.residuals.is_some() || args.plot.is_some() {
             eprintln!("goniofit: no residuals file and no pictures written: the fit was stopped before its fitted values were evaluated");
@@ -49,7 +53,7 @@ pub fn write_single_outputs(args: &FitArgs, o: &Outcome, info: &RunInfo) -> anyh
 /// The outputs of a batch of fits: `--html` as one page (summary table, overview, one
 /// section per fit), `--plot` as one folder per fit ([`fit_folder`]). Fits whose fitted
 /// values were not evaluated get no pictures.
-pub fn write_batch_outputs(
+pub(crate) fn write_batch_outputs(
     args: &FitArgs,
     outcomes: &[Outcome],
     infos: &[RunInfo],
@@ -108,7 +112,7 @@ pub fn write_batch_outputs(
 /// The folder of fit `k` (0-based) of `n` in a batch's `--plot` folder: its number
 /// (zero-padded, so folders sort in the summary's order) and its label with every
 /// character but letters, digits, `.`, `-` and `_` made `_` (the file's folders left out).
-pub fn fit_folder(k: usize, n: usize, label: &str) -> String {
+pub(crate) fn fit_folder(k: usize, n: usize, label: &str) -> String {
     let width = n.to_string().len();
     // "data/cornell/garnet_red.astm [550nm]" → "garnet_red.astm [550nm]".
     let (file, group) = match label.find(" [") {

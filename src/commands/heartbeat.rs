@@ -11,9 +11,9 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Quiet time before the first line: short runs print nothing.
-pub const FIRST: Duration = Duration::from_secs(2);
+pub(crate) const FIRST: Duration = Duration::from_secs(2);
 /// Time between lines.
-pub const EVERY: Duration = Duration::from_secs(5);
+pub(crate) const EVERY: Duration = Duration::from_secs(5);
 
 /// What the run is doing now.
 #[derive(Debug, Default)]
@@ -26,7 +26,7 @@ struct State {
 }
 
 /// The progress line writer; lines stop when it is dropped.
-pub struct Heartbeat {
+pub(crate) struct Heartbeat {
     state: Arc<Mutex<State>>,
     quit: Option<Sender<()>>,
     thread: Option<JoinHandle<()>>,
@@ -35,14 +35,14 @@ pub struct Heartbeat {
 impl Heartbeat {
     /// Lines on standard error when `enabled` and standard error is not a terminal;
     /// otherwise a heartbeat that records the stage and prints nothing.
-    pub fn start(enabled: bool) -> Heartbeat {
+    pub(crate) fn start(enabled: bool) -> Heartbeat {
         Heartbeat::to(enabled && !std::io::stderr().is_terminal(), |line| {
             eprintln!("{line}")
         })
     }
 
     /// Lines to `write` when `enabled` (the writer runs on the heartbeat's own thread).
-    pub fn to(enabled: bool, write: impl Fn(&str) + Send + 'static) -> Heartbeat {
+    pub(crate) fn to(enabled: bool, write: impl Fn(&str) + Send + 'static) -> Heartbeat {
         Heartbeat::timed(enabled, (FIRST, EVERY), write)
     }
 
@@ -80,21 +80,21 @@ impl Heartbeat {
     }
 
     /// The stage, in words ("reading data/x.csv", "fitting 40 datasets").
-    pub fn stage(&self, stage: impl Into<String>) {
+    pub(crate) fn stage(&self, stage: impl Into<String>) {
         if let Ok(mut s) = self.state.lock() {
             s.stage = stage.into();
         }
     }
 
     /// Start counting `total` datasets.
-    pub fn count(&self, total: u64) {
+    pub(crate) fn count(&self, total: u64) {
         if let Ok(mut s) = self.state.lock() {
             (s.done, s.total, s.counting_since) = (0, total, Some(Instant::now()));
         }
     }
 
     /// One more dataset done.
-    pub fn inc(&self) {
+    pub(crate) fn inc(&self) {
         if let Ok(mut s) = self.state.lock() {
             s.done += 1;
         }

@@ -2,26 +2,26 @@
 //! and lists every file it reads and writes (`files`), which `cli::run` checks together
 //! before the command starts ([`crate::io::FileSet`]).
 
-pub mod args;
-pub mod bench;
-pub mod convert;
-pub mod design;
-pub mod eval;
-pub mod figures;
-pub mod fit;
-pub mod fit_args;
-pub mod fit_outputs;
-pub mod heartbeat;
-pub mod plot;
-pub mod recover;
-pub mod render;
-pub mod signals;
-pub mod stages;
-pub mod synth;
+pub(crate) mod args;
+pub(crate) mod bench;
+pub(crate) mod convert;
+pub(crate) mod design;
+pub(crate) mod eval;
+pub(crate) mod figures;
+pub(crate) mod fit;
+pub(crate) mod fit_args;
+pub(crate) mod fit_outputs;
+pub(crate) mod heartbeat;
+pub(crate) mod plot;
+pub(crate) mod recover;
+pub(crate) mod render;
+pub(crate) mod signals;
+pub(crate) mod stages;
+pub(crate) mod synth;
 
 /// Whether `e` is a stop request that came before anything could be reported
 /// ([`crate::Error::Stopped`] anywhere in its chain).
-pub fn is_stopped(e: &anyhow::Error) -> bool {
+pub(crate) fn is_stopped(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
         matches!(
             c.downcast_ref::<crate::Error>(),
@@ -32,7 +32,7 @@ pub fn is_stopped(e: &anyhow::Error) -> bool {
 
 /// Exit code for an error: 3 for a stop with nothing to report ([`is_stopped`]), 2 for the
 /// user's input or usage, 1 for internal failures.
-pub fn exit_code_of(e: &anyhow::Error) -> u8 {
+pub(crate) fn exit_code_of(e: &anyhow::Error) -> u8 {
     if is_stopped(e) {
         return 3;
     }

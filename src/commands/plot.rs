@@ -15,7 +15,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
-pub struct PlotArgs {
+pub(crate) struct PlotArgs {
     /// A fit report written by `goniofit fit --json`.
     pub report: PathBuf,
     /// Folder for the pictures (PNG and SVG).
@@ -25,7 +25,7 @@ pub struct PlotArgs {
 
 impl PlotArgs {
     /// The report and the measurement file it names; the pictures in the `--out` folder.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         let mut set = FileSet::new().input("report", &self.report);
         let data = std::fs::read_to_string(&self.report)
             .ok()
@@ -46,7 +46,7 @@ pub(super) fn saved_input(report: &FitReport) -> Option<PathBuf> {
 
 /// A fit report read back with the data it fitted: the fit's arguments, model, fitted
 /// values (layout order), settings and input, and the unit of λ.
-pub struct SavedFit {
+pub(crate) struct SavedFit {
     pub report: FitReport,
     pub model: String,
     pub values: Vec<f64>,
@@ -59,7 +59,7 @@ pub struct SavedFit {
 /// Read a report written by `goniofit fit --json` and re-read the file it fitted (warning
 /// when the file changed since). Errors: not such a report (a bad input, exit 2), or the
 /// data no longer readable.
-pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
+pub(crate) fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -123,7 +123,7 @@ pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
     })
 }
 
-pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: PlotArgs) -> anyhow::Result<u8> {
     let SavedFit {
         report,
         values,

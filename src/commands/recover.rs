@@ -19,7 +19,7 @@ truths inside ±2 reported standard errors (≈ 0.95 when calibrated).
 
 Example:
   goniofit recover --scenes 30 --seed 11 --json > recover.json")]
-pub struct RecoverArgs {
+pub(crate) struct RecoverArgs {
     /// Number of scenes (regimes in turn: smooth, intermediate, rough, grazing).
     #[arg(long, default_value_t = 30)]
     pub scenes: usize,
@@ -47,7 +47,7 @@ pub struct RecoverArgs {
 }
 
 /// Run `goniofit recover`.
-pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     crate::settings::scenes(crate::settings::Front::Cli, args.scenes)?;
     if !(args.noise.is_finite() && args.noise > 0.0) {
         return Err(crate::Error::Usage(format!(
@@ -100,7 +100,7 @@ pub fn run(args: RecoverArgs) -> anyhow::Result<u8> {
 const SIGNALLED: u8 = 130;
 
 /// A progress bar on stderr, hidden when stderr is not a terminal.
-pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
     if !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
@@ -114,7 +114,7 @@ pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
 }
 
 /// A bar style from an indicatif template (the default bar if the template is invalid).
-pub fn bar_style(template: &str) -> indicatif::ProgressStyle {
+pub(crate) fn bar_style(template: &str) -> indicatif::ProgressStyle {
     indicatif::ProgressStyle::with_template(template)
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
         .progress_chars("=> ")

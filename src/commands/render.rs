@@ -9,20 +9,20 @@ use clap::{Args, Subcommand};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
-pub struct RenderArgs {
+pub(crate) struct RenderArgs {
     #[command(subcommand)]
     pub what: RenderWhat,
 }
 
 #[derive(Debug, Subcommand)]
-pub enum RenderWhat {
+pub(crate) enum RenderWhat {
     /// A sphere viewed along +z, lit from --light-deg off the view on the −x side; writes
     /// a PNG or SVG (by the extension of --out), brightness = L / L_max.
     Sphere(SphereArgs),
 }
 
 #[derive(Debug, Args)]
-pub struct SphereArgs {
+pub(crate) struct SphereArgs {
     /// Model name: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular.
     #[arg(long)]
     pub model: String,
@@ -55,14 +55,14 @@ pub struct SphereArgs {
 
 impl RenderArgs {
     /// The picture at `--out`, and its name printed on standard output.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         match &self.what {
             RenderWhat::Sphere(a) => FileSet::new().output("--out", &a.out).stdout(),
         }
     }
 }
 
-pub fn run(args: RenderArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: RenderArgs) -> anyhow::Result<u8> {
     match args.what {
         RenderWhat::Sphere(a) => sphere(a),
     }

@@ -6,7 +6,7 @@
 
 /// Install the handler (once, at the start of `main`). If another handler is already
 /// installed, signals keep their previous behaviour.
-pub fn install() {
+pub(crate) fn install() {
     let _ = ctrlc::set_handler(|| {
         if !crate::lm::stop::interrupt() {
             crate::io::output::remove_temporaries();

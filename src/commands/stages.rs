@@ -9,17 +9,17 @@ use crate::fit::dataset::Outcome;
 use crate::fit::driver::StageSeconds;
 
 /// The environment variable that asks for the stage timing.
-pub const VAR: &str = "GONIOFIT_STAGES";
+pub(crate) const VAR: &str = "GONIOFIT_STAGES";
 
 /// Whether the stage timing was asked for.
-pub fn wanted() -> bool {
+pub(crate) fn wanted() -> bool {
     std::env::var_os(VAR).is_some()
 }
 
 /// One fit's stage times: its [`StageSeconds`], its intervals' and its whole dataset's
 /// wall seconds.
 #[derive(Debug, Clone, Copy)]
-pub struct Times {
+pub(crate) struct Times {
     stages: StageSeconds,
     intervals: f64,
     dataset: f64,
@@ -27,7 +27,7 @@ pub struct Times {
 
 impl Times {
     /// The stage times of `o`.
-    pub fn of(o: &Outcome) -> Times {
+    pub(crate) fn of(o: &Outcome) -> Times {
         Times {
             stages: o.result.stage_seconds,
             intervals: o.interval_seconds,
@@ -38,7 +38,7 @@ impl Times {
 
 /// Write the stage timing line (see the module doc): the process's phases `(read, fit,
 /// report)` in wall seconds, and the median of each stage over the fits' `times`.
-pub fn print((read, fit, report): (f64, f64, f64), times: &[Times]) {
+pub(crate) fn print((read, fit, report): (f64, f64, f64), times: &[Times]) {
     let us = |f: &dyn Fn(&Times) -> f64| {
         let mut v: Vec<f64> = times.iter().map(|t| 1e6 * f(t)).collect();
         (median(&mut v) * 10.0).round() / 10.0

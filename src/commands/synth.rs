@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true, after_help = AFTER_HELP)]
-pub struct SynthArgs {
+pub(crate) struct SynthArgs {
     /// Model name: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular.
     #[arg(long)]
     pub model: String,
@@ -115,7 +115,7 @@ Examples:
       --noise-kind absolute --write-sigma --out scan.csv";
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum NoiseKindArg {
+pub(crate) enum NoiseKindArg {
     Relative,
     Absolute,
     Poisson,
@@ -181,7 +181,7 @@ fn build_layout(a: &SynthArgs) -> anyhow::Result<Layout> {
 
 /// `goniofit synth`: evaluate the model on the layout, add the seeded noise, write the CSV
 /// (to `--out` or standard output) and the truth JSON; exit code 0.
-pub fn run(a: SynthArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(a: SynthArgs) -> anyhow::Result<u8> {
     let patch = a.patch.as_deref().map(parse_patch).transpose()?;
     let opts = a.factors.apply(settings::model_options(
         Front::Cli,
@@ -319,7 +319,7 @@ impl SynthArgs {
 
     /// The layout file (when `--layout` names one); the CSV to `--out` or standard output,
     /// and the truth JSON.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         let mut set = FileSet::new();
         if let Some(layout) = Layout::file_of(&self.layout) {
             set = set.input("--layout", layout);

@@ -7,7 +7,7 @@ use std::path::Path;
 
 /// Most candidates a design considers (a 0.5° hemisphere grid to 85° has 2.6 M: choose a
 /// coarser step or a file).
-pub const MAX_CANDIDATES: usize = 1_000_000;
+pub(crate) const MAX_CANDIDATES: usize = 1_000_000;
 
 /// A grid of reachable geometries: θi and θr from 0 to `theta_max_deg` in steps of
 /// `step_deg`; φr either 0 and 180° (`in_plane`: the plane of incidence, specular and back
@@ -35,7 +35,7 @@ impl Default for Grid {
 
 impl Grid {
     /// The grid's geometries, in θi, θr, φr order. Errors: a limit outside (0, 90), a step
-    /// that is not positive, or more than [`MAX_CANDIDATES`] points.
+    /// that is not positive, or more than `MAX_CANDIDATES` points.
     pub fn angles(&self) -> Result<Vec<AnglesDeg>> {
         let (max, step) = (self.theta_max_deg, self.step_deg);
         if !(max.is_finite() && max > 0.0 && max < 90.0) {
@@ -86,7 +86,7 @@ fn ladder(from: f64, to: f64, step: f64) -> Vec<f64> {
 /// The candidate geometries of a CSV file with columns theta_i, theta_r, phi_r in degrees
 /// (the layout files of `goniofit synth`: any column order, other columns ignored, a signed
 /// θr < 0 taken as |θr| on the other side). Errors name the file, line and column.
-pub fn read(path: &Path) -> Result<Vec<AnglesDeg>> {
+pub(crate) fn read(path: &Path) -> Result<Vec<AnglesDeg>> {
     let file_err = |message: String| Error::File {
         path: path.to_path_buf(),
         message,

@@ -14,14 +14,14 @@ use nalgebra::{DMatrix, DVector};
 /// Prior standard deviation of every design variable (ln p for the positive parameters):
 /// a factor e¹⁰ either way, far looser than anything a design reports as determined, so it
 /// only matters where the data has no information at all.
-pub const PRIOR_SD: f64 = 10.0;
+pub(crate) const PRIOR_SD: f64 = 10.0;
 
 /// Most passes of the exchange over the chosen samples.
 const EXCHANGE_PASSES: usize = 4;
 
 /// What a design minimises.
 #[derive(Debug, Clone)]
-pub enum Criterion {
+pub(crate) enum Criterion {
     /// The variance of cᵀx (c-optimal).
     Variance(DVector<f64>),
     /// −ln det of the information (D-optimal).
@@ -45,7 +45,7 @@ impl Criterion {
     }
 
     /// The objective at information `m` (None when `m` is not positive definite).
-    pub fn objective(&self, m: &DMatrix<f64>) -> Option<f64> {
+    pub(crate) fn objective(&self, m: &DMatrix<f64>) -> Option<f64> {
         let chol = m.clone().cholesky()?;
         Some(match self {
             Criterion::Variance(c) => c.dot(&chol.solve(c)),
@@ -55,7 +55,7 @@ impl Criterion {
 }
 
 /// `base` plus the prior information I/[`PRIOR_SD`]².
-pub fn with_prior(base: &DMatrix<f64>) -> DMatrix<f64> {
+pub(crate) fn with_prior(base: &DMatrix<f64>) -> DMatrix<f64> {
     base + DMatrix::identity(base.nrows(), base.ncols()) / (PRIOR_SD * PRIOR_SD)
 }
 
@@ -87,7 +87,7 @@ fn best(
 /// replaced by a better one while that lowers the objective, at most a few passes).
 /// Returns the chosen candidates' indices in the order chosen; fewer than `n` when fewer
 /// are allowed, none when the information is not finite.
-pub fn choose(
+pub(crate) fn choose(
     base: &DMatrix<f64>,
     cand: &DMatrix<f64>,
     n: usize,
@@ -154,7 +154,7 @@ fn exchange(
 /// What each candidate alone would add to the information `base`: the fraction by which
 /// it lowers the target's variance (c-optimal), or the gain in ln det (D-optimal). Used to
 /// colour the candidates in the design's picture.
-pub fn single_gains(base: &DMatrix<f64>, cand: &DMatrix<f64>, crit: &Criterion) -> Vec<f64> {
+pub(crate) fn single_gains(base: &DMatrix<f64>, cand: &DMatrix<f64>, crit: &Criterion) -> Vec<f64> {
     let m = with_prior(base);
     let (Some(minv), Some(obj)) = (inverse(&m), crit.objective(&m)) else {
         return vec![0.0; cand.nrows()];

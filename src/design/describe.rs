@@ -5,7 +5,7 @@
 use super::{Design, Scene, DETERMINED_RELATIVE_SE};
 
 /// The target as a reader writes it (σ, T/σ; `all`: every parameter).
-pub fn target_label(target: &str) -> String {
+pub(crate) fn target_label(target: &str) -> String {
     if target.eq_ignore_ascii_case("all") {
         return "every parameter".into();
     }
@@ -13,7 +13,7 @@ pub fn target_label(target: &str) -> String {
 }
 
 /// A relative standard error as a percentage (`±8 %`, `±0.6 %`).
-pub fn percent(r: f64) -> String {
+pub(crate) fn percent(r: f64) -> String {
     let p = 100.0 * r;
     if p >= 10.0 {
         format!("±{p:.0} %")
@@ -65,7 +65,7 @@ fn group(angles: &[[f64; 3]]) -> String {
 /// Where a set of geometries (degrees) lies, as the rest of a phrase `with 20 samples…`:
 /// ` at θi 77.5–85°, θr 77.5–85° on the specular side, in the plane of incidence`, or for
 /// both sides `: 11 at … on the specular side and 9 at … on the back side`.
-pub fn where_(angles: &[[f64; 3]]) -> String {
+pub(crate) fn where_(angles: &[[f64; 3]]) -> String {
     if angles.is_empty() {
         return " (none)".into();
     }

@@ -3,13 +3,13 @@
 //!
 //! From a model at known (fitted) parameters, the wavelength, a noise model and the
 //! geometries already measured, [`design`] computes the Fisher information of the measured
-//! samples and of every candidate geometry ([`predict`]), chooses `n` candidates that most
+//! samples and of every candidate geometry (`predict`), chooses `n` candidates that most
 //! lower the predicted variance of a target — a parameter, a derived quantity such as T/σ,
-//! or every parameter at once (D-optimal) — greedily and then by exchange ([`choose`]),
+//! or every parameter at once (D-optimal) — greedily and then by exchange (`choose`),
 //! and reports the linearised standard errors before and after, honest about the
-//! directions the information leaves undetermined. [`simulate`] checks the linearised
+//! directions the information leaves undetermined. `simulate` checks the linearised
 //! figures by fitting simulated measurements at the measured and proposed geometries.
-//! Candidates come from a file or a grid ([`candidates`]); alternative wavelengths may be
+//! Candidates come from a file or a grid (`candidates`); alternative wavelengths may be
 //! offered, each with its own amplitudes (the per-channel parameters of a joint fit).
 
 pub(crate) mod candidates;
@@ -26,10 +26,10 @@ use crate::geometry::{Geometry, Quantity, Sample};
 use crate::model::Model;
 pub use candidates::Grid;
 use choose::Criterion;
-pub use describe::{percent, target_label, where_};
+pub(crate) use describe::{percent, target_label, where_};
 use nalgebra::{DMatrix, DVector};
 pub use predict::NoiseModel;
-pub use quantities::{quantities, QuantityDef};
+pub(crate) use quantities::{quantities, QuantityDef};
 pub use simulate::{before_and_after, Simulation};
 
 /// Largest relative standard error at which a design calls a quantity determined: beyond
@@ -120,7 +120,7 @@ pub struct Candidate {
     pub value: f64,
     /// Within the instrument's dynamic range and carrying information.
     pub reachable: bool,
-    /// What the candidate alone would add ([`choose::single_gains`]).
+    /// What the candidate alone would add (`choose::single_gains`).
     pub gain: f64,
     /// Whether the design chose it.
     pub chosen: bool,

@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, DVector};
 
 /// Eigenvalues of the Jacobi-scaled information at or below this fraction of the largest
 /// count as zero (the singular-value threshold of the fit's statistics, 1e-6, squared).
-pub const NULL_EIGENVALUE: f64 = 1e-12;
+pub(crate) const NULL_EIGENVALUE: f64 = 1e-12;
 
 /// The noise of one residual: the fit's residual kind and its standard deviation ε.
 ///
@@ -59,7 +59,7 @@ impl NoiseModel {
 
 /// The information rows of a set of samples: their model values and rows gᵢ.
 #[derive(Debug, Clone)]
-pub struct Rows {
+pub(crate) struct Rows {
     /// The model value of each sample (the measured quantity).
     pub value: Vec<f64>,
     /// n × q: row i is gᵢ in the design's variables (zero for a sample without information).
@@ -69,7 +69,7 @@ pub struct Rows {
 /// The rows gᵢ of the samples of `geo` for `model` at `params`: model parameter j feeds the
 /// design variable `map[j]` of `q`. `positive[j]` says whether parameter j is taken in log
 /// space. A sample whose value or derivatives are not finite gets a zero row.
-pub fn information_rows(
+pub(crate) fn information_rows(
     model: &dyn Model,
     params: &[f64],
     geo: &Geometry,
@@ -106,14 +106,14 @@ pub fn information_rows(
 }
 
 /// F = Σ gᵢ gᵢᵀ of the given rows (q × q).
-pub fn information(rows: &DMatrix<f64>) -> DMatrix<f64> {
+pub(crate) fn information(rows: &DMatrix<f64>) -> DMatrix<f64> {
     rows.transpose() * rows
 }
 
 /// The linearised covariance of the design variables: the pseudo-inverse of the
 /// information, and the directions it leaves undetermined.
 #[derive(Debug, Clone)]
-pub struct Covariance {
+pub(crate) struct Covariance {
     /// F⁺ (q × q).
     pub cov: DMatrix<f64>,
     /// Unit vectors (in the design variables) of the directions with no information.
@@ -123,7 +123,7 @@ pub struct Covariance {
 /// F⁺ with eigenvalues of the Jacobi-scaled D⁻¹FD⁻¹ (D = √diag F) at or below
 /// [`NULL_EIGENVALUE`] × the largest treated as zero; a variable with no information at
 /// all is a null direction by itself. Non-finite information gives every direction null.
-pub fn covariance(f: &DMatrix<f64>) -> Covariance {
+pub(crate) fn covariance(f: &DMatrix<f64>) -> Covariance {
     let q = f.nrows();
     if !f.iter().all(|v| v.is_finite()) {
         return Covariance {
@@ -170,7 +170,7 @@ fn unit(q: usize, k: usize) -> DVector<f64> {
 impl Covariance {
     /// The standard error of cᵀx, or None when c has a component along an undetermined
     /// direction (more than 1e-6 of its length) or the variance is not finite.
-    pub fn se(&self, c: &DVector<f64>) -> Option<f64> {
+    pub(crate) fn se(&self, c: &DVector<f64>) -> Option<f64> {
         let len = c.norm();
         if self.null.iter().any(|v| v.dot(c).abs() > 1e-6 * len) {
             return None;

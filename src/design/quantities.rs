@@ -28,7 +28,7 @@ pub struct QuantityDef {
 /// The parameters of `model` at `params`, then, for models with σ and T, T/σ, Beckmann's
 /// α = 2σ/T, the rough-regime amplitude s·(T/σ)², the smooth-regime amplitude s·σ², and
 /// with a Lambertian term its reflectance factor π·s_d.
-pub fn quantities(model: &dyn Model, params: &[f64]) -> Vec<QuantityDef> {
+pub(crate) fn quantities(model: &dyn Model, params: &[f64]) -> Vec<QuantityDef> {
     let specs = model.params();
     let q = specs.len();
     let mut out: Vec<QuantityDef> = specs

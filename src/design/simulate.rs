@@ -34,7 +34,7 @@ pub struct Simulation {
 /// The fit settings of a simulated measurement: the scene's model and residual kind,
 /// started at the truth, with no reduction to determined combinations (the estimate of
 /// every parameter is the least-squares one, wherever the data leaves it).
-pub fn fit_config(scene: &Scene) -> FitConfig {
+pub(crate) fn fit_config(scene: &Scene) -> FitConfig {
     FitConfig {
         model: scene.model.name().to_string(),
         model_opts: scene.model.options().unwrap_or_default(),
@@ -71,7 +71,7 @@ fn noisy(f: &[f64], scene: &Scene, seed: u64) -> Vec<f64> {
 /// with seeds `seed`, `seed + 1`, …, fit each ([`fit_config`], or `config` when given) and
 /// return the scatter of the estimates of every quantity in `defs`. Errors: no draws, or
 /// geometry outside the valid domain.
-pub fn simulate(
+pub(crate) fn simulate(
     scene: &Scene,
     samples: &[Sample],
     defs: &[QuantityDef],
@@ -120,7 +120,7 @@ pub fn simulate(
     })
 }
 
-/// The simulations of a design (see [`simulate`], `draws` fits each, both with `seed`):
+/// The simulations of a design (see `simulate`, `draws` fits each, both with `seed`):
 /// at the measured geometries alone (None unless they outnumber the parameters), and at
 /// the measured and the `chosen` geometries (θi, θr, φr in degrees) together.
 pub fn before_and_after(

@@ -182,12 +182,12 @@ fn fitted_at_point(
 /// The note of a fit whose stop request cut the evaluation of its fitted values at the
 /// reported point (after the solve; a fit whose evaluations are slower than
 /// [`QUICK_EVALUATION_SECONDS`] checks the stop between blocks of samples there).
-pub const FITTED_NOT_COMPUTED: &str = "the fit was stopped before its fitted values at the reported point were evaluated on the whole data: the cost is the solver's at that point, and the rms and max |residual|, R² (and χ² under a robust loss) were not computed, nor the residuals file and pictures";
+pub(super) const FITTED_NOT_COMPUTED: &str = "the fit was stopped before its fitted values at the reported point were evaluated on the whole data: the cost is the solver's at that point, and the rms and max |residual|, R² (and χ² under a robust loss) were not computed, nor the residuals file and pictures";
 
 /// The mean seconds of one of the solver's evaluations at most which the fitted values and
 /// modes at the reported point are evaluated to the end after a stop request too (they cost
 /// about one evaluation: a quick fit stopped keeps its residuals file and pictures).
-pub const QUICK_EVALUATION_SECONDS: f64 = 0.25;
+pub(super) const QUICK_EVALUATION_SECONDS: f64 = 0.25;
 
 /// Whether the solver's evaluations took at most [`QUICK_EVALUATION_SECONDS`] each.
 fn quick(lm: &crate::lm::LmReport) -> bool {
@@ -542,7 +542,7 @@ fn g_range(layout: &ParamLayout, input: &FitInput, p: &[f64]) -> Option<(f64, f6
 /// free parameters: s² = χ²/(n − p), under a robust loss the robust objective 2·cost/(n − p)
 /// (the s² of the covariance, so that a few outliers do not shrink every other residual);
 /// √wᵢ rᵢ when the weights are inverse variances from stated uncertainties (or s = 0).
-pub fn standardized_residuals(
+pub(crate) fn standardized_residuals(
     problem: &FitProblem,
     residuals: &[f64],
     n_free: usize,

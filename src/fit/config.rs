@@ -61,7 +61,7 @@ impl FitConfig {
 }
 
 /// The floor of relative and log residuals: `config.floor`, or 1e-6 × max |y|.
-pub fn residual_floor(config: &FitConfig, y: &[f64]) -> f64 {
+pub(crate) fn residual_floor(config: &FitConfig, y: &[f64]) -> f64 {
     config
         .floor
         .unwrap_or(1e-6 * y.iter().fold(0.0f64, |m, v| m.max(v.abs())))

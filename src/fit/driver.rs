@@ -10,18 +10,18 @@
 //!   the Jacobian and its standard error in ln p is at most [`DETERMINED_MAX_LOG_SE`]
 //!   (the data pins it within a factor e at one standard error).
 
-pub use super::assemble::standardized_residuals;
-pub use super::config::{residual_floor, FitConfig};
-pub use super::identify::{
-    ALIGN, DETERMINED_MAX_LOG_SE, LOOSE_LOG_SE, RANK_THRESHOLD, ROUGH_G, SMOOTH_G,
-};
+pub(crate) use super::assemble::standardized_residuals;
+pub(crate) use super::config::residual_floor;
+pub use super::config::FitConfig;
 use super::prepare::{prepare, rough_by_construction};
 use super::problem::edges::at_kbs_edge;
 pub use super::problem::FitInput;
 use super::problem::FitProblem;
 use super::problem::ParamLayout;
-pub use super::result::{base_name, Derived, FitResult, ParamResult, StageSeconds, Verdict};
-pub use super::start::{GRID_TOL, REFINE_TOL};
+#[cfg(test)]
+pub(crate) use super::result::Derived;
+pub(crate) use super::result::{base_name, StageSeconds};
+pub use super::result::{FitResult, ParamResult, Verdict};
 use super::{accept, assemble, identify, reduce, solve, start};
 use crate::error::{Error, Result};
 use crate::lm::Stop;
@@ -29,7 +29,7 @@ use crate::model::{self, EvalMode, Model};
 use std::time::Instant;
 
 /// Run a fit.
-pub fn fit(input: &FitInput, config: &FitConfig) -> Result<FitResult> {
+pub(crate) fn fit(input: &FitInput, config: &FitConfig) -> Result<FitResult> {
     let model = model::by_name(&config.model, &config.model_opts)?;
     fit_model(model.as_ref(), input, config)
 }
@@ -58,7 +58,7 @@ pub fn fit_model(model: &dyn Model, input: &FitInput, config: &FitConfig) -> Res
 /// every parameter of this fit or its point lies outside the model's domain on this data.
 /// The caller judges the result against a searched fit ([`crate::fit::dataset`]'s warm
 /// start): a start is only as good as the valley it lies in.
-pub fn fit_near(
+pub(crate) fn fit_near(
     input: &FitInput,
     config: &FitConfig,
     near: &FitResult,
@@ -163,7 +163,7 @@ fn stopped_before_first_evaluation(why: crate::lm::Termination, n: usize) -> Err
 }
 
 /// The note of a fit stopped before the Jacobian at its best point was evaluated.
-pub const UNCERTAINTIES_NOT_COMPUTED: &str = "the fit was stopped before the Jacobian at its best point was evaluated: the values and the cost are those of that point, and their standard errors, correlations and what the data determines were not computed";
+pub(crate) const UNCERTAINTIES_NOT_COMPUTED: &str = "the fit was stopped before the Jacobian at its best point was evaluated: the values and the cost are those of that point, and their standard errors, correlations and what the data determines were not computed";
 
 /// Solve from the start, and from each of the start search's rival valleys
 /// (the lower cost inside the domain wins); when the first run ends at an edge of the physical domain
@@ -269,13 +269,13 @@ fn best_of_rivals(
 
 /// Relative steps of each nonlinear parameter at which `leave_small_basins` probes a
 /// converged log-residual fit (each way).
-pub const PROBE_STEPS: [f64; 2] = [0.01, 0.04];
+pub(crate) const PROBE_STEPS: [f64; 2] = [0.01, 0.04];
 
 /// Most solves `leave_small_basins` starts from probes.
-pub const PROBE_ROUNDS: usize = 4;
+pub(crate) const PROBE_ROUNDS: usize = 4;
 
 /// Relative cost by which a probe must lie below the converged point to be solved from.
-pub const PROBE_GAIN: f64 = 1e-7;
+pub(crate) const PROBE_GAIN: f64 = 1e-7;
 
 /// A converged fit with log residuals, probed: each free nonlinear parameter (σ, T, w) is
 /// moved by ±[`PROBE_STEPS`] (the smaller first) with the others held, and where a probe
@@ -353,7 +353,7 @@ fn was_stopped(run: &solve::Run) -> bool {
 /// Largest g a forced `--mode series` fit accepts at its start: the series sums O(√g) terms
 /// per sample (at g ~ 1e6 about 0.5 ms per sample, against 2 µs with `auto`), so beyond this
 /// one evaluation of a large file would take minutes.
-pub const SERIES_G_MAX: f64 = 1e5;
+pub(crate) const SERIES_G_MAX: f64 = 1e5;
 
 /// Refuse a forced series evaluation on data so rough that one evaluation would take
 /// minutes (see [`SERIES_G_MAX`]), with a hint to use `auto`.

@@ -9,23 +9,23 @@ use super::stats::covariance;
 use nalgebra::{DMatrix, DVector};
 
 /// Largest standard error of ln p for a parameter to count as determined.
-pub const DETERMINED_MAX_LOG_SE: f64 = 1.0;
+pub(crate) const DETERMINED_MAX_LOG_SE: f64 = 1.0;
 
 /// Standard error of ln σ above which a ridge along a regime's known direction counts as
 /// undetermined (see `kbs_verdict`).
-pub const LOOSE_LOG_SE: f64 = 0.05;
+pub(crate) const LOOSE_LOG_SE: f64 = 0.05;
 
 /// Alignment |cos| of the weakest direction with a regime's known direction.
-pub const ALIGN: f64 = 0.98;
+pub(crate) const ALIGN: f64 = 0.98;
 
 /// Median g above which the rough regime's ridge is expected.
-pub const ROUGH_G: f64 = 3.0;
+pub(crate) const ROUGH_G: f64 = 3.0;
 
 /// Median g below which the smooth regime's ridge is expected.
-pub const SMOOTH_G: f64 = 0.3;
+pub(crate) const SMOOTH_G: f64 = 0.3;
 
 /// Relative singular-value threshold below which a direction is undetermined.
-pub const RANK_THRESHOLD: f64 = 1e-9;
+pub(crate) const RANK_THRESHOLD: f64 = 1e-9;
 
 /// The identifiability of one solved problem.
 pub(super) struct Identified {

@@ -21,11 +21,11 @@
 //! [`problem`]; [`start`] uses both and the solve stage; the stages use all three;
 //! [`dataset`] uses the stages through [`driver`].
 
-pub mod dataset;
-pub mod driver;
-pub mod problem;
-pub mod start;
-pub mod stats;
+pub(crate) mod dataset;
+pub(crate) mod driver;
+pub(crate) mod problem;
+pub(crate) mod start;
+pub(crate) mod stats;
 
 mod accept;
 mod assemble;

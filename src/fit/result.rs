@@ -27,7 +27,7 @@ pub(super) struct Solved<'m> {
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ParamResult {
     /// Parameter name as the layout spells it, with a `[channel]` suffix for per-channel
-    /// parameters ([`base_name`] strips it).
+    /// parameters (`base_name` strips it).
     pub name: String,
     /// Value at the reported point, in the model's natural units (not transformed).
     pub value: f64,
@@ -173,10 +173,10 @@ pub struct FitResult {
     /// domain, a lobe the sampling does not resolve, a lost rank; also among `notes`).
     pub unusable: Option<String>,
     /// Whether the fitted surface satisfies the paper's assumptions (KBS models; a warning,
-    /// not a failure): [`super::stats::validity`].
+    /// not a failure): `super::stats::validity`.
     pub validity: Option<super::stats::validity::Validity>,
     /// Whether the model describes the data and the weights match the noise, from the
-    /// residuals ([`super::stats::adequacy`]; a verdict, not a failure).
+    /// residuals (`super::stats::adequacy`; a verdict, not a failure).
     pub adequacy: super::stats::adequacy::Adequacy,
     /// The robust loss the fit minimised (linear: plain least squares).
     pub loss: Loss,
@@ -219,14 +219,14 @@ pub struct FitResult {
     pub termination: Termination,
     /// Wall time of the whole fit: starting values, refinement, LM, uncertainty and verdict,
     /// the fitted values and the adequacy tests (not the profile intervals, which
-    /// [`crate::fit::dataset`] times apart).
+    /// `crate::fit::dataset` times apart).
     pub seconds: f64,
     /// Of which: up to the end of the starting-value refinement.
     pub init_seconds: f64,
     /// Of which: up to the grid's candidates (the automatic starting values, before any
     /// LM iteration).
     pub start_seconds: f64,
-    /// The wall time of each stage of the fit ([`StageSeconds`]).
+    /// The wall time of each stage of the fit (`StageSeconds`).
     pub stage_seconds: StageSeconds,
     /// Number of samples per evaluation mode of the model (`series`, `rough`, …), keyed by the
     /// mode's name; empty when the fitted values were not computed.
@@ -257,7 +257,7 @@ pub struct FitResult {
     /// for a fit started at a neighbour's optimum, that optimum.
     pub start: Vec<f64>,
     /// Whether the fit started at a neighbouring dataset's optimum (`--warm-start`) instead
-    /// of the start search, and was kept as the fit (see [`crate::fit::dataset`]).
+    /// of the start search, and was kept as the fit (see `crate::fit::dataset`).
     pub started_near: bool,
 }
 
@@ -270,7 +270,7 @@ pub struct SampleVectors {
 }
 
 /// A parameter's name without its `[channel]` suffix.
-pub fn base_name(name: &str) -> &str {
+pub(crate) fn base_name(name: &str) -> &str {
     name.split('[').next().unwrap_or(name)
 }
 

@@ -18,7 +18,7 @@ pub(super) struct Run {
 impl Run {
     /// A converged run kept while a stop request cut the other starts short ends with the
     /// stop's termination: it is the best point found, not the fit's answer.
-    pub fn mark_cut(&mut self, config: &LmConfig) {
+    pub(super) fn mark_cut(&mut self, config: &LmConfig) {
         let why = config.stop.as_ref().and_then(Stop::requested);
         if let Some(why) = why.filter(|_| self.lm.termination.converged()) {
             self.lm.termination = why;
@@ -147,7 +147,7 @@ pub(in crate::fit) fn factors_held<'m>(
 /// one (when its cost there is no lower). Two starts that fall into the same valley then
 /// do not both crawl down it (Cornell acryl_blue 610 nm: three solves of ~190 iterations
 /// each ended at the same optimum).
-pub const JOIN_TOL: f64 = 0.01;
+pub(super) const JOIN_TOL: f64 = 0.01;
 
 /// The paths of a fit's solves from its several starts: every point evaluated on the whole
 /// data (parameter space) with its cost, by run.
@@ -217,13 +217,13 @@ fn canonicalise(problem: &FitProblem, lm: &mut lm::LmReport) {
 /// but a tighter cap such as g = 1e3 stops noiseless synthetic rough data short of its σ,
 /// where the O(1/g) correction still determines it, and the rejected steps end the solve
 /// without convergence.
-pub const RIDGE_G: f64 = super::problem::G_FIT_MAX;
+pub(super) const RIDGE_G: f64 = super::problem::G_FIT_MAX;
 
 /// Median g below which the first solve does not follow the smooth ridge (σ → 0 at fixed
 /// T and s·σ²): there KBS is its smooth limit (eq. 42) but for tails far below the data
 /// (Cornell acryl_blue 550 nm: 4·10⁻⁷ of the cost between median g ≈ 10⁻⁶ and σ → 0), and
 /// the data determines T and the amplitude only. Following the ridge took 420 iterations.
-pub const SMOOTH_RIDGE_G: f64 = 1e-6;
+pub(super) const SMOOTH_RIDGE_G: f64 = 1e-6;
 
 /// The σ values a solve may visit: `min..=max` (layout indices of σ, T and the lobe's
 /// scale).
@@ -239,7 +239,7 @@ impl SigmaRange {
     /// The range of a single-channel KBS fit with σ and T free: σ from where the median g
     /// over the samples is [`SMOOTH_RIDGE_G`] up to where it reaches [`RIDGE_G`]; None for
     /// other fits.
-    pub fn rough_ridge(problem: &FitProblem, input: &FitInput) -> Option<Self> {
+    pub(super) fn rough_ridge(problem: &FitProblem, input: &FitInput) -> Option<Self> {
         let layout = &problem.layout;
         let free = |name: &str| -> Option<usize> {
             match layout.find(name)[..] {
@@ -264,7 +264,7 @@ impl SigmaRange {
     /// ridge (T scaled with σ, so T/σ and the amplitude s·(T/σ)² stay), below `min` along
     /// the smooth one (T and s·σ² stay). The limit's cost is unchanged; the exact model's
     /// changes by the limit's error (O(1/g), O(g)).
-    pub fn project(&self, p: &[f64]) -> Vec<f64> {
+    pub(super) fn project(&self, p: &[f64]) -> Vec<f64> {
         let mut q = p.to_vec();
         let sigma = p[self.sigma];
         if sigma > self.max {
@@ -287,7 +287,7 @@ impl SigmaRange {
 impl Run {
     /// Add an earlier run's iteration, evaluation and time counts to this one (the report of
     /// a refit counts the whole fit's work).
-    pub fn add_counts(&mut self, earlier: &lm::LmReport) {
+    pub(super) fn add_counts(&mut self, earlier: &lm::LmReport) {
         self.lm.iterations += earlier.iterations;
         self.lm.evaluations += earlier.evaluations;
         self.lm.jacobian_evaluations += earlier.jacobian_evaluations;

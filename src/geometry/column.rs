@@ -83,7 +83,7 @@ impl PartialEq for Column {
 }
 
 /// A per-sample value that is often the same for every sample (a fit's wavelength, its
-/// weights): that one value (stored once), or a [`Column`]. Indexed like a column
+/// weights): that one value (stored once), or a `Column`. Indexed like a column
 /// (`v[i]`); [`PerSample::from`] a vector keeps one value when every entry has the same
 /// bits, so reading it gives exactly the entries given.
 #[derive(Debug, Clone, PartialEq)]
@@ -129,7 +129,7 @@ impl PerSample {
         }
     }
 
-    /// The median value ([`crate::geometry::median`]; NaN without samples).
+    /// The median value (`crate::geometry::median`; NaN without samples).
     pub fn median(&self) -> f64 {
         match self {
             PerSample::One { value, len } if *len > 0 => *value,

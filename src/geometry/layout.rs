@@ -37,13 +37,13 @@ impl AnglesDeg {
 }
 
 /// Default in-plane incidence angles, degrees.
-pub const INPLANE_THETA_I_DEG: [f64; 5] = [15.0, 30.0, 45.0, 60.0, 75.0];
+pub(crate) const INPLANE_THETA_I_DEG: [f64; 5] = [15.0, 30.0, 45.0, 60.0, 75.0];
 /// Default in-plane θr step and largest |θr|, degrees.
-pub const INPLANE_STEP_DEG: f64 = 1.0;
+pub(crate) const INPLANE_STEP_DEG: f64 = 1.0;
 /// Default largest |θr| of the in-plane scans, degrees.
-pub const INPLANE_THETA_R_MAX_DEG: f64 = 85.0;
+pub(crate) const INPLANE_THETA_R_MAX_DEG: f64 = 85.0;
 /// Default grid (θi, θr, φr counts) of the hemisphere and grazing layouts.
-pub const DEFAULT_GRID: (usize, usize, usize) = (5, 18, 36);
+pub(crate) const DEFAULT_GRID: (usize, usize, usize) = (5, 18, 36);
 
 /// Where the synthetic instrument looks. See the module documentation for the exact angles.
 #[derive(Debug, Clone, PartialEq)]
@@ -451,7 +451,7 @@ impl Layout {
 }
 
 /// `5x18x36` as (θi, θr, φr) counts.
-pub fn parse_grid(text: &str) -> Result<(usize, usize, usize)> {
+pub(crate) fn parse_grid(text: &str) -> Result<(usize, usize, usize)> {
     let bad = || {
         Error::Usage(format!(
             "grid '{text}': expected three counts NIxNRxNP, e.g. 5x18x36"
@@ -497,7 +497,7 @@ fn grid(theta_i: &[f64], n_theta_r: usize, n_phi_r: usize) -> Vec<AnglesDeg> {
 
 /// Keep `n` of the angles, evenly spread over the layout order (indices ⌊k·len/n⌋), so a
 /// subsample still covers every θi. An error if `n` is 0 or exceeds the layout's size.
-pub fn subsample(angles: &[AnglesDeg], n: usize) -> Result<Vec<AnglesDeg>> {
+pub(crate) fn subsample(angles: &[AnglesDeg], n: usize) -> Result<Vec<AnglesDeg>> {
     let len = angles.len();
     if n == 0 || n > len {
         return Err(Error::Usage(format!(

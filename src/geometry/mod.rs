@@ -8,9 +8,10 @@
 //! Measurement layouts, the sets of directions a data set is measured at, are [`layout`].
 
 mod column;
-pub mod layout;
+pub(crate) mod layout;
 
-pub use column::{Column, PerSample};
+pub(crate) use column::Column;
+pub use column::PerSample;
 
 use crate::error::{Error, Result};
 use nalgebra::Vector3;
@@ -18,7 +19,7 @@ use std::sync::{Arc, OnceLock};
 
 /// The smallest and largest length accepted for a wavelength or a patch half-size (any
 /// unit): beyond them the model's (T/λ)², (σ/λ)² and 4XY/λ² overflow or underflow.
-pub const LENGTH_RANGE: (f64, f64) = (1e-30, 1e30);
+pub(crate) const LENGTH_RANGE: (f64, f64) = (1e-30, 1e30);
 
 /// One measurement direction pair, in radians.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -115,7 +116,7 @@ pub enum Quantity {
 }
 
 /// Per-sample quantities for a batch of samples, computed once per dataset. Columns are
-/// indexed by sample ([`Column`]: shared storage). Quantities written `/k` are the wave-vector components divided by
+/// indexed by sample (`Column`: shared storage). Quantities written `/k` are the wave-vector components divided by
 /// k = 2π/λ, so they depend on angles only.
 #[derive(Debug, Clone)]
 pub struct Geometry {
@@ -208,7 +209,7 @@ impl PolarAngles {
 /// (cot θ, tan θ) of a polar angle θ ∈ [0, π/2]: cot θ = cos θ/sin θ (∞ at 0; clamped at
 /// 0 against rounding) and tan θ = 1/cot θ (0 at 0, ∞ where cot θ = 0), each to a few ulps.
 #[inline]
-pub fn cot_tan(theta: f64) -> (f64, f64) {
+pub(crate) fn cot_tan(theta: f64) -> (f64, f64) {
     let (s, c) = theta.sin_cos();
     let cot = (c / s).max(0.0);
     (cot, 1.0 / cot)
@@ -275,12 +276,12 @@ impl Columns {
 /// cos θ_loc = √(h/2), the cosine of the local incidence angle on the specular facet, of
 /// a sample from the geometry column h = 1 + ŝ·k̂₂ (clamped to [0, 1] against rounding).
 #[inline]
-pub fn cos_local(h: f64) -> f64 {
+pub(crate) fn cos_local(h: f64) -> f64 {
     (0.5 * h).sqrt().min(1.0)
 }
 
 /// Wrap an angle in radians to (−π, π].
-pub fn wrap_phi(phi: f64) -> f64 {
+pub(crate) fn wrap_phi(phi: f64) -> f64 {
     let two_pi = 2.0 * std::f64::consts::PI;
     let mut p = phi % two_pi;
     if p <= -std::f64::consts::PI {
@@ -377,7 +378,7 @@ impl Geometry {
         self.vxy2[i] * (2.0 * std::f64::consts::PI * corr_len / self.wavelength[i]).powi(2) * 0.25
     }
 
-    /// The factors' columns ([`FactorColumns`]), computed on the first call and kept.
+    /// The factors' columns (`FactorColumns`), computed on the first call and kept.
     pub fn factor_columns(&self) -> &FactorColumns {
         self.factors.get_or_init(|| {
             let polar = PolarAngles::of(&self.theta_i, &self.theta_r);
@@ -437,7 +438,7 @@ impl Geometry {
 
 /// Fewest samples on the flank of a Gaussian lobe (between e^{-8} and e^{-1/8} of its
 /// peak) for its width w to count as resolved by the angular sampling.
-pub const MIN_FLANK_SAMPLES: usize = 3;
+pub(crate) const MIN_FLANK_SAMPLES: usize = 3;
 
 /// The angular sampling's resolution: which Gaussian lobe widths the samples measure, and
 /// the median roughness g the samples see.
@@ -457,7 +458,7 @@ impl Geometry {
     }
 
     /// The narrowest Gaussian lobe width (rad) the angular sampling resolves: the smallest w
-    /// with at least [`MIN_FLANK_SAMPLES`] samples on its flank ([`Self::flank_samples`]).
+    /// with at least `MIN_FLANK_SAMPLES` samples on its flank ([`Self::flank_samples`]).
     /// Exact: for the offsets d sorted ascending, three of them fit in [w/2, 4w] first for
     /// some three consecutive ones, at w = d_{j+2}/4 when d_{j+2} ≤ 8 d_j. None when no w
     /// resolves (fewer than three samples off the mirror direction). O(n log n).
@@ -477,7 +478,7 @@ impl Geometry {
     /// The lower bound on a Gaussian lobe's width w in a fit: half of
     /// [`Self::resolved_width`]. A solver step to a narrower lobe is rejected (as a step
     /// outside the models' domain), so a lobe the sampling does not resolve ends at this
-    /// bound, where fewer than [`MIN_FLANK_SAMPLES`] samples lie on its flank and the fit's
+    /// bound, where fewer than `MIN_FLANK_SAMPLES` samples lie on its flank and the fit's
     /// acceptance says so, instead of running w to 1e-100. None (no bound) when no width is
     /// resolved at all.
     pub fn width_floor(&self) -> Option<f64> {
@@ -493,7 +494,7 @@ impl Geometry {
 
 /// Median of the values that are not NaN: the middle one, or the mean of the two middle
 /// ones for an even count; NaN when there are none. Linear time.
-pub fn median(v: &[f64]) -> f64 {
+pub(crate) fn median(v: &[f64]) -> f64 {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
     let n = s.len();
     if n == 0 {

@@ -4,6 +4,6 @@
 //! the solver ([`workprec`]). The CLI's `synth`, `recover` and `bench` commands and the
 //! tests run them; nothing below them in the library uses them.
 
-pub mod recover;
-pub mod synth;
-pub mod workprec;
+pub(crate) mod recover;
+pub(crate) mod synth;
+pub(crate) mod workprec;

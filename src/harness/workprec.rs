@@ -27,22 +27,22 @@ use serde::Serialize;
 use std::time::Instant;
 
 /// Tolerance of the reference series (the tightest the model accepts is 1e-16).
-pub const REFERENCE_TOL: f64 = 1e-15;
+pub(crate) const REFERENCE_TOL: f64 = 1e-15;
 
 /// Series tolerances of the evaluation rows.
-pub const SERIES_TOLS: [f64; 6] = [1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-14];
+pub(crate) const SERIES_TOLS: [f64; 6] = [1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-14];
 
 /// Layout of the model-error data sets.
-pub const EVAL_LAYOUT: &str = "hemisphere 5x18x36";
+pub(crate) const EVAL_LAYOUT: &str = "hemisphere 5x18x36";
 
 /// Layout of the fits.
-pub const FIT_LAYOUT: &str = "hemisphere 4x12x24";
+pub(crate) const FIT_LAYOUT: &str = "hemisphere 4x12x24";
 
 /// Truth of the fits: σ, T, scale (intermediate regime, g from ~0.1 to ~14).
-pub const FIT_TRUTH: [f64; 3] = [0.3, 2.0, 1.5];
+pub(crate) const FIT_TRUTH: [f64; 3] = [0.3, 2.0, 1.5];
 
 /// The regimes the evaluation rows run on: (name, σ, T, scale) with λ = 1.
-pub fn regimes() -> [(&'static str, [f64; 3]); 3] {
+pub(crate) fn regimes() -> [(&'static str, [f64; 3]); 3] {
     [
         ("smooth", [0.02, 1.0, 1.0]),
         ("intermediate", FIT_TRUTH),
@@ -52,7 +52,7 @@ pub fn regimes() -> [(&'static str, [f64; 3]); 3] {
 
 /// One row of the work–precision table.
 #[derive(Debug, Clone, Serialize)]
-pub struct Row {
+pub(crate) struct Row {
     /// `eval` (a model evaluation mode) or `fit` (a solver setting).
     pub kind: String,
     /// The mode (`series 1e-8`, `smooth`, `rough`, `auto`) or the solver setting
@@ -72,7 +72,7 @@ pub struct Row {
 
 /// The whole table.
 #[derive(Debug, Clone, Serialize)]
-pub struct WorkPrecision {
+pub(crate) struct WorkPrecision {
     /// The evaluation rows (series tolerances, smooth, rough, auto), then the solver rows.
     pub rows: Vec<Row>,
     /// What the model errors are measured against, in words (the series at [`REFERENCE_TOL`]).
@@ -87,7 +87,7 @@ pub struct WorkPrecision {
 
 /// Options.
 #[derive(Debug, Clone)]
-pub struct WorkPrecisionConfig {
+pub(crate) struct WorkPrecisionConfig {
     /// Timing repeats (the median is reported).
     pub repeats: usize,
 }
@@ -100,7 +100,7 @@ impl Default for WorkPrecisionConfig {
 
 /// An evaluation mode of a row.
 #[derive(Debug, Clone, Copy)]
-pub struct ModeSpec {
+pub(crate) struct ModeSpec {
     /// The KBS evaluation mode of the row.
     pub mode: EvalMode,
     /// The series' relative tolerance: one of [`SERIES_TOLS`] for the series rows, the
@@ -110,7 +110,7 @@ pub struct ModeSpec {
 
 impl ModeSpec {
     /// Row label.
-    pub fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         match self.mode {
             EvalMode::Series => format!("series {:.0e}", self.tol),
             EvalMode::Smooth => "smooth".into(),
@@ -130,7 +130,7 @@ impl ModeSpec {
 }
 
 /// The evaluation modes, in table order.
-pub fn modes() -> Vec<ModeSpec> {
+pub(crate) fn modes() -> Vec<ModeSpec> {
     let mut v: Vec<ModeSpec> = SERIES_TOLS
         .iter()
         .map(|&tol| ModeSpec {
@@ -155,7 +155,7 @@ pub fn modes() -> Vec<ModeSpec> {
 }
 
 /// Finite-difference Jacobian of a problem's residuals (forward or central).
-pub struct FiniteDifference<'p, P: LeastSquaresProblem + ?Sized> {
+pub(crate) struct FiniteDifference<'p, P: LeastSquaresProblem + ?Sized> {
     /// The problem whose residuals are differenced (its own Jacobian is not used).
     pub inner: &'p P,
     /// Central differences (two evaluations per parameter) rather than forward ones from the
@@ -181,7 +181,7 @@ impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for FiniteDifference<'
 
 /// Largest relative difference of `v` from `reference` (samples where the reference is 0
 /// count by their absolute value; a non-finite value gives ∞).
-pub fn max_rel_error(v: &[f64], reference: &[f64]) -> f64 {
+pub(crate) fn max_rel_error(v: &[f64], reference: &[f64]) -> f64 {
     v.iter().zip(reference).fold(0.0f64, |m, (&a, &b)| {
         let e = if !a.is_finite() {
             f64::INFINITY
@@ -227,7 +227,7 @@ fn reference_model() -> Result<Box<dyn Model>> {
 }
 
 /// Noise-free fit data from the reference model.
-pub fn fit_input() -> Result<FitInput> {
+pub(crate) fn fit_input() -> Result<FitInput> {
     let reference = reference_model()?;
     let angles = Layout::parse(FIT_LAYOUT)?.angles();
     let data = synth::generate(
@@ -260,12 +260,12 @@ fn time_median<F: FnMut()>(repeats: usize, mut f: F) -> f64 {
 }
 
 /// Number of progress steps [`run`] reports.
-pub fn steps() -> usize {
+pub(crate) fn steps() -> usize {
     modes().len() + solver_settings().len()
 }
 
 /// The solver settings: (label, Jacobian: 0 analytic / 1 forward / 2 central, LM config).
-pub fn solver_settings() -> Vec<(String, u8, LmConfig)> {
+pub(crate) fn solver_settings() -> Vec<(String, u8, LmConfig)> {
     let loose = LmConfig {
         ftol: 1e-4,
         xtol: 1e-4,
@@ -289,7 +289,7 @@ pub fn solver_settings() -> Vec<(String, u8, LmConfig)> {
 
 /// Run the whole table; `on_step(label)` is called after each row. The evaluation rows
 /// come first (in [`modes`] order), then the solver rows (in [`solver_settings`] order).
-pub fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkPrecision> {
+pub(crate) fn run(config: &WorkPrecisionConfig, on_step: &dyn Fn(&str)) -> Result<WorkPrecision> {
     let reference = reference_model()?;
     let geo = geometry(EVAL_LAYOUT)?;
     let refs: Vec<Vec<f64>> = regimes()
@@ -445,7 +445,7 @@ fn sci(v: f64) -> String {
 
 impl WorkPrecision {
     /// The table as text.
-    pub fn table(&self) -> String {
+    pub(crate) fn table(&self) -> String {
         use std::fmt::Write as _;
         let mut s = String::new();
         let _ = writeln!(
@@ -476,13 +476,13 @@ impl WorkPrecision {
 }
 
 /// Smallest error the plot shows (exact zeros are drawn here).
-pub const PLOT_ERROR_FLOOR: f64 = 1e-17;
+pub(crate) const PLOT_ERROR_FLOOR: f64 = 1e-17;
 
 /// The log-log plot of error against run time: one point per row for the model error
 /// (evaluation rows, against the evaluation time) and the parameter error (every row,
 /// against the fit's solver time), each labelled by its mode.
 #[derive(Debug, Clone)]
-pub struct WorkPrecisionPlot {
+pub(crate) struct WorkPrecisionPlot {
     /// (label, seconds, error) for the model errors.
     pub model: Vec<(String, f64, f64)>,
     /// (label, solver seconds, error) for the parameter errors.
@@ -491,7 +491,7 @@ pub struct WorkPrecisionPlot {
 
 impl WorkPrecisionPlot {
     /// The points of a table (non-finite errors are left out; zeros sit at the floor).
-    pub fn new(wp: &WorkPrecision) -> Self {
+    pub(crate) fn new(wp: &WorkPrecision) -> Self {
         let pt = |r: &Row, s: f64, e: f64| {
             (e.is_finite() && s > 0.0).then(|| (r.mode.clone(), s, e.max(PLOT_ERROR_FLOOR)))
         };
@@ -512,7 +512,7 @@ impl WorkPrecisionPlot {
 
     /// The chart: both axes logarithmic (ticks from the data's range), every point
     /// labelled by its mode with labels placed apart, the legend beside the chart.
-    pub fn chart(&self) -> crate::plot::xy::XyPlot {
+    pub(crate) fn chart(&self) -> crate::plot::xy::XyPlot {
         use crate::plot::series_color;
         use crate::plot::xy::{Annotation, Kind, Series, XyPlot};
         let mut plot = XyPlot::new(
@@ -584,10 +584,13 @@ impl crate::plot::Picture for WorkPrecisionPlot {
 }
 
 /// The name of the plot's files without the extension: `work-precision.png`, `.svg`.
-pub const PLOT_STEM: &str = "work-precision";
+pub(crate) const PLOT_STEM: &str = "work-precision";
 
 /// Write the plot as `dir/work-precision.png` and `.svg`; returns the paths.
-pub fn write_plot(wp: &WorkPrecision, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
+pub(crate) fn write_plot(
+    wp: &WorkPrecision,
+    dir: &std::path::Path,
+) -> Result<Vec<std::path::PathBuf>> {
     crate::plot::write_png_svg(&WorkPrecisionPlot::new(wp), dir, PLOT_STEM)
 }
 

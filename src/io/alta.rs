@@ -42,7 +42,7 @@ use std::path::Path;
 
 /// The input parametrizations goniofit reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Input {
+pub(crate) enum Input {
     /// θl, φl, θv, φv.
     SphericalTlPlTvPv,
     /// θv, θl, Δφ = φl − φv.
@@ -82,7 +82,7 @@ impl Input {
 
     /// The view and light unit vectors of one row's inputs `x` (radians), or None when a
     /// CARTESIAN vector has no length.
-    pub fn directions(self, x: &[f64]) -> Option<([f64; 3], [f64; 3])> {
+    pub(crate) fn directions(self, x: &[f64]) -> Option<([f64; 3], [f64; 3])> {
         let sph = |t: f64, p: f64| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()];
         Some(match self {
             Input::SphericalTlPlTvPv => (sph(x[2], x[3]), sph(x[0], x[1])),
@@ -115,7 +115,7 @@ struct Header {
 }
 
 /// Whether a file's start is an ALTA data file: its first non-blank line is `#DIM`.
-pub fn is_alta(head: &[u8]) -> bool {
+pub(crate) fn is_alta(head: &[u8]) -> bool {
     let head = head.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(head);
     head.split(|&b| b == b'\n')
         .map(|l| l.trim_ascii())
@@ -128,7 +128,7 @@ pub fn is_alta(head: &[u8]) -> bool {
 
 /// Parse ALTA data `text` (see the module docs) into a dataset of the channels
 /// `opts.channel` selects (one output: no choice needed).
-pub fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Dataset> {
+pub(crate) fn parse(path: &Path, text: &str, opts: &ReadOptions) -> Result<Dataset> {
     let mut header: Option<Header> = None;
     let mut pending: Vec<(usize, &str)> = Vec::new();
     let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();

@@ -47,7 +47,7 @@ use std::path::Path;
 
 /// Whether `token` looks like an ASTM header key (upper-case letters, digits, `_`, starting
 /// with a letter), e.g. `LAB_NAME`, `NUM_POINTS`, `VARS`.
-pub fn is_key(token: &str) -> bool {
+pub(crate) fn is_key(token: &str) -> bool {
     let mut chars = token.chars();
     matches!(chars.next(), Some(c) if c.is_ascii_uppercase())
         && chars.all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
@@ -76,7 +76,7 @@ fn split_row(line: &str, max: usize) -> std::result::Result<Vec<&str>, ()> {
 
 /// The parsed header of an ASTM file.
 #[derive(Debug, Clone, Default)]
-pub struct Header {
+pub(crate) struct Header {
     /// Key/value pairs in file order (VARS included).
     pub keys: Vec<(String, String)>,
     /// Column names from VARS.
@@ -110,7 +110,7 @@ fn check_vars(path: &Path, line: usize, vars: &[String]) -> Result<()> {
 
 impl Header {
     /// The value of a header key (first occurrence, case-sensitive as in the standard).
-    pub fn get(&self, key: &str) -> Option<&str> {
+    pub(crate) fn get(&self, key: &str) -> Option<&str> {
         self.keys
             .iter()
             .find(|(k, _)| k == key)

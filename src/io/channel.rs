@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 /// wavelength, e.g. `0.532µm`), and a wavelength (`0.532` in the file's unit, or with a unit
 /// such as `532nm` when the file's unit is known) keeps the rows whose `wavelength` equals it
 /// to 1e-9 relative. A channel that selects nothing is an error listing what there is.
-pub fn select_csv_channel(ds: Dataset, channel: Option<&str>) -> Result<Dataset> {
+pub(crate) fn select_csv_channel(ds: Dataset, channel: Option<&str>) -> Result<Dataset> {
     let Some(want) = channel.map(str::trim) else {
         return Ok(ds);
     };

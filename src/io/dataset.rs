@@ -20,7 +20,7 @@ pub struct ReadOptions {
     /// One channel, or `all`. ASTM: a channel name such as `550nm`. CSV: a `group` label
     /// when the file has a `group` column, otherwise a wavelength (`0.532`, in the file's
     /// unit, or `532nm`) selecting the rows of that `wavelength`; `all` on a CSV without a
-    /// `group` column makes each wavelength a channel (see [`super::select_csv_channel`]).
+    /// `group` column makes each wavelength a channel (see `super::select_csv_channel`).
     pub channel: Option<String>,
     /// MERL tables: keep every k-th θd and φd cell (k² fewer samples; 0 or 1 keeps all).
     /// Other formats refuse k > 1.
@@ -69,7 +69,7 @@ impl Dataset {
         self.samples.len()
     }
 
-    /// Whether there are no samples (never true for a dataset returned by [`super::read_dataset`]).
+    /// Whether there are no samples (never true for a dataset [`crate::read`] returns).
     pub fn is_empty(&self) -> bool {
         self.samples.is_empty()
     }

@@ -25,7 +25,7 @@ const STDOUT: &str = "standard output";
 /// Every file of one command: inputs, outputs and folders of pictures, each with the
 /// option that names it (`"input"`, `"--out"`, `"--plot"`, ...).
 #[derive(Debug, Default)]
-pub struct FileSet {
+pub(crate) struct FileSet {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf)>,
     folders: Vec<(String, PathBuf)>,
@@ -33,24 +33,24 @@ pub struct FileSet {
 
 impl FileSet {
     /// An empty set.
-    pub fn new() -> FileSet {
+    pub(crate) fn new() -> FileSet {
         FileSet::default()
     }
 
     /// A file the command reads.
-    pub fn input(mut self, option: &str, path: &Path) -> FileSet {
+    pub(crate) fn input(mut self, option: &str, path: &Path) -> FileSet {
         self.inputs.push((option.to_string(), path.to_path_buf()));
         self
     }
 
     /// A file the command writes (`-`: standard output).
-    pub fn output(mut self, option: &str, path: &Path) -> FileSet {
+    pub(crate) fn output(mut self, option: &str, path: &Path) -> FileSet {
         self.outputs.push((option.to_string(), path.to_path_buf()));
         self
     }
 
     /// [`FileSet::output`] when `path` is given.
-    pub fn output_opt(self, option: &str, path: Option<&Path>) -> FileSet {
+    pub(crate) fn output_opt(self, option: &str, path: Option<&Path>) -> FileSet {
         match path {
             Some(p) => self.output(option, p),
             None => self,
@@ -58,13 +58,13 @@ impl FileSet {
     }
 
     /// Standard output, which the command prints to.
-    pub fn stdout(self) -> FileSet {
+    pub(crate) fn stdout(self) -> FileSet {
         self.output(STDOUT, Path::new("-"))
     }
 
     /// A folder the command creates if needed and writes pictures into: `stem.png` and
     /// `stem.svg` for every stem.
-    pub fn pictures(mut self, option: &str, dir: &Path, stems: &[&str]) -> FileSet {
+    pub(crate) fn pictures(mut self, option: &str, dir: &Path, stems: &[&str]) -> FileSet {
         self.folders.push((option.to_string(), dir.to_path_buf()));
         for stem in stems {
             for ext in ["png", "svg"] {
@@ -76,7 +76,7 @@ impl FileSet {
 
     /// Refuse (exit code 2) an unusable output path or two files that are one (see the
     /// module docs); the first problem found is the error.
-    pub fn check(&self) -> Result<()> {
+    pub(crate) fn check(&self) -> Result<()> {
         for (option, dir) in &self.folders {
             check_folder(option, dir)?;
         }

@@ -29,30 +29,16 @@ use std::io::Read;
 use std::path::Path;
 
 /// Cells along θh, θd and φd.
-pub const DIMS: [usize; 3] = [90, 90, 180];
+pub(crate) const DIMS: [usize; 3] = [90, 90, 180];
 /// Cells per channel table.
-pub const CELLS: usize = DIMS[0] * DIMS[1] * DIMS[2];
+pub(crate) const CELLS: usize = DIMS[0] * DIMS[1] * DIMS[2];
 /// The channel scales of the reference reader (stored number × scale = BRDF in 1/sr).
-pub const SCALES: [f64; 3] = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
+pub(crate) const SCALES: [f64; 3] = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
 /// Bytes of a MERL file: the dimensions and three tables of f64.
-pub const FILE_BYTES: u64 = 12 + 3 * 8 * CELLS as u64;
-
-/// The cell index of a half/difference direction, as the reference reader's lookup
-/// (angles in rad; each index clamped to its table).
-pub fn cell_of(theta_h: f64, theta_d: f64, phi_d: f64) -> usize {
-    let th = if theta_h <= 0.0 {
-        0
-    } else {
-        ((theta_h / FRAC_PI_2 * 90.0 * 90.0).sqrt() as usize).min(89)
-    };
-    let td = ((theta_d / FRAC_PI_2 * 90.0).max(0.0) as usize).min(89);
-    let pd = if phi_d < 0.0 { phi_d + PI } else { phi_d };
-    let pd = ((pd / PI * 180.0).max(0.0) as usize).min(179);
-    pd + DIMS[2] * (td + DIMS[1] * th)
-}
+pub(crate) const FILE_BYTES: u64 = 12 + 3 * 8 * CELLS as u64;
 
 /// The centre of cell (θh index, θd index, φd index) in the lookup's coordinates (rad).
-pub fn cell_centre(i: usize, j: usize, k: usize) -> (f64, f64, f64) {
+pub(crate) fn cell_centre(i: usize, j: usize, k: usize) -> (f64, f64, f64) {
     let u = (i as f64 + 0.5) / 90.0;
     (
         u * u * FRAC_PI_2,
@@ -62,7 +48,7 @@ pub fn cell_centre(i: usize, j: usize, k: usize) -> (f64, f64, f64) {
 }
 
 /// Incident and outgoing unit vectors of half/difference angles (half vector at azimuth 0).
-pub fn directions(theta_h: f64, theta_d: f64, phi_d: f64) -> ([f64; 3], [f64; 3]) {
+pub(crate) fn directions(theta_h: f64, theta_d: f64, phi_d: f64) -> ([f64; 3], [f64; 3]) {
     let d = [
         theta_d.sin() * phi_d.cos(),
         theta_d.sin() * phi_d.sin(),
@@ -78,7 +64,8 @@ pub fn directions(theta_h: f64, theta_d: f64, phi_d: f64) -> ([f64; 3], [f64; 3]
 
 /// The half/difference angles (θh, θd, φd) of a pair of unit vectors, as the reference
 /// reader's `std_coords_to_half_diff_coords`.
-pub fn half_diff(wi: [f64; 3], wo: [f64; 3]) -> (f64, f64, f64) {
+#[cfg(test)]
+pub(crate) fn half_diff(wi: [f64; 3], wo: [f64; 3]) -> (f64, f64, f64) {
     let h = [wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]];
     let n = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
     let h = h.map(|v| v / n);
@@ -109,7 +96,7 @@ fn cell_sample(i: usize, j: usize, k: usize) -> Option<Sample> {
 }
 
 /// Whether `bytes` (a file's start) and its length look like a MERL file.
-pub fn is_merl(head: &[u8], len: u64) -> bool {
+pub(crate) fn is_merl(head: &[u8], len: u64) -> bool {
     head.len() >= 12
         && len == FILE_BYTES
         && head[..12]
@@ -121,7 +108,7 @@ pub fn is_merl(head: &[u8], len: u64) -> bool {
 /// Read a MERL file from `reader` (`len` bytes): the measured cells of the channels
 /// `opts.channel` selects (`r`, `g`, `b` or `all`; required), every `stride`-th θd and φd
 /// cell (1: all), as BRDF (1/sr) with the channels' nominal wavelengths (nm, as RGL's).
-pub fn read(
+pub(crate) fn read(
     path: &Path,
     mut reader: impl Read,
     len: u64,
@@ -227,7 +214,8 @@ fn read_table(reader: &mut impl Read, buf: &mut [u8], table: &mut [f64]) -> std:
 }
 
 /// Read a MERL file by path (see [`read`]).
-pub fn read_path(path: &Path, opts: &ReadOptions, stride: usize) -> Result<Dataset> {
+#[cfg(test)]
+pub(crate) fn read_path(path: &Path, opts: &ReadOptions, stride: usize) -> Result<Dataset> {
     let io_err = |source| Error::Io {
         path: path.to_path_buf(),
         source,

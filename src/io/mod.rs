@@ -20,10 +20,10 @@
 //! written (no output is an input or another output).
 //!
 //! ```
-//! use goniofit::io::{read_dataset, ReadOptions};
+//! use goniofit::{read, ReadOptions};
 //! let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
 //! let opts = ReadOptions { channel: Some("550nm".into()), require_value: true, ..Default::default() };
-//! let ds = read_dataset(&path, &opts)?;
+//! let ds = read(&path, &opts)?;
 //! assert_eq!(ds.len(), 1439);
 //! assert_eq!(ds.wavelength.as_ref().unwrap()[0], 550.0); // nm, from the channel name
 //! # Ok::<(), goniofit::Error>(())
@@ -42,31 +42,35 @@
 //! [`astm`], [`rgl`], [`merl`], [`alta`]; [`arrays`] for arrays handed over by a program),
 //! [`output`] and [`files`] for writing.
 
-pub mod alta;
-pub mod arrays;
-pub mod astm;
+pub(crate) mod alta;
+pub(crate) mod arrays;
+pub(crate) mod astm;
 mod channel;
-pub mod csv;
+pub(crate) mod csv;
 mod dataset;
-pub mod files;
-pub mod merl;
-pub mod output;
+pub(crate) mod files;
+pub(crate) mod merl;
+pub(crate) mod output;
 mod quantity;
 mod read;
-pub mod rgl;
+pub(crate) mod rgl;
 mod sniff;
 mod text;
 mod values;
 
-pub use files::FileSet;
-pub use output::{print_stdout, write_atomic, write_bytes};
+pub(crate) use files::FileSet;
+pub(crate) use output::{print_stdout, write_atomic, write_bytes};
 
-pub use crate::error::{shown, shown_text};
-pub use channel::select_csv_channel;
+pub(crate) use crate::error::{shown, shown_text};
+pub(crate) use channel::select_csv_channel;
 pub(crate) use dataset::empty_brdf;
 pub use dataset::{Dataset, ReadOptions};
-pub use read::{read_bytes, read_dataset, read_dataset_columns, read_dataset_with, Progress};
-pub use sniff::is_astm;
-pub use text::{csv_field, write_csv, write_record};
+#[cfg(test)]
+pub(crate) use read::read_bytes;
+pub(crate) use read::read_dataset;
+pub use read::read_dataset_columns;
+pub(crate) use read::read_dataset_with;
+pub(crate) use text::{write_csv, write_record};
+pub use values::parse_length;
 pub(crate) use values::{check_angles, parse_finite};
-pub use values::{format_value, nm_per, parse_length, wavelength_nm_of_channel, LENGTH_UNITS};
+pub(crate) use values::{format_value, nm_per, wavelength_nm_of_channel};

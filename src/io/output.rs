@@ -66,7 +66,7 @@ fn temporaries() -> std::sync::MutexGuard<'static, Temporaries> {
 /// temporary is created nor renamed into place, the writing thread waits for the end of
 /// the process) or made and not yet renamed (removed here). Safe to call from any thread
 /// at any time.
-pub fn remove_temporaries() {
+pub(crate) fn remove_temporaries() {
     let mut list = temporaries();
     list.closed = true;
     for p in &list.paths {
@@ -160,7 +160,7 @@ impl Drop for Registered {
 
 /// Where the bytes of an output go.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Sink {
+pub(crate) enum Sink {
     /// The process's standard output (`-`, `/dev/stdout`, `/dev/fd/1`).
     Stdout,
     /// The process's standard error (`/dev/stderr`, `/dev/fd/2`).
@@ -174,7 +174,7 @@ pub enum Sink {
 
 /// Decide how `path` is written (see the module docs). A symlink the kernel would not
 /// follow (see `resolve_symlinks`) or a loop of symlinks is an [`Error::File`].
-pub fn sink_of(path: &Path) -> Result<Sink> {
+pub(crate) fn sink_of(path: &Path) -> Result<Sink> {
     if path.as_os_str() == "-" {
         return Ok(Sink::Stdout);
     }
@@ -324,7 +324,7 @@ fn pour(
 /// Write an output file (or stream) without ever leaving a half-written or destroyed file:
 /// see the module docs for what each kind of path gets. `f` writes the content (through a
 /// buffer); its errors and the file system's are reported with the path.
-pub fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
@@ -415,12 +415,12 @@ fn keep_attributes(tmp: &std::fs::File, target: &Path) {
 }
 
 /// [`write_atomic`] of bytes already in memory.
-pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+pub(crate) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic(path, |w| w.write_all(bytes))
 }
 
 /// Print `text` on standard output; a closed pipe is not an error (see the module docs),
 /// any other failure (a full disk behind a redirection) is an [`Error::Write`].
-pub fn print_stdout(text: &str) -> Result<()> {
+pub(crate) fn print_stdout(text: &str) -> Result<()> {
     write_atomic(Path::new("-"), |w| w.write_all(text.as_bytes()))
 }

@@ -11,19 +11,19 @@ use crate::error::{Error, Result};
 use std::path::Path;
 
 /// Read a dataset, choosing the format by extension or content (see the module docs).
-pub fn read_dataset(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
+pub(crate) fn read_dataset(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
     read_file(path, opts, true, &|_| Ok(()))
 }
 
 /// What a caller's progress callback says after each MiB or so read: go on, or stop with
 /// the reason (e.g. "stopped: interrupted"; the read then ends with [`Error::Stopped`]).
-pub type Progress<'f> = &'f dyn Fn(u64) -> std::result::Result<(), &'static str>;
+pub(crate) type Progress<'f> = &'f dyn Fn(u64) -> std::result::Result<(), &'static str>;
 
 /// [`read_dataset`] (with the raw rows only when `keep_rows`, see
 /// [`read_dataset_columns`]), calling `progress(bytes read so far)` every MiB or so while
 /// a CSV file is streamed (about 25,000 rows of a typical scan); when it returns a reason,
 /// reading ends with [`Error::Stopped`] ("REASON while reading FILE …: nothing fitted").
-pub fn read_dataset_with(
+pub(crate) fn read_dataset_with(
     path: &Path,
     opts: &ReadOptions,
     keep_rows: bool,
@@ -32,9 +32,11 @@ pub fn read_dataset_with(
     read_file(path, opts, keep_rows, progress)
 }
 
-/// [`read_dataset`] without the raw rows (`rows` stays empty): what a fit needs when it
-/// writes no residuals file. A CSV file is streamed record by record, so reading holds
-/// one record's text at a time, not the file (a 1M-row scan is ~45 MB of text).
+/// Read a measurement file into its samples as `goniofit fit` does: CSV, ASTM E1392, NIST
+/// PTFE, RGL `.bsdf`, MERL `.binary` or ALTA data, told apart by name and content; the rows
+/// `opts` selects (channel, columns, angle unit), checked (angles in range, finite values).
+/// The file's raw rows are not kept (`rows` stays empty). Errors name the file and, for
+/// text formats, the line.
 pub fn read_dataset_columns(path: &Path, opts: &ReadOptions) -> Result<Dataset> {
     read_file(path, opts, false, &|_| Ok(()))
 }
@@ -155,7 +157,7 @@ fn refuse_subsample(path: &Path, opts: &ReadOptions) -> Result<()> {
 
 /// Read a dataset from bytes already in memory; `path` names it in messages and decides
 /// the format by extension as [`read_dataset`] does.
-pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
+pub(crate) fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
     if merl::is_merl(bytes, bytes.len() as u64) || merl_by_extension(path) {
         return merl::read(path, bytes, bytes.len() as u64, opts, opts.subsample);
     }

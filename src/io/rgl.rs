@@ -26,8 +26,8 @@
 //! (`spectra` instead of `rgb`) and malformed files are refused with the field, its byte
 //! offset and what was expected.
 
-pub mod tensor;
-pub mod warp;
+pub(crate) mod tensor;
+pub(crate) mod warp;
 
 use super::{shown, Dataset, ReadOptions};
 use crate::error::{Error, Result};
@@ -38,23 +38,21 @@ use tensor::{dtype_name, Field, TensorFile, FLOAT32};
 use warp::Warp;
 
 /// The channel names, in the file's order.
-pub const CHANNELS: [&str; 3] = ["r", "g", "b"];
+pub(crate) const CHANNELS: [&str; 3] = ["r", "g", "b"];
 
 /// Nominal wavelengths (nm) of the r, g, b channels: the dominant wavelengths of the sRGB
 /// primaries, rounded to the nanometre.
-pub const NOMINAL_NM: [f64; 3] = [612.0, 549.0, 465.0];
+pub(crate) const NOMINAL_NM: [f64; 3] = [612.0, 549.0, 465.0];
 
 /// How the report names a wavelength taken from [`NOMINAL_NM`].
-pub const NOMINAL_ORIGIN: &str = "nominal wavelength of the sRGB channel";
+pub(crate) const NOMINAL_ORIGIN: &str = "nominal wavelength of the sRGB channel";
 
 /// Incidences with cos θi at or below this are not sampled (grazing).
 const GRAZING_COS: f64 = 1e-6;
 
 /// An isotropic RGL BRDF, ready to sample and evaluate.
 #[derive(Debug, Clone)]
-pub struct RglBrdf {
-    /// The file's `description` text.
-    pub description: String,
+pub(crate) struct RglBrdf {
     /// Incidence elevations of the tables (rad, ascending).
     pub theta_i: Vec<f32>,
     ndf: Warp,
@@ -67,7 +65,7 @@ pub struct RglBrdf {
 
 /// One measured point: geometry, the grid point it comes from and f_r per channel.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RglSample {
+pub(crate) struct RglSample {
     /// Index of θi in the file's `theta_i`, row and column of the rgb grid.
     pub index: (usize, usize, usize),
     /// Angles in goniofit's convention (rad).
@@ -161,17 +159,9 @@ fn check_kind(path: &Path, tf: &TensorFile) -> Result<()> {
 
 impl RglBrdf {
     /// Parse an RGL `.bsdf` file's bytes (`path` names it in messages).
-    pub fn parse(path: &Path, bytes: &[u8]) -> Result<RglBrdf> {
+    pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<RglBrdf> {
         let tf = TensorFile::parse(bytes).map_err(|m| Error::file(path, m))?;
         check_kind(path, &tf)?;
-        let description = tf
-            .field("description")
-            .map(|f| {
-                String::from_utf8_lossy(tf.data(f))
-                    .trim_end_matches('\0')
-                    .to_string()
-            })
-            .unwrap_or_default();
         let (f_ti, theta_i) = float_field(path, &tf, "theta_i", 1)?;
         let (f_pi, phi_i) = float_field(path, &tf, "phi_i", 1)?;
         if phi_i.len() != 1 {
@@ -222,7 +212,6 @@ impl RglBrdf {
         };
         let rgb = [channel(0), channel(1), channel(2)];
         Ok(RglBrdf {
-            description,
             theta_i,
             ndf,
             sigma,
@@ -235,7 +224,8 @@ impl RglBrdf {
     /// f_r (1/sr) per channel at incident direction `wi` (towards the light) and outgoing
     /// `wo`, unit vectors in the local frame (z = normal), by the reference loader's
     /// interpolation (in f32, as the loader); 0 when either is at or below the horizon.
-    pub fn eval(&self, wi: [f64; 3], wo: [f64; 3]) -> [f64; 3] {
+    #[cfg(test)]
+    pub(crate) fn eval(&self, wi: [f64; 3], wo: [f64; 3]) -> [f64; 3] {
         let f = self.eval_cos(wi, wo);
         if wi[2] <= 0.0 || wo[2] <= 0.0 {
             return [0.0; 3];
@@ -245,7 +235,8 @@ impl RglBrdf {
 
     /// f_r · cos θo per channel, as the reference loader's `eval` (without its clipping of
     /// negative values to 0); 0 when either direction is at or below the horizon.
-    pub fn eval_cos(&self, wi: [f64; 3], wo: [f64; 3]) -> [f64; 3] {
+    #[cfg(test)]
+    pub(crate) fn eval_cos(&self, wi: [f64; 3], wo: [f64; 3]) -> [f64; 3] {
         self.eval_cos32(wi.map(|v| v as f32), wo.map(|v| v as f32))
             .map(f64::from)
     }
@@ -289,7 +280,7 @@ impl RglBrdf {
     }
 
     /// The measured points (see the module docs), in the order θi, grid row, grid column.
-    pub fn samples(&self) -> Vec<RglSample> {
+    pub(crate) fn samples(&self) -> Vec<RglSample> {
         let (nx, ny) = self.grid;
         let mut out = Vec::new();
         for (t, &theta_i) in self.theta_i.iter().enumerate() {
@@ -360,7 +351,7 @@ fn expect_shape(path: &Path, f: &Field, want: &[usize], got: &[usize]) -> Result
 /// nominal wavelength in nm. `lines` holds each point's 1-based number among the file's
 /// points (θi, row, column order); the pass-through columns are the angles in degrees,
 /// the channel and BRDF.
-pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
+pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dataset> {
     let brdf = RglBrdf::parse(path, bytes)?;
     let selected = select_channels(path, opts.channel.as_deref())?;
     let points = brdf.samples();

@@ -58,7 +58,7 @@ pub(super) fn estimate_rows(head: &[u8], len: u64) -> usize {
 }
 
 /// Whether the file is ASTM E1392 (by extension or content).
-pub fn is_astm(path: &Path, text: &str) -> bool {
+pub(crate) fn is_astm(path: &Path, text: &str) -> bool {
     if path
         .extension()
         .and_then(|e| e.to_str())

@@ -6,7 +6,7 @@ use crate::geometry::Sample;
 
 /// Format a value with full precision: the shortest decimal that parses back to the same
 /// `f64`, in scientific notation (`1.2345e-3`, `5e-1`, `NaN`, `inf`).
-pub fn format_value(v: f64) -> String {
+pub(crate) fn format_value(v: f64) -> String {
     format!("{v:e}")
 }
 
@@ -97,10 +97,10 @@ pub(crate) fn check_angles(
 }
 
 /// Length units goniofit understands, as written in reports: nanometres and micrometres.
-pub const LENGTH_UNITS: [(&str, f64); 2] = [("nm", 1.0), ("µm", 1000.0)];
+pub(crate) const LENGTH_UNITS: [(&str, f64); 2] = [("nm", 1.0), ("µm", 1000.0)];
 
 /// Nanometres per `unit` (`nm`, `µm`; 1 for anything else).
-pub fn nm_per(unit: &str) -> f64 {
+pub(crate) fn nm_per(unit: &str) -> f64 {
     LENGTH_UNITS
         .iter()
         .find(|(u, _)| *u == unit)
@@ -109,7 +109,7 @@ pub fn nm_per(unit: &str) -> f64 {
 
 /// A positive length such as `633nm`, `633 nm`, `0.633um`, `0.633µm` or a bare `0.633`:
 /// the number and its unit (`nm`, `µm`; None for a bare number), within
-/// [`crate::geometry::LENGTH_RANGE`]. The error says what is accepted.
+/// `crate::geometry::LENGTH_RANGE`. The error says what is accepted.
 pub fn parse_length(text: &str) -> Result<(f64, Option<&'static str>)> {
     let t = text.trim();
     let lower = t.to_lowercase();
@@ -137,7 +137,7 @@ pub fn parse_length(text: &str) -> Result<(f64, Option<&'static str>)> {
 
 /// A wavelength from a channel name such as `550nm`, `550 nm`, `0.55um`, `0.55µm` or a bare
 /// number (taken as nm); the result is in nm. `None` when the name is not a wavelength.
-pub fn wavelength_nm_of_channel(name: &str) -> Option<f64> {
+pub(crate) fn wavelength_nm_of_channel(name: &str) -> Option<f64> {
     let (v, unit) = parse_length(name).ok()?;
     Some(v * unit.map_or(1.0, nm_per))
 }

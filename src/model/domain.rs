@@ -17,15 +17,15 @@ use crate::error::{Error, Result};
 use crate::geometry::Geometry;
 
 /// The documented accuracy range of the KBS sum: T/λ.
-pub const T_OVER_LAMBDA: (f64, f64) = (1e-3, 1e5);
+pub(crate) const T_OVER_LAMBDA: (f64, f64) = (1e-3, 1e5);
 /// The documented accuracy range of the KBS sum: g = (2πσ/λ)² (cos θi + cos θr)².
-pub const G_RANGE: (f64, f64) = (1e-12, 1e6);
+pub(crate) const G_RANGE: (f64, f64) = (1e-12, 1e6);
 /// The documented accuracy range of the KBS sum: upper end of a = v_xy² T²/4.
-pub const A_MAX: f64 = 1e8;
+pub(crate) const A_MAX: f64 = 1e8;
 
 /// A number for messages: plain where that is short (`0.3`, `2`, `550`), scientific
 /// otherwise (`1e300`, `2.5e-7`); always the shortest form that reads back exactly.
-pub fn short_number(v: f64) -> String {
+pub(crate) fn short_number(v: f64) -> String {
     let a = v.abs();
     if v == 0.0 || (1e-4..1e6).contains(&a) || !v.is_finite() {
         format!("{v}")
@@ -35,7 +35,7 @@ pub fn short_number(v: f64) -> String {
 }
 
 /// `name = value, …` of a parameter vector, for messages.
-pub fn describe_params(model: &dyn Model, params: &[f64]) -> String {
+pub(crate) fn describe_params(model: &dyn Model, params: &[f64]) -> String {
     model
         .params()
         .iter()
@@ -48,7 +48,11 @@ pub fn describe_params(model: &dyn Model, params: &[f64]) -> String {
 /// The model's values (the measured quantity of `geo`) at `params`, each finite; otherwise
 /// an [`Error::Usage`] naming the first sample whose value is not finite, its angles and
 /// wavelength, and the parameters. `params` must have the model's length (checked).
-pub fn evaluate_checked(model: &dyn Model, params: &[f64], geo: &Geometry) -> Result<Vec<f64>> {
+pub(crate) fn evaluate_checked(
+    model: &dyn Model,
+    params: &[f64],
+    geo: &Geometry,
+) -> Result<Vec<f64>> {
     super::check_param_count(model, params)?;
     for (spec, v) in model.params().iter().zip(params) {
         super::check_param_value(spec, *v)?;
@@ -61,7 +65,7 @@ pub fn evaluate_checked(model: &dyn Model, params: &[f64], geo: &Geometry) -> Re
 
 /// Ok when every entry of `values` (one per sample of `geo`: the model's values, or with
 /// `what` = "'s derivative by NAME" a column of its Jacobian) is finite; otherwise the
-/// [`Error::Usage`] of [`evaluate_checked`] for the first sample that is not.
+/// [`Error::Usage`] of `evaluate_checked` for the first sample that is not.
 pub fn check_finite(
     model: &dyn Model,
     params: &[f64],
@@ -94,7 +98,7 @@ pub fn check_finite(
 /// Warnings for parameters outside the documented accuracy range of the KBS sum (empty for
 /// the other models and inside the range). Each names the quantity, its range over the
 /// samples and the documented range.
-pub fn accuracy_warnings(model: &dyn Model, params: &[f64], geo: &Geometry) -> Vec<String> {
+pub(crate) fn accuracy_warnings(model: &dyn Model, params: &[f64], geo: &Geometry) -> Vec<String> {
     let idx = |name: &str| model.params().iter().position(|s| s.name == name);
     let (Some(js), Some(jt)) = (idx("sigma"), idx("T")) else {
         return Vec::new();

@@ -119,7 +119,7 @@ impl Fresnel {
 /// would be their rounding (a relative 10⁻¹⁵ of F on the solver's ln(n − 1), a column
 /// shaped like the lobe's amplitude) and its terms of order n⁴ overflow beyond n ~ 10⁷⁷.
 /// A fit whose index runs here has run to the edge n → ∞ of its domain.
-pub const FLAT_INDEX: f64 = 1e17;
+pub(crate) const FLAT_INDEX: f64 = 1e17;
 
 /// A normalised Fresnel factor F = R(θ_loc)/R(0) and its partial derivatives.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -141,14 +141,15 @@ impl FresnelValue {
     };
 }
 
-pub use crate::geometry::cos_local;
+#[cfg(test)]
+pub(crate) use crate::geometry::cos_local;
 
 /// Unpolarised Fresnel reflectance of the index η = n + iκ at incidence cos θ = `c`
 /// (0 ≤ c ≤ 1), divided by its value at normal incidence, with ∂/∂n and ∂/∂κ (module doc),
 /// in real arithmetic: two square roots and one division for w and F, one more division
 /// for the derivatives.
 #[inline(always)]
-pub fn complex_ratio(c: f64, n: f64, kappa: f64) -> FresnelValue {
+pub(crate) fn complex_ratio(c: f64, n: f64, kappa: f64) -> FresnelValue {
     // η² = er + i·ei; w² = η² − 1 + c² = x + i·ei, w = a + ib its principal root (a ≥ 0)
     // without cancellation: t = √((|w²| + |x|)/2); |w|² = |w²|.
     let (er, ei) = (n * n - kappa * kappa, 2.0 * n * kappa);
@@ -210,7 +211,7 @@ fn mul((a, b): (f64, f64), (c, d): (f64, f64)) -> (f64, f64) {
 /// [`complex_ratio`] at κ = 0 for n > 1, in real arithmetic (w² = n² − 1 + c² > 0): the
 /// same formulas, the same accuracy, one division.
 #[inline(always)]
-pub fn real_ratio(c: f64, n: f64) -> FresnelValue {
+pub(crate) fn real_ratio(c: f64, n: f64) -> FresnelValue {
     let (n2, c2) = (n * n, c * c);
     let w = (n2 - 1.0 + c2).sqrt();
     // One division for w⁻¹, (c + w)⁻¹ and (n²c + w)⁻¹ (all factors ≥ √(n² − 1) > 0).
@@ -237,7 +238,7 @@ pub fn real_ratio(c: f64, n: f64) -> FresnelValue {
 /// Schlick's approximation normalised at normal incidence, F = 1 + 4n(1 − c)⁵/(n − 1)²,
 /// with ∂F/∂n = −4(n + 1)(1 − c)⁵/(n − 1)³; `n` ≠ 1 (F is unbounded there, as F₀ → 0).
 #[inline]
-pub fn schlick_ratio(c: f64, n: f64) -> FresnelValue {
+pub(crate) fn schlick_ratio(c: f64, n: f64) -> FresnelValue {
     let one_minus_c = (1.0 - c).max(0.0);
     let x5 = one_minus_c.powi(5);
     let nm1 = n - 1.0;

@@ -44,7 +44,7 @@ use std::f64::consts::PI;
 
 /// The KBS model with a chosen evaluation mode.
 #[derive(Debug, Clone, Copy)]
-pub struct Kbs {
+pub(crate) struct Kbs {
     /// The evaluation mode and tolerance, the patch size and the Fresnel and shadowing
     /// factors.
     pub opts: ModelOptions,
@@ -115,7 +115,7 @@ pub(crate) struct KbsPoint {
 
 impl Kbs {
     /// A KBS model; `opts.tol` must lie in [1e-16, 0.1], patch sizes must be positive.
-    pub fn new(opts: ModelOptions) -> Result<Self> {
+    pub(crate) fn new(opts: ModelOptions) -> Result<Self> {
         let (lo, hi) = super::TOL_RANGE;
         if !(lo..=hi).contains(&opts.tol) {
             return Err(Error::Usage(format!(
@@ -429,7 +429,7 @@ fn scaled(inc: f64, factor: f64, x: f64) -> f64 {
 
 /// sin(x)/x, 1 at 0.
 #[inline]
-pub fn sinc(x: f64) -> f64 {
+pub(crate) fn sinc(x: f64) -> f64 {
     if x.abs() < 1e-4 {
         1.0 - x * x / 6.0
     } else {

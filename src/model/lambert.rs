@@ -14,7 +14,7 @@ use crate::geometry::Geometry;
 
 /// The Lambertian model.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Lambert;
+pub(crate) struct Lambert;
 
 pub(crate) const SCALE: ParamSpec = ParamSpec {
     name: "scale",

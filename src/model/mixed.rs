@@ -21,7 +21,7 @@ use crate::geometry::Geometry;
 
 /// KBS surface scattering plus a Lambertian body term.
 #[derive(Debug, Clone, Copy)]
-pub struct KbsLambert {
+pub(crate) struct KbsLambert {
     /// The KBS lobe (its options: mode, factors); the Lambertian term has none.
     pub kbs: Kbs,
 }
@@ -46,7 +46,7 @@ const PARAMS_NK: [ParamSpec; 6] = [
 
 impl KbsLambert {
     /// See [`Kbs::new`] for the options' domain.
-    pub fn new(opts: ModelOptions) -> Result<Self> {
+    pub(crate) fn new(opts: ModelOptions) -> Result<Self> {
         Ok(KbsLambert {
             kbs: Kbs::new(opts)?,
         })

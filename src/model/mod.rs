@@ -3,15 +3,15 @@
 //!
 //! The model layer knows nothing of files, fits or plots.
 
-pub mod domain;
-pub mod fresnel;
-pub mod kbs;
-pub mod lambert;
+pub(crate) mod domain;
+pub(crate) mod fresnel;
+pub(crate) mod kbs;
+pub(crate) mod lambert;
 mod lanes;
-pub mod mixed;
-pub mod series;
-pub mod shadowing;
-pub mod specular;
+pub(crate) mod mixed;
+pub(crate) mod series;
+pub(crate) mod shadowing;
+pub(crate) mod specular;
 
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
@@ -76,7 +76,7 @@ pub enum EvalMode {
 }
 
 /// The range of the relative accuracy target of the KBS evaluation.
-pub const TOL_RANGE: (f64, f64) = (1e-16, 0.1);
+pub(crate) const TOL_RANGE: (f64, f64) = (1e-16, 0.1);
 
 /// Options shared by the model constructors.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,9 +88,9 @@ pub struct ModelOptions {
     /// Patch half-sizes (X, Y) in the unit of λ: when given, KBS includes the coherent ρ0²
     /// term and uses A = 4XY; otherwise A = λ² and no coherent term.
     pub patch: Option<(f64, f64)>,
-    /// Fresnel factor on the KBS lobe ([`fresnel`]; ignored by the other models).
+    /// Fresnel factor on the KBS lobe (`fresnel`; ignored by the other models).
     pub fresnel: fresnel::Fresnel,
-    /// Shadowing–masking factor on the KBS lobe ([`shadowing`]; ignored by the others).
+    /// Shadowing–masking factor on the KBS lobe (`shadowing`; ignored by the others).
     pub shadowing: shadowing::Shadowing,
 }
 
@@ -184,7 +184,7 @@ pub trait Model: Send + Sync {
     }
 
     /// [`Self::radiance`]'s values and the evaluation mode of each sample at parameters `p`,
-    /// from one evaluation (every sample [`Mode::Closed`] for a model in closed form).
+    /// from one evaluation (every sample `Mode::Closed` for a model in closed form).
     fn radiance_modes(&self, geo: &Geometry, p: &[f64], out: &mut [f64]) -> Vec<Mode> {
         self.radiance(geo, p, out, None);
         vec![Mode::Closed; geo.len()]

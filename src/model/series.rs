@@ -85,7 +85,6 @@ mod terms;
 #[cfg(test)]
 mod work_bounds;
 
-pub use asymptotic::ASYM_ORDERS;
 use asymptotic::{asymptotic_body, ASYM_G_MIN};
 use small::{series_from_one, SMALL_A_MAX, SMALL_G_MAX};
 pub use terms::LnQ;
@@ -417,7 +416,7 @@ impl PeakSum {
 }
 
 /// The asymptotic completion of the rough approximation (module doc), or `None` when its
-/// error estimate does not reach `tol` within [`ASYM_ORDERS`] orders.
+/// error estimate does not reach `tol` within `ASYM_ORDERS` orders.
 pub fn asymptotic(g: f64, a: f64, tol: f64) -> Option<LnQ> {
     struct Call(f64, f64, f64);
     impl LanesFn for Call {

@@ -83,7 +83,7 @@ impl Shadowing {
     }
 
     /// [`Self::eval`] the lobe's way, from (cot θ, tan θ) of incidence and view as
-    /// [`crate::geometry::cot_tan`] gives them ([`Self::direction`]: no division for ν and
+    /// `crate::geometry::cot_tan` gives them ([`Self::direction`]: no division for ν and
     /// 1/ν; G the same to 1e-15 relative).
     #[inline]
     pub fn eval_cot_tan(
@@ -100,11 +100,11 @@ impl Shadowing {
         self.combine(Self::direction(incidence, k), Self::direction(view, k))
     }
 
-    /// Λ and ν ∂Λ/∂ν ([`lambda`]) of one direction, for [`Self::combine`], from its
-    /// (cot θ, tan θ) as [`crate::geometry::cot_tan`] gives them (tan θ = 1/cot θ, both
+    /// Λ and ν ∂Λ/∂ν (`lambda`) of one direction, for [`Self::combine`], from its
+    /// (cot θ, tan θ) as `crate::geometry::cot_tan` gives them (tan θ = 1/cot θ, both
     /// ≥ 0) and `(k, 1/k)` with k = T/(2σ) > 0: ν = k cot θ and 1/ν = tan θ/k, without a
     /// division (∞ at normal incidence, where Λ = 0; 0 at grazing, where Λ = ∞). ν and 1/ν
-    /// carry a few ulps of rounding each: Λ is [`lambda`]'s to 1e-15 (1 + Λ).
+    /// carry a few ulps of rounding each: Λ is `lambda`'s to 1e-15 (1 + Λ).
     #[inline(always)]
     pub fn direction((cot, tan): (f64, f64), (k, inv_k): (f64, f64)) -> (f64, f64) {
         lambda_ny(k * cot, tan * inv_k)
@@ -162,7 +162,7 @@ impl ShadowValue {
 /// Smith's Λ(ν) of the Beckmann distribution and ν ∂Λ/∂ν = −e^{−ν²}/(2√π ν), for ν ≥ 0
 /// (Λ = ∞ at ν = 0, the grazing direction); accuracy and cost in the module doc.
 #[inline(always)]
-pub fn lambda(nu: f64) -> (f64, f64) {
+pub(crate) fn lambda(nu: f64) -> (f64, f64) {
     lambda_ny(nu, 1.0 / nu)
 }
 
@@ -184,7 +184,8 @@ fn lambda_ny(nu: f64, y: f64) -> (f64, f64) {
 /// cot θ = cos θ/sin θ of a polar angle θ ∈ [0, π/2] (∞ at 0, 0 at π/2 up to rounding,
 /// clamped at 0).
 #[inline]
-pub fn cot(theta: f64) -> f64 {
+#[cfg(test)]
+pub(crate) fn cot(theta: f64) -> f64 {
     crate::geometry::cot_tan(theta).0
 }
 

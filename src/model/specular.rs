@@ -17,7 +17,7 @@ use crate::geometry::Geometry;
 
 /// Lambertian + Gaussian specular lobe.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct LambertSpecular;
+pub(crate) struct LambertSpecular;
 
 const PARAMS: [ParamSpec; 3] = [
     SCALE,
@@ -40,7 +40,7 @@ const PARAMS: [ParamSpec; 3] = [
 /// The Gaussian lobe of eq. 34 for one sample, and its exponent's quadratic form
 /// q = (θr − θi)² + φr²/4 (so that ∂/∂w is cheap).
 #[inline]
-pub fn gaussian_lobe(b: f64, w: f64, theta_i: f64, theta_r: f64, phi_r: f64) -> (f64, f64) {
+pub(crate) fn gaussian_lobe(b: f64, w: f64, theta_i: f64, theta_r: f64, phi_r: f64) -> (f64, f64) {
     let q = (theta_r - theta_i).powi(2) + 0.25 * phi_r * phi_r;
     let norm = b / (w * (2.0 * std::f64::consts::PI).sqrt());
     (norm * (-0.5 * q / (w * w)).exp(), q)

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 /// Values z on a rectangular grid: `z[j * xs.len() + i]` at `(xs[i], ys[j])`; `xs`, `ys`
 /// strictly increasing.
 #[derive(Debug, Clone)]
-pub struct Grid {
+pub(crate) struct Grid {
     /// The columns' x, in data units, strictly increasing.
     pub xs: Vec<f64>,
     /// The rows' y, in data units, strictly increasing.
@@ -21,10 +21,11 @@ pub struct Grid {
 }
 
 /// A straight piece of an iso-line, in data coordinates.
-pub type Segment = ((f64, f64), (f64, f64));
+#[cfg(test)]
+pub(crate) type Segment = ((f64, f64), (f64, f64));
 
 /// `n` evenly spaced values from `a` to `b` inclusive (n ≥ 2).
-pub fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
+pub(crate) fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
     let n = n.max(2);
     (0..n)
         .map(|k| a + (b - a) * k as f64 / (n - 1) as f64)
@@ -33,7 +34,8 @@ pub fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
 
 impl Grid {
     /// Evaluate `f(x, y)` on the grid.
-    pub fn from_fn(xs: Vec<f64>, ys: Vec<f64>, f: impl Fn(f64, f64) -> f64) -> Grid {
+    #[cfg(test)]
+    pub(crate) fn from_fn(xs: Vec<f64>, ys: Vec<f64>, f: impl Fn(f64, f64) -> f64) -> Grid {
         let mut z = Vec::with_capacity(xs.len() * ys.len());
         for &y in &ys {
             for &x in &xs {
@@ -44,12 +46,12 @@ impl Grid {
     }
 
     /// z at grid node (i, j).
-    pub fn at(&self, i: usize, j: usize) -> f64 {
+    pub(crate) fn at(&self, i: usize, j: usize) -> f64 {
         self.z[j * self.xs.len() + i]
     }
 
     /// Smallest and largest finite z.
-    pub fn range(&self) -> (f64, f64) {
+    pub(crate) fn range(&self) -> (f64, f64) {
         self.z
             .iter()
             .filter(|v| v.is_finite())
@@ -59,7 +61,7 @@ impl Grid {
     }
 
     /// Bilinear interpolation at (x, y), clamped to the grid.
-    pub fn interpolate(&self, x: f64, y: f64) -> f64 {
+    pub(crate) fn interpolate(&self, x: f64, y: f64) -> f64 {
         let locate = |v: &[f64], t: f64| -> (usize, f64) {
             let n = v.len();
             if n < 2 || t <= v[0] {
@@ -145,7 +147,8 @@ impl Grid {
     }
 
     /// The iso-line z = `level` as straight segments.
-    pub fn contour(&self, level: f64) -> Vec<Segment> {
+    #[cfg(test)]
+    pub(crate) fn contour(&self, level: f64) -> Vec<Segment> {
         self.contour_edges(level)
             .into_iter()
             .map(|(a, b)| (self.crossing(a, level), self.crossing(b, level)))
@@ -154,7 +157,7 @@ impl Grid {
 
     /// The iso-line z = `level` as polylines: the segments joined end to end (closed loops
     /// repeat their first point at the end).
-    pub fn contour_lines(&self, level: f64) -> Vec<Vec<(f64, f64)>> {
+    pub(crate) fn contour_lines(&self, level: f64) -> Vec<Vec<(f64, f64)>> {
         let segs = self.contour_edges(level);
         let mut at_edge: HashMap<Edge, Vec<usize>> = HashMap::new();
         for (k, (a, b)) in segs.iter().enumerate() {
@@ -205,7 +208,7 @@ type Edge = (usize, usize, bool);
 
 /// Draw `grid` as a heatmap filling the chart's plotting area, colour `heat_color((z − lo) /
 /// (hi − lo))`, as one bitmap (one embedded image in SVG).
-pub fn draw_heatmap<DB: DrawingBackend>(
+pub(crate) fn draw_heatmap<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     grid: &Grid,
     (lo, hi): (f64, f64),
@@ -237,7 +240,7 @@ pub fn draw_heatmap<DB: DrawingBackend>(
 }
 
 /// Draw the iso-lines of `grid` at `levels` with `pen`, at sub-pixel positions.
-pub fn draw_contours<DB: super::stroke::Canvas>(
+pub(crate) fn draw_contours<DB: super::stroke::Canvas>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     grid: &Grid,
     levels: &[f64],
@@ -254,7 +257,7 @@ pub fn draw_contours<DB: super::stroke::Canvas>(
 
 /// A vertical colour bar for values `lo..hi` in `area`, with tick labels and `label`, and
 /// black marks at the contour `levels`.
-pub fn draw_colorbar<DB: DrawingBackend>(
+pub(crate) fn draw_colorbar<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     (lo, hi): (f64, f64),
     levels: &[f64],

@@ -18,7 +18,7 @@ use plotters::prelude::*;
 use std::collections::BTreeMap;
 
 /// The stem of the picture's files (`design.png`, `design.svg`).
-pub const PICTURE: &str = "design";
+pub(crate) const PICTURE: &str = "design";
 
 /// Decades of gain the colour scale spans below the best candidate.
 const DECADES: f64 = 4.0;
@@ -27,7 +27,7 @@ const DECADES: f64 = 4.0;
 /// in [−4, 0]: the colour scale spans four decades; None: out of reach), and whether it is
 /// chosen.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Point {
+pub(crate) struct Point {
     /// Position in the panel's data coordinates: on the projected hemisphere
     /// (sin θr cos φr, sin θr |sin φr|), unitless, the two sides of the plane of incidence
     /// folded together; in the incidence panel (θi, signed θr) in degrees, θr negative
@@ -44,7 +44,7 @@ pub struct Point {
 
 /// The design's picture, its data computed when built.
 #[derive(Debug, Clone)]
-pub struct DesignPlot {
+pub(crate) struct DesignPlot {
     /// The first title line: how many geometries were chosen, for which target, model and
     /// wavelength.
     pub title: String,
@@ -82,7 +82,7 @@ fn merge(points: impl Iterator<Item = Point>) -> Vec<Point> {
 
 impl DesignPlot {
     /// The picture of `d` for `scene`.
-    pub fn new(d: &Design, scene: &Scene) -> Result<DesignPlot> {
+    pub(crate) fn new(d: &Design, scene: &Scene) -> Result<DesignPlot> {
         let best = d
             .candidates
             .iter()

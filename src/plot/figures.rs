@@ -25,18 +25,18 @@ use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// The correlation-length-to-roughness ratios of Figures 4 and 5.
-pub const T_OVER_SIGMA: [f64; 5] = [3.0, 4.0, 5.0, 7.0, 10.0];
+pub(crate) const T_OVER_SIGMA: [f64; 5] = [3.0, 4.0, 5.0, 7.0, 10.0];
 /// Light angle from the view direction in Figures 4 and 5, degrees.
-pub const LIGHT_DEG: f64 = 45.0;
+pub(crate) const LIGHT_DEG: f64 = 45.0;
 /// θi of Figures 6 and 7, degrees.
-pub const FIG6_THETA_I_DEG: f64 = 45.0;
+pub(crate) const FIG6_THETA_I_DEG: f64 = 45.0;
 /// T/σ of Figures 6 and 7.
-pub const FIG6_T_OVER_SIGMA: f64 = 5.0;
+pub(crate) const FIG6_T_OVER_SIGMA: f64 = 5.0;
 
 /// One curve of a figure: a label, the parameter that distinguishes it (T/σ, or φr in
 /// radians; NaN for the Lambertian curve) and its (x, y) points.
 #[derive(Debug, Clone)]
-pub struct Curve {
+pub(crate) struct Curve {
     /// The legend text, e.g. `KBS rough, T/σ = 5` or `φr = π/4 (45°)`.
     pub label: String,
     /// T/σ (Figure 5), φr in radians (Figure 6), or NaN for the Lambertian curve (drawn
@@ -49,7 +49,7 @@ pub struct Curve {
 
 impl Curve {
     /// The point with the largest y.
-    pub fn peak(&self) -> (f64, f64) {
+    pub(crate) fn peak(&self) -> (f64, f64) {
         self.points
             .iter()
             .copied()
@@ -59,7 +59,8 @@ impl Curve {
     }
 
     /// Width of the region where y ≥ half the peak (in x units, by grid points).
-    pub fn width_at_half_max(&self) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn width_at_half_max(&self) -> f64 {
         let half = 0.5 * self.peak().1;
         let xs: Vec<f64> = self
             .points
@@ -106,7 +107,7 @@ fn radiance_at(model: &dyn Model, params: &[f64], samples: &[Sample]) -> Result<
 }
 
 /// The six spheres of Figure 4 (five KBS, one Lambertian) at `size` pixels, with captions.
-pub fn figure4_spheres(size: u32) -> Result<Vec<(SphereImage, String)>> {
+pub(crate) fn figure4_spheres(size: u32) -> Result<Vec<(SphereImage, String)>> {
     let kbs = kbs_rough()?;
     let mut out = Vec::new();
     for r in T_OVER_SIGMA {
@@ -121,7 +122,7 @@ pub fn figure4_spheres(size: u32) -> Result<Vec<(SphereImage, String)>> {
 /// Figure 5's curves: radiance along the sphere's y = 0 row, the normal at θ (degrees,
 /// −90…90, negative toward the light) from the view direction, each normalised to its
 /// maximum; five KBS curves (param = T/σ) and the Lambertian one (param = NaN).
-pub fn figure5_curves(n_points: usize) -> Result<Vec<Curve>> {
+pub(crate) fn figure5_curves(n_points: usize) -> Result<Vec<Curve>> {
     let t = LIGHT_DEG.to_radians();
     let source = Vector3::new(-t.sin(), 0.0, t.cos());
     let view = Vector3::z();
@@ -170,7 +171,7 @@ pub fn figure5_curves(n_points: usize) -> Result<Vec<Curve>> {
 /// Figure 6's curves: L over θr (degrees, 0…90) at θi = 45°, T/σ = 5 (rough
 /// approximation), for φr = kπ/16, k = 0…8 (param = φr in radians), all normalised to the
 /// φr = 0 curve's peak.
-pub fn figure6_curves(n_points: usize) -> Result<Vec<Curve>> {
+pub(crate) fn figure6_curves(n_points: usize) -> Result<Vec<Curve>> {
     let kbs = kbs_rough()?;
     let params = kbs_params(FIG6_T_OVER_SIGMA);
     let thetas = linspace(0.0, 90.0, n_points);
@@ -225,7 +226,7 @@ fn reduce(num: usize, den: usize) -> (usize, usize) {
 
 /// Figure 7's grid: L at θi = 45°, T/σ = 5 (rough approximation) over x = θr (degrees,
 /// 0…90) and y = φr (degrees, −180…180), normalised to its maximum.
-pub fn figure7_grid(nx: usize, ny: usize) -> Result<Grid> {
+pub(crate) fn figure7_grid(nx: usize, ny: usize) -> Result<Grid> {
     let kbs = kbs_rough()?;
     let xs = linspace(0.0, 90.0, nx);
     let ys = linspace(-180.0, 180.0, ny);
@@ -244,11 +245,11 @@ pub fn figure7_grid(nx: usize, ny: usize) -> Result<Grid> {
 }
 
 /// Contour levels (fractions of the maximum) of Figure 7 and the fit contour plot.
-pub const LEVELS: [f64; 10] = [0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
+pub(crate) const LEVELS: [f64; 10] = [0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
 
 /// Figure 4: six spheres in a 3×2 grid with captions.
 #[derive(Debug, Clone)]
-pub struct Figure4 {
+pub(crate) struct Figure4 {
     /// The spheres in reading order (the five KBS ratios of [`T_OVER_SIGMA`], then the
     /// Lambertian one), each with the caption drawn under it.
     pub spheres: Vec<(SphereImage, String)>,
@@ -261,7 +262,7 @@ const FIG4_BOTTOM: u32 = 60;
 
 impl Figure4 {
     /// Compute the spheres.
-    pub fn new() -> Result<Self> {
+    pub(crate) fn new() -> Result<Self> {
         Ok(Figure4 {
             spheres: figure4_spheres(FIG4_SPHERE)?,
         })
@@ -339,7 +340,7 @@ impl Picture for Figure4 {
 }
 
 /// Figure 5 as a chart.
-pub fn figure5() -> Result<XyPlot> {
+pub(crate) fn figure5() -> Result<XyPlot> {
     let curves = figure5_curves(241)?;
     let mut plot = XyPlot::new(
         "Figure 5: intensity along the line through the marks (y = 0), light at 45°",
@@ -370,7 +371,7 @@ pub fn figure5() -> Result<XyPlot> {
 }
 
 /// Figure 6 as a chart.
-pub fn figure6() -> Result<XyPlot> {
+pub(crate) fn figure6() -> Result<XyPlot> {
     let curves = figure6_curves(181)?;
     let mut plot = XyPlot::new(
         "Figure 6: KBS rough approximation, θi = 45°, T/σ = 5: L over θr for φr = 0 … π/2",
@@ -392,11 +393,11 @@ pub fn figure6() -> Result<XyPlot> {
 }
 
 /// A set of marked points on a contour map: legend label, (x, y) points, fill colour.
-pub type Marks = (String, Vec<(f64, f64)>, RGBColor);
+pub(crate) type Marks = (String, Vec<(f64, f64)>, RGBColor);
 
 /// A contour map picture: heatmap, iso-lines, colour bar, marked points, legend.
 #[derive(Debug, Clone)]
-pub struct ContourPlot {
+pub(crate) struct ContourPlot {
     /// The first title line, centred above the legend and map.
     pub title: String,
     /// A second title line; empty for none.
@@ -422,7 +423,7 @@ pub struct ContourPlot {
 
 impl ContourPlot {
     /// The legend's lines: the contour levels and each set of marks.
-    pub fn legend_entries(&self) -> Vec<Entry> {
+    pub(crate) fn legend_entries(&self) -> Vec<Entry> {
         let mut out = vec![Entry {
             glyph: Glyph::Line {
                 color: BLACK,
@@ -501,7 +502,7 @@ impl Picture for ContourPlot {
 }
 
 /// Figure 7 as a contour map.
-pub fn figure7() -> Result<ContourPlot> {
+pub(crate) fn figure7() -> Result<ContourPlot> {
     let grid = figure7_grid(181, 361)?;
     Ok(ContourPlot {
         title: "Figure 7: KBS rough approximation, θi = 45°, T/σ = 5: contours of L over (θr, φr)"
@@ -523,11 +524,11 @@ pub fn figure7() -> Result<ContourPlot> {
 }
 
 /// The names of the figures' files without the extension (each as `.png` and `.svg`).
-pub const FIGURES: [&str; 4] = ["figure4", "figure5", "figure6", "figure7"];
+pub(crate) const FIGURES: [&str; 4] = ["figure4", "figure5", "figure6", "figure7"];
 
 /// Write Figures 4–7 into `dir` as PNG and SVG (`figure4.png`, `figure4.svg`, …, named
 /// by [`FIGURES`]); the folder is created if needed. Returns the written paths.
-pub fn write_all(dir: &Path) -> Result<Vec<PathBuf>> {
+pub(crate) fn write_all(dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|source| crate::Error::Io {
         path: dir.to_path_buf(),
         source,

@@ -26,18 +26,18 @@ use std::f64::consts::PI;
 
 /// At most this many incidence angles get a hemisphere picture (those with the most
 /// samples).
-pub const MAX_HEMISPHERES: usize = 4;
+pub(crate) const MAX_HEMISPHERES: usize = 4;
 
 /// The projected position of the view direction (θr, φr) (radians):
 /// (sin θr cos φr, sin θr sin φr), inside the unit disc for θr ∈ [0, 90°].
-pub fn project(theta_r: f64, phi_r: f64) -> (f64, f64) {
+pub(crate) fn project(theta_r: f64, phi_r: f64) -> (f64, f64) {
     let s = theta_r.sin();
     (s * phi_r.cos(), s * phi_r.sin())
 }
 
 /// A colour scale for values: linear or logarithmic over [lo, hi].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ValueScale {
+pub(crate) struct ValueScale {
     /// The value at the scale's dark (purple) end, in the values' unit; > 0 on a log scale.
     pub lo: f64,
     /// The value at the scale's light (yellow-green) end, in the values' unit.
@@ -51,7 +51,7 @@ impl ValueScale {
     /// The scale of `values` (non-finite ones ignored): logarithmic over the positive
     /// values when they span more than a factor 10 (the lowest kept at ≥ 1e-6 × the
     /// highest), else linear over all of them. A constant or empty set gets a unit range.
-    pub fn of(values: impl Iterator<Item = f64>) -> ValueScale {
+    pub(crate) fn of(values: impl Iterator<Item = f64>) -> ValueScale {
         let v: Vec<f64> = values.filter(|v| v.is_finite()).collect();
         let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
@@ -83,7 +83,7 @@ impl ValueScale {
     }
 
     /// Where `v` lies on the scale, clamped to [0, 1] (values ≤ 0 on a log scale: 0).
-    pub fn fraction(&self, v: f64) -> f64 {
+    pub(crate) fn fraction(&self, v: f64) -> f64 {
         let f = if self.log {
             if v <= 0.0 {
                 return 0.0;
@@ -100,7 +100,7 @@ impl ValueScale {
     }
 
     /// Nice tick values inside the range ([`log_ticks`] or [`linear_ticks`]).
-    pub fn ticks(&self) -> Vec<f64> {
+    pub(crate) fn ticks(&self) -> Vec<f64> {
         if self.log {
             log_ticks(self.lo, self.hi)
         } else {
@@ -110,7 +110,7 @@ impl ValueScale {
 }
 
 /// A diverging colour (blue – white – red) for `t` ∈ [−1, 1] (clamped; NaN: white).
-pub fn diverging_color(t: f64) -> RGBColor {
+pub(crate) fn diverging_color(t: f64) -> RGBColor {
     const BLUE: [f64; 3] = [33.0, 102.0, 172.0];
     const RED: [f64; 3] = [178.0, 24.0, 43.0];
     let t = if t.is_finite() {
@@ -127,7 +127,7 @@ pub fn diverging_color(t: f64) -> RGBColor {
 /// One incidence angle's hemisphere: the samples' projected positions and their measured,
 /// fitted and standardized residual values.
 #[derive(Debug, Clone)]
-pub struct HemispherePlot {
+pub(crate) struct HemispherePlot {
     /// The first title line: the fit's title and this incidence angle.
     pub title: String,
     /// A second title line (the fit's status); empty for none.
@@ -158,7 +158,7 @@ pub struct HemispherePlot {
 
 /// The groups to draw: up to [`MAX_HEMISPHERES`] with the most samples (ties: lower θi
 /// first), in the order of `gs` (by θi).
-pub fn chosen_groups(gs: &[Group]) -> Vec<&Group> {
+pub(crate) fn chosen_groups(gs: &[Group]) -> Vec<&Group> {
     let mut order: Vec<usize> = (0..gs.len()).collect();
     order.sort_by(|&a, &b| gs[b].idx.len().cmp(&gs[a].idx.len()).then(a.cmp(&b)));
     order.truncate(MAX_HEMISPHERES);
@@ -167,7 +167,7 @@ pub fn chosen_groups(gs: &[Group]) -> Vec<&Group> {
 }
 
 /// The hemisphere pictures of a fit: one per chosen incidence angle ([`chosen_groups`]).
-pub fn hemisphere_plots(input: &FitPlotInput) -> Result<Vec<HemispherePlot>> {
+pub(crate) fn hemisphere_plots(input: &FitPlotInput) -> Result<Vec<HemispherePlot>> {
     let gs = checked_groups(input)?;
     let multi = gs.iter().any(|g| g.wavelength != gs[0].wavelength);
     let chosen = chosen_groups(&gs);
@@ -232,7 +232,7 @@ fn one_hemisphere(input: &FitPlotInput, g: &Group, caption: String) -> Hemispher
 
 /// The residual scale's half-width: a nice number (1, 2, 2.5, 5 × 10ᵏ) at or above the
 /// 98th percentile of |r|, at least 2 (so a good fit looks pale).
-pub fn residual_limit(r: &[f64]) -> f64 {
+pub(crate) fn residual_limit(r: &[f64]) -> f64 {
     let mut a: Vec<f64> = r
         .iter()
         .map(|v| v.abs())
@@ -274,7 +274,7 @@ fn dot_radii(points: &[(f64, f64)], disc_r: f64) -> Vec<f64> {
 }
 
 /// Radius of each disc (pixels).
-pub const DISC_R: f64 = 165.0;
+pub(crate) const DISC_R: f64 = 165.0;
 /// Width of each panel (pixels).
 const PANEL_W: u32 = 430;
 /// Colour bar size (pixels).
@@ -286,7 +286,7 @@ const RING: RGBColor = RGBColor(200, 200, 200);
 
 impl HemispherePlot {
     /// The legend line under the titles.
-    pub fn legend_entries(&self) -> Vec<Entry> {
+    pub(crate) fn legend_entries(&self) -> Vec<Entry> {
         let ti = fmt_num(self.theta_i.to_degrees());
         vec![
             Entry {

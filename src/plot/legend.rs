@@ -12,7 +12,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// A point marker.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Marker {
+pub(crate) enum Marker {
     /// A filled circle of radius r.
     Filled,
     /// A circle's outline of radius r, 2 pixels wide, its inside left clear.
@@ -25,7 +25,7 @@ pub enum Marker {
 
 /// How a legend entry is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Glyph {
+pub(crate) enum Glyph {
     /// A line of `width` pixels, dashed as (on, off) pixels when given.
     Line {
         /// The colour of the 26-pixel stroke drawn left of the label.
@@ -53,7 +53,7 @@ pub enum Glyph {
 
 /// One legend line: its glyph and text.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Entry {
+pub(crate) struct Entry {
     /// The sample of the series' look drawn at the line's left (34 pixels with its gap).
     pub glyph: Glyph,
     /// The text after the glyph, one line in the legend font; the longest label sets the
@@ -62,16 +62,16 @@ pub struct Entry {
 }
 
 /// Legend text size (pixels).
-pub const LEGEND_FONT: f64 = 15.0;
+pub(crate) const LEGEND_FONT: f64 = 15.0;
 /// Height of one legend line (pixels).
-pub const LINE_H: u32 = 22;
+pub(crate) const LINE_H: u32 = 22;
 /// Width of a glyph and the gap after it (pixels).
 const GLYPH_W: i32 = 34;
 
 /// The width (pixels) of the text `s` at `size`, from the bundled font's metrics (an
 /// estimate of 0.6 em per character if the font cannot be measured). The font is
 /// registered first, so a picture's layout is the same whether or not one was drawn before.
-pub fn text_width(s: &str, size: f64) -> u32 {
+pub(crate) fn text_width(s: &str, size: f64) -> u32 {
     // An unregistered font measures nothing and would give the estimate instead; an error
     // here leaves the estimate, and the drawing itself reports it.
     let _ = super::ensure_font();
@@ -82,7 +82,7 @@ pub fn text_width(s: &str, size: f64) -> u32 {
 }
 
 /// The width (pixels) a column of `entries` needs, with its margins.
-pub fn column_width(entries: &[Entry]) -> u32 {
+pub(crate) fn column_width(entries: &[Entry]) -> u32 {
     entries
         .iter()
         .map(|e| text_width(&e.label, LEGEND_FONT))
@@ -91,7 +91,7 @@ pub fn column_width(entries: &[Entry]) -> u32 {
 }
 
 /// Draw a marker of radius `r` centred at pixel `c` of `area`.
-pub fn draw_marker<DB: DrawingBackend>(
+pub(crate) fn draw_marker<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     c: (i32, i32),
     marker: Marker,
@@ -148,7 +148,7 @@ fn draw_glyph<DB: Canvas>(
 
 /// Draw `entries` as a column starting at pixel (x, y) of `area`; returns the y below the
 /// last line.
-pub fn draw_column<DB: Canvas>(
+pub(crate) fn draw_column<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     (x, y): (i32, i32),
     entries: &[Entry],
@@ -166,7 +166,7 @@ pub fn draw_column<DB: Canvas>(
 }
 
 /// The rows (each a run of entries) that lay `entries` out across `width` pixels.
-pub fn rows(entries: &[Entry], width: u32) -> Vec<Vec<Entry>> {
+pub(crate) fn rows(entries: &[Entry], width: u32) -> Vec<Vec<Entry>> {
     let mut out: Vec<Vec<Entry>> = Vec::new();
     let mut used = 0;
     for e in entries {
@@ -182,7 +182,7 @@ pub fn rows(entries: &[Entry], width: u32) -> Vec<Vec<Entry>> {
 }
 
 /// Draw `entries` in rows across `area` (as laid out by [`rows`]), centred.
-pub fn draw_rows<DB: Canvas>(
+pub(crate) fn draw_rows<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     entries: &[Entry],
 ) -> Result<(), DrawError<DB>> {
@@ -208,7 +208,7 @@ pub fn draw_rows<DB: Canvas>(
 
 /// A continuous colour scale for lines and points on white (viridis, its darkest 88 %:
 /// the palest yellow is left out); `t` clamped to [0, 1], NaN gives the first colour.
-pub fn sequential_color(t: f64) -> RGBColor {
+pub(crate) fn sequential_color(t: f64) -> RGBColor {
     const STOPS: [[f64; 3]; 5] = [
         [68.0, 1.0, 84.0],
         [59.0, 82.0, 139.0],
@@ -231,7 +231,7 @@ pub fn sequential_color(t: f64) -> RGBColor {
 /// What a colour bar shows: the quantity's name, its range, and the values of the series
 /// (marked on the bar).
 #[derive(Debug, Clone, PartialEq)]
-pub struct ColorKey {
+pub(crate) struct ColorKey {
     /// The quantity's name and unit, written above the bar after `colour: `.
     pub label: String,
     /// The values (the quantity's unit) at the scale's ends: `range.0` dark purple at the
@@ -245,7 +245,7 @@ pub struct ColorKey {
 impl ColorKey {
     /// The labelled ticks of the colour bar: nice numbers ([`super::ticks::linear_ticks`])
     /// inside the range, about five (the range's ends when it is a single value).
-    pub fn ticks(&self) -> Vec<f64> {
+    pub(crate) fn ticks(&self) -> Vec<f64> {
         let (lo, hi) = self.range;
         let t = super::ticks::linear_ticks(lo, hi, 5);
         if t.is_empty() {
@@ -256,18 +256,18 @@ impl ColorKey {
     }
 
     /// The colour of value `v` on this key.
-    pub fn color(&self, v: f64) -> RGBColor {
+    pub(crate) fn color(&self, v: f64) -> RGBColor {
         let (lo, hi) = self.range;
         sequential_color(if hi > lo { (v - lo) / (hi - lo) } else { 0.5 })
     }
 }
 
 /// The height (pixels) a colour bar takes in a legend panel.
-pub const COLORBAR_H: u32 = 256;
+pub(crate) const COLORBAR_H: u32 = 256;
 
 /// Draw the colour bar of `key` in a legend panel at pixel (x, y): its name, a vertical
 /// bar, and a labelled tick at each series' value.
-pub fn draw_color_key<DB: DrawingBackend>(
+pub(crate) fn draw_color_key<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     (x, y): (i32, i32),
     key: &ColorKey,

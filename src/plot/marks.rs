@@ -6,7 +6,7 @@ use super::fmt_num;
 
 /// The values beyond a limit: how many, and the farthest.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Beyond {
+pub(crate) struct Beyond {
     /// How many finite values lie beyond the limit (NaN and infinities are not counted).
     pub count: usize,
     /// The farthest of them from the edge (the largest above a top, the smallest below a
@@ -18,13 +18,13 @@ pub struct Beyond {
 
 impl Beyond {
     /// The finite values above `limit`.
-    pub fn above(values: impl IntoIterator<Item = f64>, limit: f64) -> Beyond {
+    pub(crate) fn above(values: impl IntoIterator<Item = f64>, limit: f64) -> Beyond {
         let beyond = values.into_iter().filter(|v| v.is_finite() && *v > limit);
         Beyond::gather(beyond, false)
     }
 
     /// The finite values below `limit`.
-    pub fn below(values: impl IntoIterator<Item = f64>, limit: f64) -> Beyond {
+    pub(crate) fn below(values: impl IntoIterator<Item = f64>, limit: f64) -> Beyond {
         let beyond = values.into_iter().filter(|v| v.is_finite() && *v < limit);
         Beyond::gather(beyond, true)
     }
@@ -51,7 +51,7 @@ impl Beyond {
     /// The legend text: "3 measured beyond the rim (up to 55.14× L_max)" ("down to" below
     /// a bottom); `what` names the edge ("beyond the rim"), `unit` follows the farthest
     /// value ("× L_max" or "").
-    pub fn label(&self, what: &str, unit: &str) -> String {
+    pub(crate) fn label(&self, what: &str, unit: &str) -> String {
         let bound = if self.below { "down to" } else { "up to" };
         format!(
             "{} measured {what} ({bound} {}{unit})",
@@ -64,7 +64,7 @@ impl Beyond {
 /// An arrow ending at the origin (its tip), pointing along `dir` (pixels; y down): the
 /// shaft of `len` pixels and a head of `head` pixels, as one polyline of pixel offsets from
 /// the tip (tail → tip → one barb → tip → the other barb).
-pub fn arrow(dir: (f64, f64), len: f64, head: f64) -> Vec<(i32, i32)> {
+pub(crate) fn arrow(dir: (f64, f64), len: f64, head: f64) -> Vec<(i32, i32)> {
     let n = (dir.0 * dir.0 + dir.1 * dir.1).sqrt();
     let (ux, uy) = if n > 0.0 {
         (dir.0 / n, dir.1 / n)
@@ -84,7 +84,7 @@ pub fn arrow(dir: (f64, f64), len: f64, head: f64) -> Vec<(i32, i32)> {
 }
 
 /// The legend glyph of an arrow: pointing right, its tip `len` pixels right of (x, y).
-pub fn arrow_glyph((x, y): (i32, i32), len: i32) -> Vec<(i32, i32)> {
+pub(crate) fn arrow_glyph((x, y): (i32, i32), len: i32) -> Vec<(i32, i32)> {
     arrow((1.0, 0.0), len as f64, 7.0)
         .into_iter()
         .map(|(dx, dy)| (x + len + dx, y + dy))
@@ -93,7 +93,7 @@ pub fn arrow_glyph((x, y): (i32, i32), len: i32) -> Vec<(i32, i32)> {
 
 /// A pixel rectangle: left, top, width, height.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Rect {
+pub(crate) struct Rect {
     /// The left edge, pixels from the drawing area's left (grows rightwards).
     pub x: f64,
     /// The top edge, pixels from the drawing area's top (grows downwards).
@@ -106,12 +106,12 @@ pub struct Rect {
 
 impl Rect {
     /// Whether the two rectangles share interior points.
-    pub fn overlaps(&self, o: &Rect) -> bool {
+    pub(crate) fn overlaps(&self, o: &Rect) -> bool {
         self.x < o.x + o.w && o.x < self.x + self.w && self.y < o.y + o.h && o.y < self.y + self.h
     }
 
     /// Whether `self` lies inside `o`.
-    pub fn inside(&self, o: &Rect) -> bool {
+    pub(crate) fn inside(&self, o: &Rect) -> bool {
         self.x >= o.x
             && self.y >= o.y
             && self.x + self.w <= o.x + o.w
@@ -122,7 +122,7 @@ impl Rect {
 /// Where a point's label goes: the top-left corner of its text box, in pixel offsets from
 /// the point, and whether a leader line joins them (a label moved away from its point).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Placed {
+pub(crate) struct Placed {
     /// Pixels from the point to the text box's left edge (negative: the box starts left of
     /// the point).
     pub dx: f64,
@@ -138,7 +138,7 @@ pub struct Placed {
 /// diagonals, then the same directions 2, 3, 4 and 5 times farther, with a leader line)
 /// whose box overlaps no earlier label, no point's marker (`radius` pixels) and stays in
 /// `area`. A label with no such position takes the one overlapping the fewest boxes.
-pub fn place_labels(
+pub(crate) fn place_labels(
     points: &[(f64, f64)],
     sizes: &[(f64, f64)],
     radius: f64,

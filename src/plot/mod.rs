@@ -10,19 +10,21 @@
 //! [`write_picture`] writes a file, [`svg_string`], [`png_bytes`] and [`rgb_buffer`] render
 //! in memory.
 
-pub mod contour;
-pub mod design;
-pub mod figures;
-pub mod fit;
-pub mod hemisphere;
-pub mod legend;
-pub mod marks;
-pub mod overview;
-pub mod sphere;
-pub mod stroke;
-pub mod svg;
-pub mod ticks;
-pub mod xy;
+pub(crate) mod contour;
+pub(crate) mod design;
+pub(crate) mod figures;
+pub(crate) mod fit;
+pub(crate) mod hemisphere;
+pub(crate) mod legend;
+pub(crate) mod marks;
+pub(crate) mod overview;
+pub(crate) mod sphere;
+pub(crate) mod stroke;
+pub(crate) mod svg;
+pub(crate) mod ticks;
+pub(crate) mod xy;
+
+pub use fit::{key_svg_of_outcome, png_of_outcome, svg_of_outcome};
 
 use crate::error::{Error, Result};
 use plotters::coord::Shift;
@@ -33,12 +35,12 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
 /// The font family every picture uses.
-pub const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Register the bundled font under [`FONT`] (once per process).
-pub fn ensure_font() -> Result<()> {
+pub(crate) fn ensure_font() -> Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok()
@@ -54,20 +56,20 @@ pub fn ensure_font() -> Result<()> {
 }
 
 /// The font at `size` pixels.
-pub fn font(size: f64) -> FontDesc<'static> {
+pub(crate) fn font(size: f64) -> FontDesc<'static> {
     (FONT, size).into_font()
 }
 
 /// Error type of drawing on a backend `DB`.
-pub type DrawError<DB> = DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>;
+pub(crate) type DrawError<DB> = DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>;
 
 /// A picture that can be drawn on any plotters backend.
-pub trait Picture {
+pub(crate) trait Picture {
     /// Size in pixels (width, height).
     fn size(&self) -> (u32, u32);
 
     /// Draw on `root` (already filled white, of [`Picture::size`]); curves go through
-    /// [`stroke::Canvas`] at sub-pixel positions.
+    /// `stroke::Canvas` at sub-pixel positions.
     fn draw<DB: stroke::Canvas>(
         &self,
         root: &DrawingArea<DB, Shift>,
@@ -76,7 +78,7 @@ pub trait Picture {
 
 /// Output format, chosen by the file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Format {
+pub(crate) enum Format {
     /// `.png`: the picture's SVG rendered by resvg at its pixel size, 8-bit RGB.
     Png,
     /// `.svg`: the SVG document as drawn, text as text, bitmaps embedded as data URLs.
@@ -85,7 +87,7 @@ pub enum Format {
 
 impl Format {
     /// The format of `path` by its extension (`.png` or `.svg`, any case).
-    pub fn of(path: &Path) -> Result<Format> {
+    pub(crate) fn of(path: &Path) -> Result<Format> {
         match path
             .extension()
             .and_then(|e| e.to_str())
@@ -111,9 +113,9 @@ fn plot_error<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
 
 /// Write `pic` to `path` as PNG or SVG (by extension), creating the parent folder if
 /// needed. The picture is rendered in memory and written with
-/// [`crate::io::write_atomic`]: a failure (a full disk) leaves no empty or cut file and any
+/// `crate::io::write_atomic`: a failure (a full disk) leaves no empty or cut file and any
 /// old picture intact.
-pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
+pub(crate) fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
     let format = Format::of(path)?;
     let svg = svg_string(pic).map_err(named(path))?;
     write_rendered(&svg, pic.size(), format, path)
@@ -121,7 +123,7 @@ pub fn write_picture<P: Picture>(pic: &P, path: &Path) -> Result<()> {
 
 /// Write `pic` as `dir/stem.png` and `dir/stem.svg` (drawn once, the PNG rendered from the
 /// SVG), each as [`write_picture`] does; returns both paths.
-pub fn write_png_svg<P: Picture>(pic: &P, dir: &Path, stem: &str) -> Result<Vec<PathBuf>> {
+pub(crate) fn write_png_svg<P: Picture>(pic: &P, dir: &Path, stem: &str) -> Result<Vec<PathBuf>> {
     let paths = vec![
         dir.join(format!("{stem}.png")),
         dir.join(format!("{stem}.svg")),
@@ -162,7 +164,7 @@ fn write_rendered(svg: &str, size: (u32, u32), format: Format, path: &Path) -> R
 
 /// Render `pic` to a PNG file's bytes in memory: its SVG document ([`svg_string`])
 /// rendered at [`Picture::size`] pixels, 8-bit RGB.
-pub fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
+pub(crate) fn png_bytes<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     svg_to_png(&svg_string(pic)?, pic.size())
 }
 
@@ -179,7 +181,7 @@ fn svg_to_png(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
 }
 
 /// Render `pic` to an SVG document in memory.
-pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
+pub(crate) fn svg_string<P: Picture>(pic: &P) -> Result<String> {
     ensure_font()?;
     let mut out = String::new();
     let here = Path::new("<svg in memory>");
@@ -197,7 +199,8 @@ pub fn svg_string<P: Picture>(pic: &P) -> Result<String> {
 
 /// Render `pic` to an RGB buffer in memory (row-major, 3 bytes per pixel, top row first),
 /// exactly the pixels of [`png_bytes`].
-pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
+#[cfg(test)]
+pub(crate) fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
     svg_to_rgb(&svg_string(pic)?, pic.size())
 }
 
@@ -205,7 +208,7 @@ pub fn rgb_buffer<P: Picture>(pic: &P) -> Result<Vec<u8>> {
 /// pixels, its view box stretched to fill it: RGB, row-major, top row first. Text is set in
 /// the bundled font (the only one known, also under every generic family name); images
 /// embedded as data URLs are drawn, and no file or other address is ever read.
-pub fn svg_to_rgb(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
+pub(crate) fn svg_to_rgb(svg: &str, (w, h): (u32, u32)) -> Result<Vec<u8>> {
     let here = Path::new("<png in memory>");
     let options = usvg::Options {
         font_family: FONT_FAMILY.to_string(),
@@ -256,10 +259,10 @@ fn font_database() -> Arc<usvg::fontdb::Database> {
 }
 
 /// How many colours [`series_color`] has before it repeats.
-pub const PALETTE: usize = 10;
+pub(crate) const PALETTE: usize = 10;
 
 /// The i-th of ten well-separated line colours (matplotlib's "tab10"), cycling.
-pub fn series_color(i: usize) -> RGBColor {
+pub(crate) fn series_color(i: usize) -> RGBColor {
     const TAB10: [(u8, u8, u8); 10] = [
         (31, 119, 180),
         (255, 127, 14),
@@ -278,7 +281,7 @@ pub fn series_color(i: usize) -> RGBColor {
 
 /// A light sequential colour map (white → yellow → orange → dark red) for heatmaps under
 /// black contour lines; `t` is clamped to [0, 1].
-pub fn heat_color(t: f64) -> RGBColor {
+pub(crate) fn heat_color(t: f64) -> RGBColor {
     const STOPS: [(f64, [f64; 3]); 5] = [
         (0.0, [255.0, 255.0, 255.0]),
         (0.25, [255.0, 237.0, 160.0]),
@@ -306,7 +309,7 @@ pub use crate::error::fmt_num;
 
 /// A tick label on a linear axis: like [`fmt_num`], but rounding noise around zero
 /// (|v| < 1e-9) shows as 0.
-pub fn fmt_tick(v: f64) -> String {
+pub(crate) fn fmt_tick(v: f64) -> String {
     if v.abs() < 1e-9 {
         "0".into()
     } else {
@@ -314,20 +317,9 @@ pub fn fmt_tick(v: f64) -> String {
     }
 }
 
-/// "name: p1 = v1, p2 = v2" for a model and its parameters.
-pub fn model_title(model: &dyn crate::model::Model, params: &[f64]) -> String {
-    let ps: Vec<String> = model
-        .params()
-        .iter()
-        .zip(params)
-        .map(|(s, v)| format!("{} = {}", s.name, fmt_num(*v)))
-        .collect();
-    format!("{}: {}", model.name(), ps.join(", "))
-}
-
 /// `text` in lines of at most `width` characters, broken at white space (a longer word
 /// keeps its own line).
-pub fn wrap(text: &str, width: usize) -> Vec<String> {
+pub(crate) fn wrap(text: &str, width: usize) -> Vec<String> {
     let mut lines: Vec<String> = Vec::new();
     let mut line = String::new();
     for word in text.split_whitespace() {

@@ -10,7 +10,7 @@ use super::{series_color, ticks::nice_step};
 /// One quantity across the fits: its name, unit (empty for none) and per fit (x, value,
 /// determined). Non-finite values are left out.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Quantity {
+pub(crate) struct Quantity {
     /// The quantity's name (`T/σ` or a model parameter's): the chart's title and y label.
     pub name: String,
     /// Its unit, shown in brackets after the name on the y axis; empty: none shown.
@@ -21,11 +21,11 @@ pub struct Quantity {
 }
 
 /// The size (pixels) of each small chart.
-pub const SMALL: (u32, u32) = (600, 400);
+pub(crate) const SMALL: (u32, u32) = (600, 400);
 
 /// The small charts of `quantities` over x (described by `x_desc`), one per quantity with
 /// at least one finite value.
-pub fn overview_charts(x_desc: &str, quantities: &[Quantity]) -> Vec<XyPlot> {
+pub(crate) fn overview_charts(x_desc: &str, quantities: &[Quantity]) -> Vec<XyPlot> {
     let xs: Vec<f64> = quantities
         .iter()
         .flat_map(|q| q.points.iter().map(|p| p.0))

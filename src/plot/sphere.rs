@@ -19,7 +19,7 @@ use plotters::prelude::*;
 
 /// The model's radiance over the sphere's disc, one value per pixel.
 #[derive(Debug, Clone)]
-pub struct SphereImage {
+pub(crate) struct SphereImage {
     /// Width = height in pixels.
     pub size: u32,
     /// Light direction, degrees from the view direction (+z).
@@ -29,13 +29,13 @@ pub struct SphereImage {
 }
 
 /// Where the marks go, in sphere coordinates (x, y) ∈ unit disc: view, light, specular.
-pub fn mark_positions(light_deg: f64) -> [(f64, f64); 3] {
+pub(crate) fn mark_positions(light_deg: f64) -> [(f64, f64); 3] {
     let t = light_deg.to_radians();
     [(0.0, 0.0), (-t.sin(), 0.0), (-(0.5 * t).sin(), 0.0)]
 }
 
 /// Evaluate `model` with `params` over a sphere of `size`×`size` pixels.
-pub fn sphere_radiance(
+pub(crate) fn sphere_radiance(
     model: &dyn Model,
     params: &[f64],
     light_deg: f64,
@@ -103,7 +103,7 @@ pub fn sphere_radiance(
 }
 
 /// Sphere coordinates (x right, y up, unit radius) of pixel (column i, row j).
-pub fn pixel_xy(size: u32, i: usize, j: usize) -> (f64, f64) {
+pub(crate) fn pixel_xy(size: u32, i: usize, j: usize) -> (f64, f64) {
     let s = size as f64;
     (
         (i as f64 + 0.5) / s * 2.0 - 1.0,
@@ -113,7 +113,7 @@ pub fn pixel_xy(size: u32, i: usize, j: usize) -> (f64, f64) {
 
 impl SphereImage {
     /// The largest radiance on the disc.
-    pub fn max(&self) -> f64 {
+    pub(crate) fn max(&self) -> f64 {
         self.radiance
             .iter()
             .filter(|v| v.is_finite())
@@ -121,7 +121,8 @@ impl SphereImage {
     }
 
     /// Sphere coordinates (x, y) of the brightest pixel.
-    pub fn brightest_xy(&self) -> (f64, f64) {
+    #[cfg(test)]
+    pub(crate) fn brightest_xy(&self) -> (f64, f64) {
         let n = self.size as usize;
         let k = self
             .radiance
@@ -136,7 +137,7 @@ impl SphereImage {
 
     /// RGB pixels (3 bytes each, row-major): grey level L / L_max, inverted when `negative`;
     /// background black (white in a negative).
-    pub fn to_rgb(&self, negative: bool) -> Vec<u8> {
+    pub(crate) fn to_rgb(&self, negative: bool) -> Vec<u8> {
         let max = self.max();
         let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
         let mut out = Vec::with_capacity(self.radiance.len() * 3);
@@ -156,7 +157,7 @@ impl SphereImage {
 
 /// Draw a sphere image with its top-left corner at pixel `origin` of `area`; with `marks`,
 /// the view, light and specular marks and the disc's outline.
-pub fn draw_sphere<DB: DrawingBackend>(
+pub(crate) fn draw_sphere<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     origin: (i32, i32),
     image: &SphereImage,
@@ -214,7 +215,7 @@ pub fn draw_sphere<DB: DrawingBackend>(
 
 /// One rendered sphere as a picture of exactly `size`×`size` pixels.
 #[derive(Debug, Clone)]
-pub struct SpherePicture {
+pub(crate) struct SpherePicture {
     /// The rendered radiance; its `size` is the picture's width and height in pixels.
     pub image: SphereImage,
     /// Draw as a negative (darker = more light, on white) as in the paper's Figure 4;

@@ -18,7 +18,7 @@ use plotters::prelude::*;
 use plotters_backend::{BackendCoord, DrawingErrorKind};
 
 /// A backend that can stroke polylines at sub-pixel positions.
-pub trait Canvas: DrawingBackend {
+pub(crate) trait Canvas: DrawingBackend {
     /// Stroke `pts` (backend pixels, f64) `width` pixels wide in `color`, only inside
     /// `clip` (backend pixels).
     fn stroke_polyline(
@@ -32,7 +32,7 @@ pub trait Canvas: DrawingBackend {
 
 /// The dashes of `pts`: pieces `on` pixels long, `off` pixels apart, measured along the
 /// polyline from its start. `on` ≤ 0 or `off` ≤ 0 gives the whole polyline.
-pub fn dashes(pts: &[(f64, f64)], on: f64, off: f64) -> Vec<Vec<(f64, f64)>> {
+pub(crate) fn dashes(pts: &[(f64, f64)], on: f64, off: f64) -> Vec<Vec<(f64, f64)>> {
     if !(on > 0.0 && off > 0.0) || pts.len() < 2 {
         return vec![pts.to_vec()];
     }
@@ -81,7 +81,7 @@ pub fn dashes(pts: &[(f64, f64)], on: f64, off: f64) -> Vec<Vec<(f64, f64)>> {
 /// (ours) therefore agree to within half a pixel, with no bias; a curve on an axis' end
 /// value lies on the plotting area's edge (half of its stroke clipped).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PixelMap {
+pub(crate) struct PixelMap {
     /// Width and height of the plotting area in pixels.
     pub size: (u32, u32),
     /// The data x at the plotting area's left and right edges (both > 0 on a log axis).
@@ -104,7 +104,7 @@ impl PixelMap {
 
     /// The pixel position of the value (x, y) (not finite for values a log axis cannot
     /// show, or a zero-length range).
-    pub fn to_pixel(&self, (x, y): (f64, f64)) -> (f64, f64) {
+    pub(crate) fn to_pixel(self, (x, y): (f64, f64)) -> (f64, f64) {
         let (w, h) = (self.size.0 as f64, self.size.1 as f64);
         let tx = Self::fraction(x, self.x_range, self.log.0);
         let ty = Self::fraction(y, self.y_range, self.log.1);
@@ -112,7 +112,7 @@ impl PixelMap {
     }
 
     /// The map of a linear chart's plotting area (the chart's own ranges).
-    pub fn of_linear<DB: DrawingBackend>(
+    pub(crate) fn of_linear<DB: DrawingBackend>(
         chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     ) -> PixelMap {
         let area = chart.plotting_area();
@@ -168,7 +168,7 @@ impl<DB: Canvas> Drawable<DB> for Smooth<'_> {
 
 /// A line style: width in pixels, and a dash pattern (on, off pixels) or none.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pen {
+pub(crate) struct Pen {
     /// The stroke's colour, opaque.
     pub color: RGBColor,
     /// The stroke's width in pixels (sub-pixel widths allowed).
@@ -180,7 +180,7 @@ pub struct Pen {
 
 impl Pen {
     /// A solid line.
-    pub fn solid(color: RGBColor, width: f64) -> Pen {
+    pub(crate) fn solid(color: RGBColor, width: f64) -> Pen {
         Pen {
             color,
             width,
@@ -189,7 +189,7 @@ impl Pen {
     }
 
     /// A dashed line.
-    pub fn dashed(color: RGBColor, width: f64, on: f64, off: f64) -> Pen {
+    pub(crate) fn dashed(color: RGBColor, width: f64, on: f64, off: f64) -> Pen {
         Pen {
             color,
             width,
@@ -199,7 +199,7 @@ impl Pen {
 }
 
 /// Stroke `pts` (pixels of `area`, f64) with `pen`, clipped to the area.
-pub fn draw_polyline<DB: Canvas>(
+pub(crate) fn draw_polyline<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     pts: &[(f64, f64)],
     pen: Pen,
@@ -229,7 +229,7 @@ pub fn draw_polyline<DB: Canvas>(
 
 /// Stroke the data polyline `pts` on a chart's plotting area, through `map`, with `pen`.
 /// Callers clip the polyline to the axes' ranges first ([`super::xy::clip_polyline`]).
-pub fn draw_data_polyline<DB: Canvas, CT: CoordTranslate>(
+pub(crate) fn draw_data_polyline<DB: Canvas, CT: CoordTranslate>(
     plotting_area: &DrawingArea<DB, CT>,
     map: &PixelMap,
     pts: &[(f64, f64)],

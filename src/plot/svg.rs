@@ -25,7 +25,7 @@ use std::hash::{Hash, Hasher};
 /// A backend writing an SVG document: plotters' [`SVGBackend`], where the elements this
 /// canvas writes itself (sub-pixel polylines, pixel-aligned strokes and circles) are left
 /// as one-point placeholder polylines that [`SvgCanvas::finish`] replaces by the real ones.
-pub struct SvgCanvas<'a> {
+pub(crate) struct SvgCanvas<'a> {
     inner: SVGBackend<'a>,
     elements: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
     /// The clip rectangles defined in the document so far (x, y, w, h as written), each
@@ -44,7 +44,7 @@ type DrawResult<E> = Result<(), DrawingErrorKind<E>>;
 
 impl<'a> SvgCanvas<'a> {
     /// A canvas writing into `buf`; `elements` collects the elements for [`Self::finish`].
-    pub fn new(
+    pub(crate) fn new(
         buf: &'a mut String,
         size: (u32, u32),
         elements: std::rc::Rc<std::cell::RefCell<Vec<String>>>,
@@ -59,7 +59,7 @@ impl<'a> SvgCanvas<'a> {
     /// The finished document `svg` with each placeholder replaced by its element
     /// (`elements`, in drawing order). The ids in those elements carry a hash of the whole
     /// document, so that pictures inlined in one page never share an id.
-    pub fn finish(svg: &str, elements: &[String]) -> String {
+    pub(crate) fn finish(svg: &str, elements: &[String]) -> String {
         let mut hasher = rustc_hash::FxHasher::default();
         svg.hash(&mut hasher);
         elements.hash(&mut hasher);
@@ -253,7 +253,7 @@ impl<T: BackendTextStyle> BackendTextStyle for Scaled<'_, T> {
 /// plotters measures and lays it out with: the backend writes `font-size` = size / 1.24,
 /// while plotters' ab_glyph fonts set a size-`s` text with ascent − descent = `s`, which
 /// for DejaVu Sans ((1901 + 483) / 2048 em) is an em of `s` · 2048 / 2384.
-pub const TEXT_SCALE: f64 = 1.24 * 2048.0 / 2384.0;
+pub(crate) const TEXT_SCALE: f64 = 1.24 * 2048.0 / 2384.0;
 
 impl DrawingBackend for SvgCanvas<'_> {
     type ErrorType = <SVGBackend<'static> as DrawingBackend>::ErrorType;

@@ -4,7 +4,7 @@
 //! leave a log-scaled run-time axis with two ticks.
 
 /// A "nice" step (1, 2, 2.5 or 5 × 10ᵏ) near `raw` (> 0).
-pub fn nice_step(raw: f64) -> f64 {
+pub(crate) fn nice_step(raw: f64) -> f64 {
     let k = raw.log10().floor();
     let base = 10f64.powf(k);
     let m = raw / base;
@@ -24,7 +24,7 @@ pub fn nice_step(raw: f64) -> f64 {
 
 /// Linear ticks on [lo, hi]: multiples of a nice step, about `target` of them (at least 2
 /// for any lo < hi). Empty for an empty or non-finite range.
-pub fn linear_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
+pub(crate) fn linear_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
     if !(lo.is_finite() && hi.is_finite() && hi > lo) {
         return Vec::new();
     }
@@ -59,7 +59,7 @@ fn decimal(m: f64, k: i32) -> f64 {
 /// 1-2-3-5, then 1…9 per decade, whichever first gives at least 4 ticks; a range too narrow
 /// for any of these (under a factor of about 2) gets linear nice ticks. Always at least 2
 /// ticks inside [lo, hi] for a valid range; empty otherwise.
-pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+pub(crate) fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
         return Vec::new();
     }

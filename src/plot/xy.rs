@@ -22,7 +22,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// How a series is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Kind {
+pub(crate) enum Kind {
     /// A solid line of the given width.
     Line(u32),
     /// A dashed line (8 on, 5 off) of the given width.
@@ -43,10 +43,10 @@ pub enum Kind {
 
 impl Kind {
     /// The four line styles, in order (one per wavelength when colour shows θi).
-    pub const LINES: [fn(u32) -> Kind; 4] =
+    pub(crate) const LINES: [fn(u32) -> Kind; 4] =
         [Kind::Line, Kind::Dashed, Kind::Dotted, Kind::LongDashed];
     /// The four point markers, in the same order.
-    pub const POINTS: [fn(u32) -> Kind; 4] = [
+    pub(crate) const POINTS: [fn(u32) -> Kind; 4] = [
         Kind::Points,
         Kind::OpenPoints,
         Kind::Triangles,
@@ -54,7 +54,7 @@ impl Kind {
     ];
 
     /// The legend glyph of this kind in `color`.
-    pub fn glyph(self, color: RGBColor) -> Glyph {
+    pub(crate) fn glyph(self, color: RGBColor) -> Glyph {
         let line = |width, dash| Glyph::Line { color, width, dash };
         let point = |marker, r| Glyph::Point { color, marker, r };
         match self {
@@ -76,7 +76,7 @@ impl Kind {
 
 /// One series of an [`XyPlot`].
 #[derive(Debug, Clone)]
-pub struct Series {
+pub(crate) struct Series {
     /// Legend text; `None` keeps the series out of the legend.
     pub label: Option<String>,
     /// The colour of its line or markers (and of its arrows at the top and bottom edges)
@@ -93,7 +93,7 @@ pub struct Series {
 
 /// A text label beside a data point (placed so that labels do not overlap).
 #[derive(Debug, Clone)]
-pub struct Annotation {
+pub(crate) struct Annotation {
     /// The labelled point, in data units; the label goes beside it, joined by a leader
     /// line when it had to move away.
     pub at: (f64, f64),
@@ -105,7 +105,7 @@ pub struct Annotation {
 
 /// An x–y chart.
 #[derive(Debug, Clone)]
-pub struct XyPlot {
+pub(crate) struct XyPlot {
     /// The first title line, centred at the top; its font shrinks (21 to 12 pixels) to fit
     /// the width.
     pub title: String,
@@ -145,7 +145,7 @@ pub struct XyPlot {
 
 /// Where the parts of an [`XyPlot`] go, in pixels of the whole picture.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct XyLayout {
+pub(crate) struct XyLayout {
     /// The chart: axes, labels and the data area.
     pub chart: Rect,
     /// The legend panel (right of the chart), if there is a legend.
@@ -154,7 +154,7 @@ pub struct XyLayout {
 
 impl XyPlot {
     /// An empty chart with the default size (900×600), linear axes.
-    pub fn new(
+    pub(crate) fn new(
         title: impl Into<String>,
         x_desc: impl Into<String>,
         y_desc: impl Into<String>,
@@ -180,7 +180,7 @@ impl XyPlot {
 
     /// Set the y range to cover every finite (positive, for a log axis) y value, with a
     /// margin; keeps the current range if there is none.
-    pub fn fit_y_range(&mut self) {
+    pub(crate) fn fit_y_range(&mut self) {
         let ys = self
             .series
             .iter()
@@ -208,7 +208,7 @@ impl XyPlot {
     }
 
     /// The measured points (point series) above the y range: drawn as arrows at the top.
-    pub fn above_top(&self) -> Beyond {
+    pub(crate) fn above_top(&self) -> Beyond {
         Beyond::above(
             self.series
                 .iter()
@@ -223,7 +223,7 @@ impl XyPlot {
     /// The measured points (point series, within the x range) below the y range, or at
     /// y ≤ 0 on a logarithmic axis: drawn as arrows at the bottom edge. `worst` is the
     /// smallest of them.
-    pub fn below_bottom(&self) -> Beyond {
+    pub(crate) fn below_bottom(&self) -> Beyond {
         // On a logarithmic axis y ≤ 0 lies below any bottom it can have.
         let bottom = if self.log_y {
             self.y_range.0.max(f64::MIN_POSITIVE)
@@ -242,7 +242,7 @@ impl XyPlot {
     }
 
     /// The legend's lines: the labelled series, the extra lines, and the arrows' counts.
-    pub fn legend_entries(&self) -> Vec<Entry> {
+    pub(crate) fn legend_entries(&self) -> Vec<Entry> {
         let mut out: Vec<Entry> = self
             .series
             .iter()
@@ -286,7 +286,7 @@ impl XyPlot {
     }
 
     /// The layout in a picture of `w` × `h` pixels.
-    pub fn layout_in(&self, w: u32, h: u32) -> XyLayout {
+    pub(crate) fn layout_in(&self, w: u32, h: u32) -> XyLayout {
         let panel = self.panel_width(&self.legend_entries()).min(w / 2);
         let top = titles_height(&self.title, &self.subtitle, w);
         let chart = Rect {
@@ -305,14 +305,15 @@ impl XyPlot {
     }
 
     /// The layout at this chart's own size.
-    pub fn layout(&self) -> XyLayout {
+    #[cfg(test)]
+    pub(crate) fn layout(&self) -> XyLayout {
         let (w, h) = self.size();
         self.layout_in(w, h)
     }
 }
 
 /// The height (pixels) [`draw_titles`] takes.
-pub fn titles_height(title: &str, subtitle: &str, width: u32) -> u32 {
+pub(crate) fn titles_height(title: &str, subtitle: &str, width: u32) -> u32 {
     let t = title_font_size(title, width);
     let mut h = 10.0 + 1.25 * t;
     if !subtitle.is_empty() {
@@ -323,7 +324,7 @@ pub fn titles_height(title: &str, subtitle: &str, width: u32) -> u32 {
 
 /// Draw `title` (and `subtitle` below it, if not empty) centred at the top of `root`, 10 px
 /// from its edge, each in a size that fits the width; returns the area below them.
-pub fn draw_titles<DB: DrawingBackend>(
+pub(crate) fn draw_titles<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     subtitle: &str,
@@ -349,7 +350,7 @@ pub fn draw_titles<DB: DrawingBackend>(
 
 /// A title font size (pixels) that lets `title` fit in `width` pixels: 21 px, smaller for
 /// long titles, never below 12 px.
-pub fn title_font_size(title: &str, width: u32) -> f64 {
+pub(crate) fn title_font_size(title: &str, width: u32) -> f64 {
     let n = title.chars().count().max(1) as f64;
     (0.92 * width as f64 / (0.58 * n)).clamp(12.0, 21.0)
 }
@@ -357,7 +358,7 @@ pub fn title_font_size(title: &str, width: u32) -> f64 {
 /// The polyline `pts` cut to the rectangle `x` × `y` (in the axes' own scale: logarithms
 /// for a log axis), interpolating where it crosses an edge: one piece per run inside.
 /// Points that are not finite (or ≤ 0 on a log axis) break the line.
-pub fn clip_polyline(
+pub(crate) fn clip_polyline(
     pts: &[(f64, f64)],
     x: (f64, f64),
     y: (f64, f64),
@@ -428,7 +429,7 @@ pub fn clip_polyline(
 }
 
 /// An axis of an x–y chart: f64 values, tick labels formatted by our formatters.
-pub trait Axis: Ranged<ValueType = f64> + ValueFormatter<f64> {}
+pub(crate) trait Axis: Ranged<ValueType = f64> + ValueFormatter<f64> {}
 impl<T: Ranged<ValueType = f64> + ValueFormatter<f64>> Axis for T {}
 
 fn draw_series_of<DB: Canvas, X: Axis, Y: Axis>(
@@ -644,7 +645,10 @@ fn draw_chart<DB: Canvas>(
 
 impl XyPlot {
     /// Draw the chart, its titles and its legend panel into `root` (any size).
-    pub fn draw_in<DB: Canvas>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), DrawError<DB>> {
+    pub(crate) fn draw_in<DB: Canvas>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> Result<(), DrawError<DB>> {
         let (w, h) = root.dim_in_pixel();
         let lay = self.layout_in(w, h);
         let body = draw_titles(root, &self.title, &self.subtitle)?;
@@ -664,7 +668,8 @@ impl XyPlot {
     /// The plotting area (the data rectangle inside the axes, in pixels of the whole
     /// picture) and the map from values to sub-pixel positions in it that the curves are
     /// drawn with. Found by laying the chart out as [`Picture::draw`] does.
-    pub fn plotting_area(&self) -> (Rect, PixelMap) {
+    #[cfg(test)]
+    pub(crate) fn plotting_area(&self) -> (Rect, PixelMap) {
         let (w, h) = self.size();
         let lay = self.layout_in(w, h);
         let top = titles_height(&self.title, &self.subtitle, w);

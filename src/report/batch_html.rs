@@ -13,7 +13,7 @@ use std::fmt::Write;
 
 /// One fit's section: its result, run information, text report, model comparison (empty
 /// for one model) and pictures as (name, SVG document).
-pub struct FitSection<'a> {
+pub(crate) struct FitSection<'a> {
     /// The fit of the section's dataset.
     pub result: &'a FitResult,
     /// How it was run: input, command, setting and profile intervals.
@@ -27,7 +27,7 @@ pub struct FitSection<'a> {
 }
 
 /// What the batch page shows.
-pub struct Batch<'a> {
+pub(crate) struct Batch<'a> {
     /// The command line that ran the batch.
     pub command: &'a str,
     /// One summary row per fit, in the order of `sections`.
@@ -60,7 +60,7 @@ if(!isNaN(u)&&!isNaN(v))return d*(u-v);return d*p.textContent.localeCompare(q.te
 rs.forEach(function(r){b.appendChild(r);});});});});";
 
 /// The batch page.
-pub fn batch_page(b: &Batch) -> String {
+pub(crate) fn batch_page(b: &Batch) -> String {
     let mut s = String::new();
     let n = b.sections.len();
     let _ = writeln!(

@@ -4,13 +4,14 @@
 use sha2::{Digest, Sha256};
 
 /// The SHA-256 digest of `data` as 64 lower-case hex digits.
-pub fn sha256_hex(data: &[u8]) -> String {
+#[cfg(test)]
+pub(crate) fn sha256_hex(data: &[u8]) -> String {
     hex(Sha256::digest(data).as_slice())
 }
 
 /// The SHA-256 digest of everything `reader` yields, read in 64 KiB pieces (a big file is
 /// never held whole), and the number of bytes read.
-pub fn sha256_hex_of(mut reader: impl std::io::Read) -> std::io::Result<(String, u64)> {
+pub(crate) fn sha256_hex_of(mut reader: impl std::io::Read) -> std::io::Result<(String, u64)> {
     let mut h = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
     let mut len = 0u64;

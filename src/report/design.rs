@@ -22,7 +22,7 @@ pub struct Run<'a> {
 
 /// The proposed geometries as CSV: a `theta_i,theta_r,phi_r` header and one row per
 /// geometry, degrees, in the order chosen.
-pub fn csv(d: &Design) -> String {
+pub(crate) fn csv(d: &Design) -> String {
     let mut s = String::from("theta_i,theta_r,phi_r\n");
     for c in &d.chosen {
         s += &format!("{},{},{}\n", c[0], c[1], c[2]);
@@ -66,7 +66,7 @@ fn unit(scene: &Scene) -> String {
 }
 
 /// The text report.
-pub fn text(run: &Run) -> String {
+pub(crate) fn text(run: &Run) -> String {
     let (d, scene) = (run.design, run.scene);
     let reachable = d.candidates.iter().filter(|c| c.reachable).count();
     let mut s = format!("[[goniofit {}: design]]\n", env!("CARGO_PKG_VERSION"));

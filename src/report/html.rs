@@ -10,7 +10,7 @@ use crate::fit::stats::profile::LEVELS;
 use std::fmt::Write;
 
 /// Text with `&`, `<`, `>`, `"` escaped for HTML.
-pub fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -18,13 +18,13 @@ pub fn escape(s: &str) -> String {
 }
 
 /// An SVG document as an inline element: the XML declaration and doctype dropped.
-pub fn inline_svg(svg: &str) -> &str {
+pub(crate) fn inline_svg(svg: &str) -> &str {
     svg.find("<svg").map_or(svg, |i| &svg[i..])
 }
 
 /// The pages' style sheet (tables, numbers, preformatted text, figures, yes/no colours),
 /// inlined so that a page is self-contained.
-pub const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\
+pub(crate) const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}\
 table{border-collapse:collapse;margin:0.5em 0 1em}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}\
 th{background:#eee}td.num{font-family:monospace;text-align:right;white-space:nowrap}pre{background:#f6f6f6;padding:0.5em;overflow-x:auto}\
 figure{margin:1em 0}figure svg{width:100%;max-width:1100px;height:auto}\
@@ -126,7 +126,7 @@ fn comparison_table(s: &mut String, rows: &[super::outcome::Candidate]) {
 
 /// The page. `text` is the plain-text report; `comparison` the model comparison of
 /// `--model auto` (empty for one model); `pictures` are (title, SVG document) pairs.
-pub fn page(
+pub(crate) fn page(
     r: &FitResult,
     info: &RunInfo,
     text: &str,
@@ -154,7 +154,7 @@ pub fn page(
 /// One fit's report under its title (headings `<h2>`): status, the command that
 /// reproduces it, setting, model comparison, results, pictures (inline SVG with their
 /// names as captions) and the text report folded away.
-pub fn body(
+pub(crate) fn body(
     r: &FitResult,
     info: &RunInfo,
     text: &str,

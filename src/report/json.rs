@@ -265,7 +265,7 @@ pub fn termination_name(t: crate::lm::Termination) -> String {
 }
 
 /// A finite number, or None.
-pub fn num(v: f64) -> Option<f64> {
+pub(crate) fn num(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 

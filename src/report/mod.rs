@@ -1,16 +1,20 @@
 //! Reporters for a finished fit: one per output format, and what they share (the setting
 //! and units of a fit, the input's checksum).
 
-pub mod batch_html;
-pub mod checksum;
-pub mod design;
-pub mod html;
-pub mod json;
-pub mod outcome;
-pub mod setting;
-pub mod summary;
-pub mod text;
+pub(crate) mod batch_html;
+pub(crate) mod checksum;
+pub(crate) mod design;
+pub(crate) mod html;
+pub(crate) mod json;
+pub(crate) mod outcome;
+pub(crate) mod setting;
+pub(crate) mod summary;
+pub(crate) mod text;
 
+pub use design::{json as design_json, Run as DesignRun};
+pub use html::fragment as html_fragment;
+pub use json::termination_name;
+pub use outcome::{comparison, report as fit_report, setting, to_text, Candidate, SettingSource};
 pub use setting::{Setting, Units};
 
 /// How the fit was run, for reproducing it.

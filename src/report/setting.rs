@@ -56,7 +56,7 @@ impl Units {
     }
 }
 
-pub use crate::fit::driver::base_name;
+pub(crate) use crate::fit::driver::base_name;
 
 /// The input file as fitted.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 /// A fit's summary.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Row {
+pub(crate) struct Row {
     /// The dataset (file, with `[group]`).
     pub group: String,
     /// Number of samples fitted.
@@ -39,7 +39,7 @@ pub struct Row {
 }
 
 /// The summary row of one fit.
-pub fn row(group: &str, r: &FitResult, units: &Units) -> Row {
+pub(crate) fn row(group: &str, r: &FitResult, units: &Units) -> Row {
     let param = |name: &str| {
         r.params
             .iter()
@@ -68,7 +68,7 @@ pub fn row(group: &str, r: &FitResult, units: &Units) -> Row {
 }
 
 /// The short word for a verdict, as in the table and CSV.
-pub fn verdict_word(v: Verdict) -> &'static str {
+pub(crate) fn verdict_word(v: Verdict) -> &'static str {
     match v {
         Verdict::Full => "determined",
         Verdict::Rough => "rough: T/σ only",
@@ -80,7 +80,7 @@ pub fn verdict_word(v: Verdict) -> &'static str {
 
 /// A value for the table: 4 significant digits, in parentheses when undetermined, `-` when
 /// the model has no such parameter.
-pub fn cell(v: Option<(f64, bool)>) -> String {
+pub(crate) fn cell(v: Option<(f64, bool)>) -> String {
     match v {
         Some((x, true)) => format!("{x:.4e}"),
         Some((x, false)) => format!("({x:.3e})"),
@@ -108,7 +108,7 @@ const TABLE_COLUMNS: [(&str, usize, Cell); 8] = [
 
 /// How many fits did not converge and why, e.g. `2 did not converge (maxiterations 1,
 /// degenerate 1)`; None when every fit converged.
-pub fn not_converged(rows: &[Row]) -> Option<String> {
+pub(crate) fn not_converged(rows: &[Row]) -> Option<String> {
     let mut why: Vec<(&str, usize)> = Vec::new();
     for r in rows.iter().filter(|r| !r.converged) {
         match why.iter_mut().find(|(t, _)| *t == r.termination) {
@@ -126,7 +126,7 @@ pub fn not_converged(rows: &[Row]) -> Option<String> {
 /// The summary as a text table (`[[Summary]]`), one line per fit; values the data does not
 /// determine are in parentheses. The title counts the fits that did not converge, and each
 /// row gives its termination.
-pub fn table(rows: &[Row]) -> String {
+pub(crate) fn table(rows: &[Row]) -> String {
     let mut s = String::new();
     let unit = rows
         .first()
@@ -165,7 +165,7 @@ pub fn table(rows: &[Row]) -> String {
 
 /// The adequacy verdict with its reason codes, as in the table: `misfit (runs,floor)`; past
 /// `ADEQUACY_WIDTH` characters of codes the rest are counted (`+2`; the CSV has them all).
-pub fn adequacy_cell(r: &Row) -> String {
+pub(crate) fn adequacy_cell(r: &Row) -> String {
     if r.adequacy_reasons.is_empty() {
         return r.adequacy.name().to_string();
     }
@@ -225,12 +225,12 @@ const CSV_COLUMNS: [(&str, Cell); 17] = [
 ];
 
 /// The CSV header of [`csv_rows`].
-pub fn csv_header() -> Vec<String> {
+pub(crate) fn csv_header() -> Vec<String> {
     CSV_COLUMNS.iter().map(|c| c.0.to_string()).collect()
 }
 
 /// The rows as CSV fields (full precision; empty fields where the model has no σ or T).
-pub fn csv_rows(rows: &[Row]) -> Vec<Vec<String>> {
+pub(crate) fn csv_rows(rows: &[Row]) -> Vec<Vec<String>> {
     use rayon::prelude::*;
     rows.par_iter()
         .map(|r| CSV_COLUMNS.iter().map(|c| (c.1)(r)).collect())

@@ -7,10 +7,10 @@ use crate::plot::wrap;
 use std::fmt::Write;
 
 /// Correlation matrices with more rows than this are summarised by their largest pairs.
-pub const FULL_MATRIX_MAX: usize = 8;
+pub(crate) const FULL_MATRIX_MAX: usize = 8;
 
 /// How many of the largest |ρ| pairs a summarised correlation matrix lists.
-pub const TOP_PAIRS: usize = 10;
+pub(crate) const TOP_PAIRS: usize = 10;
 
 /// Format a value with its standard error and relative error.
 fn value_se(v: f64, se: Option<f64>) -> String {
@@ -37,7 +37,7 @@ fn sci(v: f64) -> String {
 
 /// The condition number of the Jacobian: `sci`, or in words for a singular
 /// (rank-deficient) one, whose condition number is infinite.
-pub fn condition_text(v: f64) -> String {
+pub(crate) fn condition_text(v: f64) -> String {
     if v.is_infinite() {
         "singular (rank-deficient Jacobian: the data does not determine every parameter)".into()
     } else {
@@ -47,12 +47,12 @@ pub fn condition_text(v: f64) -> String {
 
 /// `v` with 8 significant digits; "not computed" when it is not a finite number and the
 /// fitted values it comes from were not `computed` (a stop request came first).
-pub fn sci7(v: f64, computed: bool) -> String {
+pub(crate) fn sci7(v: f64, computed: bool) -> String {
     if_computed(computed || v.is_finite(), || format!("{v:.7e}"))
 }
 
 /// `text()` when a figure was `computed`, else `NOT_COMPUTED`.
-pub fn if_computed(computed: bool, text: impl FnOnce() -> String) -> String {
+pub(crate) fn if_computed(computed: bool, text: impl FnOnce() -> String) -> String {
     if computed {
         text()
     } else {
@@ -65,7 +65,7 @@ const NOT_COMPUTED: &str = "not computed (the fit was stopped first)";
 
 /// A number printed with `digits` decimals, without a negative zero (R² of a fit no better
 /// than the mean prints as 0.0000000, not −0.0000000). Non-finite values print as `n/a`.
-pub fn fixed(v: f64, digits: usize) -> String {
+pub(crate) fn fixed(v: f64, digits: usize) -> String {
     if !v.is_finite() {
         return "n/a".into();
     }
@@ -233,7 +233,7 @@ fn g4(v: f64) -> String {
 }
 
 /// One interval as text: `[lo, hi]`, or a one-sided bound ("> lo") where a side is open.
-pub fn interval_text(l: &crate::fit::stats::profile::Level) -> String {
+pub(crate) fn interval_text(l: &crate::fit::stats::profile::Level) -> String {
     use crate::fit::stats::profile::Bound;
     match (l.lo, l.hi) {
         (Bound::Open(_), Bound::Open(_)) => "not bounded by the data".into(),
@@ -335,7 +335,7 @@ fn correlation_lines(s: &mut String, r: &FitResult) {
 }
 
 /// The `n` off-diagonal correlations of largest magnitude (names, ρ), largest first.
-pub fn top_pairs(r: &FitResult, n: usize) -> Vec<(String, String, f64)> {
+pub(crate) fn top_pairs(r: &FitResult, n: usize) -> Vec<(String, String, f64)> {
     let k = r.corr_names.len();
     let mut pairs: Vec<(String, String, f64)> = Vec::new();
     for i in 0..k {
@@ -376,7 +376,7 @@ fn goodness_lines(s: &mut String, r: &FitResult) {
 }
 
 /// The report as text.
-pub fn render(r: &FitResult, info: &RunInfo) -> String {
+pub(crate) fn render(r: &FitResult, info: &RunInfo) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "[[goniofit {}: fit report]]", info.version);
     let _ = writeln!(s, "    input           = {}", info.input);

@@ -5,7 +5,7 @@
 use assert_cmd::Command;
 
 /// The README's fit of the garnet paint's 550 nm channel (append the file).
-pub const GARNET_550: [&str; 7] = [
+pub(crate) const GARNET_550: [&str; 7] = [
     "fit",
     "--model",
     "kbs+lambert",
@@ -17,7 +17,7 @@ pub const GARNET_550: [&str; 7] = [
 
 /// The default fit of a real paint or CUReT file: kbs+lambert on the BRDF, log residuals
 /// (append the selection and the file).
-pub const PAINT_BRDF_LOG: [&str; 7] = [
+pub(crate) const PAINT_BRDF_LOG: [&str; 7] = [
     "fit",
     "--model",
     "kbs+lambert",
@@ -28,12 +28,12 @@ pub const PAINT_BRDF_LOG: [&str; 7] = [
 ];
 
 /// The goniofit binary.
-pub fn goniofit() -> Command {
+pub(crate) fn goniofit() -> Command {
     Command::cargo_bin("goniofit").unwrap()
 }
 
 /// Run goniofit with `args`, expect exit 0, and return its standard output as text.
-pub fn success_stdout<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
+pub(crate) fn success_stdout<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
     let out = goniofit().args(args).output().unwrap();
     assert_eq!(
         out.status.code(),
@@ -46,12 +46,12 @@ pub fn success_stdout<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
 
 /// Run goniofit with `args`, expect exit 0, and parse its standard output as JSON.
 #[allow(dead_code)]
-pub fn fit_json(args: &[&str]) -> serde_json::Value {
+pub(crate) fn fit_json(args: &[&str]) -> serde_json::Value {
     serde_json::from_str(&success_stdout(args)).unwrap()
 }
 
 /// A file of the bundled `data/` folder.
-pub fn data(p: &str) -> std::path::PathBuf {
+pub(crate) fn data(p: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("data")
         .join(p)
@@ -59,7 +59,7 @@ pub fn data(p: &str) -> std::path::PathBuf {
 
 /// Run goniofit with `args` and `--json`, whatever its exit code: (exit code, parsed
 /// report); panics with its standard error when the output is not one JSON document.
-pub fn run_json<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, serde_json::Value) {
+pub(crate) fn run_json<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, serde_json::Value) {
     let out = goniofit().args(args).arg("--json").output().unwrap();
     let v = serde_json::from_slice(&out.stdout)
         .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
@@ -68,7 +68,7 @@ pub fn run_json<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, serde_js
 
 /// The rows of a committed reference table `tests/ref/NAME` (CSV after `#` comment lines),
 /// each as column name → text.
-pub fn reference_rows(name: &str) -> Vec<std::collections::HashMap<String, String>> {
+pub(crate) fn reference_rows(name: &str) -> Vec<std::collections::HashMap<String, String>> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/ref")
         .join(name);
@@ -94,7 +94,7 @@ pub fn reference_rows(name: &str) -> Vec<std::collections::HashMap<String, Strin
 
 /// Standard error without the progress lines a run longer than 2 s writes when standard
 /// error is not a terminal ("goniofit: 7 s: fitting …").
-pub fn without_progress(err: &str) -> String {
+pub(crate) fn without_progress(err: &str) -> String {
     err.lines()
         .filter(|l| {
             let rest = l.strip_prefix("goniofit: ").unwrap_or("");
@@ -106,7 +106,7 @@ pub fn without_progress(err: &str) -> String {
 }
 
 /// The width and height a PNG file's header states (its signature and IHDR checked).
-pub fn png_size(bytes: &[u8]) -> (u32, u32) {
+pub(crate) fn png_size(bytes: &[u8]) -> (u32, u32) {
     assert!(bytes.len() > 33, "PNG too short");
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
     assert_eq!(&bytes[12..16], b"IHDR");
@@ -116,7 +116,7 @@ pub fn png_size(bytes: &[u8]) -> (u32, u32) {
 }
 
 /// An SVG document with text whose embedded images carry a MIME type.
-pub fn assert_svg(text: &str) {
+pub(crate) fn assert_svg(text: &str) {
     assert!(text.starts_with("<svg"), "starts with <svg");
     assert!(text.trim_end().ends_with("</svg>"), "ends with </svg>");
     assert!(text.contains("<text"), "has text");

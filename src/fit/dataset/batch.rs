@@ -5,10 +5,10 @@ use rayon::prelude::*;
 
 /// Chains of warm-started fits per thread: a few per thread keep every thread busy to the
 /// end while each chain stays long (its first fit is searched).
-pub const CHAINS_PER_THREAD: usize = 4;
+pub(crate) const CHAINS_PER_THREAD: usize = 4;
 
 /// `fit` applied to every job on the current rayon pool, results in the jobs' order. With
-/// `warm`, the jobs run in [`CHAINS_PER_THREAD`] contiguous chains per thread, each job
+/// `warm`, the jobs run in `CHAINS_PER_THREAD` contiguous chains per thread, each job
 /// after the first of its chain given the result of the job before it (`fit(job,
 /// Some(previous))`); without, every job runs on its own (`fit(job, None)`).
 pub fn in_chains<J, R, F>(jobs: Vec<J>, warm: bool, fit: F) -> Vec<R>
@@ -24,7 +24,7 @@ where
 /// without `warm`, after the next job of its chain with it), and `keep`'s values returned
 /// in the jobs' order: a batch that keeps a little of each result (a summary row) holds
 /// one whole result per chain at a time.
-pub fn in_chains_kept<J, R, K, F, G>(jobs: Vec<J>, warm: bool, fit: F, keep: G) -> Vec<K>
+pub(crate) fn in_chains_kept<J, R, K, F, G>(jobs: Vec<J>, warm: bool, fit: F, keep: G) -> Vec<K>
 where
     J: Send,
     R: Send,

@@ -11,7 +11,7 @@ use crate::lm::Stop;
 
 /// Fits with more free parameters than this get no profile intervals (each needs two
 /// walks of refits per quantity).
-pub const MAX_PROFILED: usize = 8;
+pub(crate) const MAX_PROFILED: usize = 8;
 
 /// Profile-likelihood intervals of every free parameter, of the parameters the reduced
 /// fit held, and of T/σ, Beckmann's α, the amplitudes and the reflectance factors, on the
@@ -19,7 +19,7 @@ pub const MAX_PROFILED: usize = 8;
 /// stated `sigma_L`). A quantity whose profile cannot be walked is left out. Every refit
 /// shares the fit's `stop` (its time limit and signals): once it fires the walks end, and
 /// the caller discards what they found (a walk cut short ends at a wrong likelihood).
-pub fn profile_intervals(
+pub(crate) fn profile_intervals(
     spec: &DatasetFit,
     input: &FitInput,
     r: &FitResult,

@@ -7,8 +7,8 @@
 //! This is the one path from measured samples to a finished [`Outcome`]; the reporters in
 //! [`crate::report::outcome`] turn an outcome into the text report and the JSON object.
 
-pub mod batch;
-pub mod intervals;
+pub(crate) mod batch;
+pub(crate) mod intervals;
 
 use super::driver::{self, FitConfig, FitInput, FitResult};
 use super::problem::weights::residual_weights;
@@ -19,13 +19,13 @@ use crate::io::{self, Dataset};
 use crate::lm::Stop;
 use crate::model::{self, domain::short_number, ModelOptions};
 
-pub use intervals::{profile_intervals, MAX_PROFILED};
+pub(crate) use intervals::{profile_intervals, MAX_PROFILED};
 
 /// The candidate of `model = "auto"` with the physically based lobe: kbs+lambert with the
 /// dielectric Fresnel factor and Smith shadowing–masking (He, Torrance, Sillion & Greenberg
 /// 1991). A dielectric is what a paint, a plastic or a glaze is; the conductor factor would
 /// add κ, which a single channel rarely determines beside n.
-pub const AUTO_EXTENDED: &str = "kbs+lambert --fresnel dielectric --shadowing smith";
+pub(crate) const AUTO_EXTENDED: &str = "kbs+lambert --fresnel dielectric --shadowing smith";
 
 /// Candidate models for `model = "auto"`, compared by BIC (model names with their factor
 /// options, as reports name them).
@@ -54,7 +54,7 @@ pub struct DatasetFit {
     /// `absolute_sigma=True`), not rescaled by the residual scatter.
     pub absolute_sigma: bool,
     /// Compute the profile-likelihood intervals of the chosen fit (when it has at most
-    /// [`MAX_PROFILED`] free parameters; they refit the data a few dozen times per quantity).
+    /// `MAX_PROFILED` free parameters; they refit the data a few dozen times per quantity).
     pub intervals: bool,
 }
 
@@ -139,10 +139,10 @@ pub struct Outcome {
 /// the Jacobian products square these, so beyond them double precision overflows (cost
 /// = inf, R² = NaN). The fit is the same in any unit of L (amplitudes scale with it) and
 /// under any common factor of the weights, so rescaling the file loses nothing.
-pub const MAGNITUDE_LIMIT: f64 = 1e100;
+pub(crate) const MAGNITUDE_LIMIT: f64 = 1e100;
 
 /// Refuse values and weights the fit cannot square in double precision (see
-/// [`MAGNITUDE_LIMIT`]), naming the file, line and column of the first one (for arrays,
+/// `MAGNITUDE_LIMIT`), naming the file, line and column of the first one (for arrays,
 /// which have no header: the array and its 0-based index, [`Error::Element`]).
 pub fn check_magnitudes(ds: &Dataset) -> Result<()> {
     let Some(y) = &ds.value else { return Ok(()) };
@@ -195,7 +195,7 @@ pub fn check_magnitudes(ds: &Dataset) -> Result<()> {
 /// weights transformed for the residual kind ([`super::problem::weights`]), and the channel index of
 /// every sample with the channel names (as printed: control and bidi characters escaped)
 /// in first-appearance order.
-pub fn fit_input(
+pub(crate) fn fit_input(
     ds: &Dataset,
     quantity: Quantity,
     wavelength: Option<f64>,
@@ -270,7 +270,7 @@ fn channel_index(labels: &[String]) -> (Vec<usize>, Vec<String>) {
 }
 
 /// The residual floor: `floor`, or 1e-6 × max |y| (as the fit computes it).
-pub fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
+pub(crate) fn floor_for(floor: Option<f64>, y: &[f64]) -> f64 {
     driver::residual_floor(
         &FitConfig {
             floor,
@@ -387,7 +387,7 @@ fn fit_candidates<'c>(
 /// (benches/texels.py: σ, T/σ and scale drawn anew per texel) the ratio has median 1, and
 /// 99 % of pairs lie below 3.8, while a valley that is not the texel's optimum leaves a
 /// misfit many times the noise.
-pub const NEAR_UNEXPLAINED_RATIO: f64 = 4.0;
+pub(crate) const NEAR_UNEXPLAINED_RATIO: f64 = 4.0;
 
 /// `near`'s fit of `config`'s model (with the same factors) when it converged: a start
 /// worth taking for the next dataset. None for a lobe with factors, which is always
@@ -650,12 +650,12 @@ fn lowest_bic_usable(results: &[FitResult]) -> (usize, Vec<String>) {
 
 /// ΔBIC below which two models' fits are a tie: the data do not prefer one (Kass &
 /// Raftery's "not worth more than a bare mention").
-pub const BIC_TIE: f64 = 2.0;
+pub(crate) const BIC_TIE: f64 = 2.0;
 
 /// The usable candidates (converged, other than `best`) whose BIC lies within
 /// [`BIC_TIE`] of the chosen one's, with their ΔBIC, lowest first; empty when the chosen
 /// fit is not usable itself.
-pub fn tied_with(results: &[FitResult], best: usize) -> Vec<(&FitResult, f64)> {
+pub(crate) fn tied_with(results: &[FitResult], best: usize) -> Vec<(&FitResult, f64)> {
     if !results[best].converged() {
         return Vec::new();
     }

@@ -20,7 +20,7 @@ use nalgebra::{DMatrix, DVector};
 /// Relative cost by which removing an amplitude (p = 0, the others held) may raise the
 /// solve's cost for the bound to be tried: a component that carries more of the fit than
 /// this is no absent one (its removal is tried only when it is within reach of the bound).
-pub const BOUND_TRY: f64 = 1e-2;
+pub(crate) const BOUND_TRY: f64 = 1e-2;
 
 /// Minimise `problem` (solver variables of `layout`) from `x0`, then settle the amplitudes
 /// at their bound (see the module doc): the returned report is the lowest-cost of the run
@@ -105,7 +105,7 @@ fn release<P: LeastSquaresProblem + ?Sized>(
 
 /// The solver variable of an amplitude at its bound at which [`release`] takes the cost's
 /// derivative in it (p = u·ε²/2 ≈ 5·10⁻¹⁷ u: the point is the bound's to rounding).
-pub const RELEASE_PROBE: f64 = 1e-8;
+pub(crate) const RELEASE_PROBE: f64 = 1e-8;
 
 /// The free amplitude (index among the free variables) of `report`'s point whose bound is
 /// worth trying: its gradient pushes it towards 0, and setting it to 0 raises the cost by

@@ -9,10 +9,10 @@ use crate::model::Model;
 
 /// Largest g a fit may step to: beyond it a trial step is rejected (σ ≫ λ is far past any
 /// scene the data could tell from the rough limit).
-pub const G_FIT_MAX: f64 = 1e7;
+pub(crate) const G_FIT_MAX: f64 = 1e7;
 
 /// Largest a = v_xy² T²/4 a fit may step to (T ≫ λ: the lobe is narrower than e^{-1e10}).
-pub const A_FIT_MAX: f64 = 1e10;
+pub(crate) const A_FIT_MAX: f64 = 1e10;
 
 /// The (σ, T) of each channel under full parameters `p` (empty for models without them),
 /// or None when `p` is not finite or some σ, T is not a positive normal number: the part of
@@ -61,7 +61,7 @@ impl FitProblem<'_> {
     /// How near full parameters `p` come to the edge of the domain of [`Self::in_domain`]:
     /// the largest of g/[`G_FIT_MAX`] and a/[`A_FIT_MAX`] over the samples (0 for models
     /// without σ and T, ∞ where σ or T is not a positive normal number).
-    pub fn domain_fraction(&self, p: &[f64]) -> f64 {
+    pub(crate) fn domain_fraction(&self, p: &[f64]) -> f64 {
         let Some(sc) = channel_roughness(self.model, &self.layout, p) else {
             return f64::INFINITY;
         };
@@ -85,7 +85,7 @@ impl FitProblem<'_> {
     /// narrowest width the angular sampling resolves
     /// ([`Geometry::width_floor`]). Outside, the solver sees non-finite residuals and
     /// rejects the step.
-    pub fn in_domain(&self, p: &[f64]) -> bool {
+    pub(crate) fn in_domain(&self, p: &[f64]) -> bool {
         let Some(sc) = channel_roughness(self.model, &self.layout, p) else {
             return false;
         };
@@ -97,7 +97,7 @@ impl FitProblem<'_> {
 }
 
 impl FitInput {
-    /// [`FitProblem::in_domain`] for these samples, without building the problem.
+    /// `FitProblem::in_domain` for these samples, without building the problem.
     pub fn in_domain(&self, model: &dyn Model, layout: &ParamLayout, p: &[f64]) -> bool {
         let Some(sc) = channel_roughness(model, layout, p) else {
             return false;

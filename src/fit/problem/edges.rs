@@ -6,11 +6,11 @@ use super::{FitInput, FitParam, ParamLayout};
 
 /// T/σ below which a KBS lobe is not a surface's specular lobe: Beckmann's α = 2σ/T > 20
 /// is far outside the paper's domain, and the lobe then only mimics a diffuse term.
-pub const MIN_T_OVER_SIGMA: f64 = 0.1;
+pub(crate) const MIN_T_OVER_SIGMA: f64 = 0.1;
 
 /// k·T = 2πT/λ below which a KBS lobe is wider than the hemisphere (its angular width in
 /// v_xy is ~2/(kT) ≫ the largest v_xy ≈ 2): flat, so again only a second diffuse term.
-pub const MIN_KT: f64 = 0.1;
+pub(crate) const MIN_KT: f64 = 0.1;
 
 /// Whether a KBS point (layout order) lies at an edge of the physical domain:
 /// T/σ < [`MIN_T_OVER_SIGMA`] or 2πT/λ < [`MIN_KT`] (λ: the median wavelength of `input`).

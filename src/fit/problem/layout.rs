@@ -15,7 +15,7 @@ use crate::model::Model;
 use nalgebra::DVector;
 
 /// Parameters that are per channel in a joint fit.
-pub const PER_CHANNEL: [&str; 2] = ["scale", "scale_d"];
+pub(crate) const PER_CHANNEL: [&str; 2] = ["scale", "scale_d"];
 
 /// How a parameter p maps to the solver variable x.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,7 +39,7 @@ pub enum Transform {
 
 /// Parameters that enter the model linearly: amplitudes, non-negative, and solved exactly
 /// at each point of the starting-value grid ([`crate::fit::start::grid`]).
-pub const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
+pub(crate) const LINEAR: [&str; 3] = ["scale", "scale_d", "B"];
 
 impl Transform {
     /// The transform for a model parameter: log for positive nonlinear parameters,
@@ -67,6 +67,7 @@ impl Transform {
     }
 
     /// p from x.
+    #[allow(clippy::wrong_self_convention)]
     pub fn from_x(self, x: f64) -> f64 {
         match self {
             Transform::Identity => x,
@@ -250,6 +251,7 @@ impl ParamLayout {
     }
 
     /// Full parameter values from solver variables (fixed parameters from the layout).
+    #[allow(clippy::wrong_self_convention)]
     pub fn from_x(&self, x: &DVector<f64>) -> Vec<f64> {
         let mut it = x.iter();
         self.params

@@ -13,10 +13,10 @@
 //! the data's uncertainty ([`weights`]), the active set of amplitudes at their bound 0
 //! (`bounds.rs`) and the edges of the physical domain a point can run to (`edges.rs`).
 
-pub mod channels;
-pub mod layout;
-pub mod loss;
-pub mod weights;
+pub(crate) mod channels;
+pub(crate) mod layout;
+pub(crate) mod loss;
+pub(crate) mod weights;
 
 pub(super) mod bounds;
 mod domain;
@@ -28,8 +28,8 @@ use crate::lm::{LeastSquaresProblem, Stop};
 use crate::model::{Mode, Model};
 pub use channels::Channels;
 use domain::width_floor;
-pub use domain::{A_FIT_MAX, G_FIT_MAX};
-pub use layout::{FitParam, ParamLayout, Transform, LINEAR, PER_CHANNEL};
+pub(crate) use domain::G_FIT_MAX;
+pub(crate) use layout::{FitParam, ParamLayout, Transform, LINEAR};
 use loss::Loss;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -136,7 +136,7 @@ impl Rows {
 }
 
 /// The fit's least-squares problem.
-pub struct FitProblem<'a> {
+pub(crate) struct FitProblem<'a> {
     /// The model evaluated at every sample.
     pub model: &'a dyn Model,
     /// The map from the solver's free variables to the model's parameters per channel.
@@ -170,7 +170,7 @@ struct Cached {
 }
 
 /// Weighted residuals at a point, as the solver sees them.
-pub struct Evaluated {
+pub(crate) struct Evaluated {
     /// The weighted residuals √wᵢ rᵢ, or under a robust loss the cost residuals (½‖·‖² is
     /// the cost).
     pub residuals: DVector<f64>,
@@ -182,7 +182,7 @@ pub struct Evaluated {
 
 impl<'a> FitProblem<'a> {
     /// Build the problem. `floor` is used by relative and log residuals.
-    pub fn new(
+    pub(crate) fn new(
         model: &'a dyn Model,
         layout: ParamLayout,
         input: &FitInput,
@@ -237,18 +237,18 @@ impl<'a> FitProblem<'a> {
     }
 
     /// The same problem under a robust loss on its weighted residuals.
-    pub fn with_loss(mut self, loss: Loss) -> Self {
+    pub(crate) fn with_loss(mut self, loss: Loss) -> Self {
         self.loss = loss;
         self
     }
 
     /// The robust loss (linear: plain least squares).
-    pub fn loss(&self) -> Loss {
+    pub(crate) fn loss(&self) -> Loss {
         self.loss
     }
 
     /// The fit cost ½ Σ C² ρ(wᵢ rᵢ²/C²) of unweighted residuals `r` (½ Σ wᵢ rᵢ² for linear).
-    pub fn cost_of(&self, r: &[f64]) -> f64 {
+    pub(crate) fn cost_of(&self, r: &[f64]) -> f64 {
         0.5 * r
             .iter()
             .zip(self.sqrt_w.iter())
@@ -257,13 +257,8 @@ impl<'a> FitProblem<'a> {
     }
 
     /// Number of samples.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.n
-    }
-
-    /// Whether there are no samples.
-    pub fn is_empty(&self) -> bool {
-        self.n == 0
     }
 
     /// Every block's model values and, on request, its model Jacobian (column-major,
@@ -318,7 +313,11 @@ impl<'a> FitProblem<'a> {
     }
 
     /// Model values at full parameters `p`, and on request ∂f/∂p (n × full params).
-    pub fn model_values(&self, p: &[f64], want_jac: bool) -> (Vec<f64>, Option<DMatrix<f64>>) {
+    pub(crate) fn model_values(
+        &self,
+        p: &[f64],
+        want_jac: bool,
+    ) -> (Vec<f64>, Option<DMatrix<f64>>) {
         let n_spec = self.model.params().len();
         let mut f = vec![0.0; self.n];
         let mut jac = want_jac.then(|| DMatrix::zeros(self.n, self.layout.len()));
@@ -348,7 +347,7 @@ impl<'a> FitProblem<'a> {
     /// Model values and each sample's evaluation mode at full parameters `p` (one
     /// evaluation), or None when `stop` was requested before every block was evaluated (a
     /// block that starts after the request is skipped).
-    pub fn values_modes_until(
+    pub(crate) fn values_modes_until(
         &self,
         p: &[f64],
         stop: Option<&Stop>,
@@ -380,7 +379,7 @@ impl<'a> FitProblem<'a> {
     }
 
     /// Unweighted residuals rᵢ of the chosen kind for model values f.
-    pub fn raw_residuals(&self, f: &[f64]) -> Vec<f64> {
+    pub(crate) fn raw_residuals(&self, f: &[f64]) -> Vec<f64> {
         f.iter()
             .enumerate()
             .map(|(i, &fi)| self.residual(i, fi))
@@ -415,24 +414,24 @@ impl<'a> FitProblem<'a> {
     }
 
     /// Weighted residuals at full parameters.
-    pub fn weighted_residuals(&self, p: &[f64]) -> DVector<f64> {
+    pub(crate) fn weighted_residuals(&self, p: &[f64]) -> DVector<f64> {
         let (f, _) = self.model_values(p, false);
         let r = self.raw_residuals(&f);
         DVector::from_iterator(self.n, r.iter().zip(self.sqrt_w.iter()).map(|(r, s)| r * s))
     }
 
     /// Measured values.
-    pub fn y(&self) -> &[f64] {
+    pub(crate) fn y(&self) -> &[f64] {
         &self.y
     }
 
     /// √wᵢ.
-    pub fn sqrt_weight(&self) -> &PerSample {
+    pub(crate) fn sqrt_weight(&self) -> &PerSample {
         &self.sqrt_w
     }
 
     /// Residual kind.
-    pub fn kind(&self) -> ResidualKind {
+    pub(crate) fn kind(&self) -> ResidualKind {
         self.kind
     }
 }
@@ -443,14 +442,14 @@ impl FitProblem<'_> {
     /// ∂r̃ᵢ/∂x_j = √wᵢ (∂rᵢ/∂fᵢ) (∂fᵢ/∂p_k) (dp_k/dx_j) for the free parameter k of column j.
     /// Under a robust loss: the cost residuals and the corrected Jacobian (see
     /// [`Self::evaluate`] for the step residuals that go with them).
-    pub fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
+    pub(crate) fn residuals_and_jacobian(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
         let e = self.evaluate(x, None);
         (e.residuals, e.jacobian)
     }
 
     /// Residuals, Jacobian and (robust loss) step residuals at x, cut short once `stop` is
     /// requested (the rows of blocks not evaluated are NaN).
-    pub fn evaluate(&self, x: &DVector<f64>, stop: Option<&Stop>) -> Evaluated {
+    pub(crate) fn evaluate(&self, x: &DVector<f64>, stop: Option<&Stop>) -> Evaluated {
         let (mut r, mut j) = self.weighted_and_jacobian(x, stop);
         let step = self.loss.correct_in_place(&mut r, &mut j);
         Evaluated {
@@ -569,7 +568,7 @@ impl FitProblem<'_> {
     /// next request at `x`, the one kept before dropped first: a big fit holds one
     /// `n × p` matrix, not two), cut short once `stop` is requested: then some rows are
     /// NaN and the solver rejects the point.
-    pub fn residuals_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DVector<f64> {
+    pub(crate) fn residuals_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DVector<f64> {
         self.forget_cached();
         let e = self.evaluate(x, stop);
         if let Ok(mut c) = self.cache.lock() {
@@ -587,7 +586,7 @@ impl FitProblem<'_> {
     /// dropped (the solver asks for the Jacobian only at points it accepted, so one left at
     /// another point is not asked for: a big fit does not hold a second `n × p` matrix
     /// while the one asked for is evaluated).
-    pub fn cached_jacobian(&self, x: &DVector<f64>) -> Option<DMatrix<f64>> {
+    pub(crate) fn cached_jacobian(&self, x: &DVector<f64>) -> Option<DMatrix<f64>> {
         let mut c = self.cache.lock().ok()?;
         if c.as_ref().is_some_and(|c| &c.x != x) {
             *c = None;
@@ -597,7 +596,7 @@ impl FitProblem<'_> {
 
     /// Drop what the last evaluation left for the solver (its Jacobian): at the end of a
     /// solve, whose last trial point may have been rejected.
-    pub fn forget_cached(&self) {
+    pub(crate) fn forget_cached(&self) {
         if let Ok(mut c) = self.cache.lock() {
             *c = None;
         }
@@ -606,7 +605,7 @@ impl FitProblem<'_> {
     /// The Jacobian at `x`: the cached one ([`Self::cached_jacobian`]), else evaluated —
     /// unless `stop` is requested: then nothing is evaluated and every entry is NaN (no
     /// uncertainty can be computed from it).
-    pub fn jacobian_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DMatrix<f64> {
+    pub(crate) fn jacobian_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DMatrix<f64> {
         if let Some(j) = self.cached_jacobian(x) {
             return j;
         }

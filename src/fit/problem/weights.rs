@@ -22,7 +22,7 @@ pub struct WeightsInfo {
 /// The weights wᵢ of the residuals of kind `kind` (see the module doc), and their
 /// description. `weight`: a weight column (used as given); `sigma_l`: an uncertainty column;
 /// neither: all weights 1 (one value for every sample). `floor` is the residual floor (relative, log).
-pub fn residual_weights(
+pub(crate) fn residual_weights(
     weight: Option<&[f64]>,
     sigma_l: Option<&[f64]>,
     y: &[f64],
@@ -63,7 +63,7 @@ pub fn residual_weights(
 
 /// How many measured values the floor raises: |y| < floor for relative residuals, y < floor
 /// for log residuals, none for absolute ones.
-pub fn floor_raised(y: &[f64], kind: ResidualKind, floor: f64) -> usize {
+pub(crate) fn floor_raised(y: &[f64], kind: ResidualKind, floor: f64) -> usize {
     match kind {
         ResidualKind::Absolute => 0,
         ResidualKind::Relative => y.iter().filter(|v| v.abs() < floor).count(),

@@ -20,19 +20,19 @@ use nalgebra::{DMatrix, DVector};
 /// Iterations of the Gauss–Newton refinement of log-residual amplitudes: the grid only ranks
 /// its points (the solver refines the winners), so a few steps that bring the amplitudes
 /// near their optimum are enough, and they bound the work at a grid point.
-pub const LOG_ITERS: usize = 10;
+pub(crate) const LOG_ITERS: usize = 10;
 
 /// Most sweeps of the SVD in [`nnls`] (a few unknowns converge in a handful; the bound only
 /// turns a matrix the SVD cannot handle into "no amplitudes" instead of an endless loop).
-pub const SVD_MAX_ITERS: usize = 1000;
+pub(crate) const SVD_MAX_ITERS: usize = 1000;
 
 /// Relative cost reduction below which the log-residual refinement stops.
-pub const LOG_FTOL: f64 = 1e-6;
+pub(crate) const LOG_FTOL: f64 = 1e-6;
 
 /// What the amplitude solves need of a problem's data besides the problem itself, computed
 /// once per problem (the grid solves at every one of its points): the weights of the
 /// linearised residuals and, for log residuals, ln max(yᵢ, floor).
-pub struct Prepared {
+pub(crate) struct Prepared {
     /// √wᵢ, divided by max(|yᵢ|, floor) for relative and log residuals (linearised around
     /// the data).
     d: Vec<f64>,
@@ -42,7 +42,7 @@ pub struct Prepared {
 
 impl Prepared {
     /// The data side of `problem`'s amplitude solves, computed once per fit.
-    pub fn new(problem: &FitProblem) -> Self {
+    pub(crate) fn new(problem: &FitProblem) -> Self {
         let (y, floor, kind) = (problem.y(), problem.floor, problem.kind());
         let d = problem
             .sqrt_weight()
@@ -66,7 +66,7 @@ impl Prepared {
 /// [`Prepared::new`] of the same problem). Sets `p[k]` (every amplitude > 0: one at its
 /// bound 0 is set to 10⁻³ of the largest, so the solver's transform has a gradient there)
 /// and returns the cost ½Σwr² there; None when the model or the solve is not finite.
-pub fn solve(
+pub(crate) fn solve(
     problem: &FitProblem,
     basis: &PointBasis,
     prep: &Prepared,
@@ -154,13 +154,13 @@ fn log_start(
 /// Steps per decade of `leave_plateau`'s scan in its first decade above the floor (a
 /// factor 1.037: with weights that follow the values, 1/σ_L² with σ_L ∝ L, the valley just
 /// above the floor can be a few per cent wide).
-pub const PLATEAU_STEPS_NEAR: usize = 64;
+pub(crate) const PLATEAU_STEPS_NEAR: usize = 64;
 
 /// Steps per decade of `leave_plateau`'s scan beyond its first decade.
-pub const PLATEAU_STEPS_FAR: usize = 16;
+pub(crate) const PLATEAU_STEPS_FAR: usize = 16;
 
 /// Decades above the floor `leave_plateau` scans.
-pub const PLATEAU_DECADES: usize = 12;
+pub(crate) const PLATEAU_DECADES: usize = 12;
 
 /// When every model value at `p` lies at or below the floor (the log residual is flat
 /// there: no solve moves), scale the amplitudes together from where the largest value
@@ -291,7 +291,7 @@ fn linearised_one(y: &[f64], basis: &PointBasis, d: &[f64]) -> Option<Vec<f64>> 
 /// the same amplitudes in that unit; an unknown whose column is zero is 0). None when the
 /// normal equations or the solve are not finite, or the SVD does not converge within
 /// [`SVD_MAX_ITERS`] sweeps.
-pub fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
+pub(crate) fn nnls(ata: &DMatrix<f64>, atb: &DVector<f64>) -> Option<Vec<f64>> {
     // nalgebra's unbounded SVD never returns on a matrix with an infinite or NaN entry
     // (AᵀA of finite columns can overflow): such a grid point has no amplitudes.
     if !ata.iter().chain(atb.iter()).all(|v| v.is_finite()) {
@@ -407,7 +407,7 @@ fn set(
 
 /// Largest share of the model's peak value the column of an amplitude at its bound 0 adds
 /// after `set` (a start for the solver, invisible in the cost).
-pub const AT_BOUND: f64 = 1e-9;
+pub(crate) const AT_BOUND: f64 = 1e-9;
 
 /// The model value of sample `i` at `p` from the basis.
 #[inline]

@@ -13,36 +13,36 @@ use crate::lm::Stop;
 use rayon::prelude::*;
 
 /// Largest number of samples the coarse grid is evaluated on.
-pub const GRID_SAMPLES: usize = 256;
+pub(crate) const GRID_SAMPLES: usize = 256;
 
 /// Median g above which a grid point is ranked with the rough approximation (below it, the
 /// smooth one): the grid only ranks candidates, the refinement uses the exact model.
-pub const GRID_ROUGH_G: f64 = 1.0;
+pub(crate) const GRID_ROUGH_G: f64 = 1.0;
 
 /// Median g below which a KBS grid point is in the smooth band.
-pub const SMOOTH_BAND_G: f64 = 0.1;
+pub(crate) const SMOOTH_BAND_G: f64 = 0.1;
 
 /// Median g above which a KBS grid point is in the rough band.
-pub const ROUGH_BAND_G: f64 = 10.0;
+pub(crate) const ROUGH_BAND_G: f64 = 10.0;
 
 /// Grid points kept as starting candidates (best first, in distinct valleys).
-pub const CANDIDATES: usize = 3;
+pub(crate) const CANDIDATES: usize = 3;
 
 /// Samples of the quick LM refinement between the grid and the full fit (a golden-ratio
 /// subsample, [`subsample`]: 256 spread over every loop of a scan start the full fit as
 /// close as 512 did; with a plain stride, 256 could miss whole azimuth ranges).
-pub const REFINE_SAMPLES: usize = 256;
+pub(crate) const REFINE_SAMPLES: usize = 256;
 
 /// Largest number of samples the start search of a model without the KBS series (Lambert,
 /// Gaussian lobe: a few operations per sample) runs on, grid and refinement alike: all of
 /// a gonioreflectometer file. A subsample ranks valleys wrongly where a narrow lobe is seen
 /// by few samples (a Cornell paint's mirror peak: the subsample's best lobe 35 % above the
 /// whole file's).
-pub const CHEAP_MODEL_SAMPLES: usize = 8192;
+pub(crate) const CHEAP_MODEL_SAMPLES: usize = 8192;
 
 /// Samples the start search of `model` runs on: [`REFINE_SAMPLES`] with the KBS series,
 /// [`CHEAP_MODEL_SAMPLES`] without.
-pub fn search_samples(model: &dyn crate::model::Model) -> usize {
+pub(crate) fn search_samples(model: &dyn crate::model::Model) -> usize {
     if model.params().iter().any(|s| s.name == "sigma") {
         REFINE_SAMPLES
     } else {
@@ -52,10 +52,10 @@ pub fn search_samples(model: &dyn crate::model::Model) -> usize {
 
 /// Samples nearest the mirror direction that the start search's sample always holds
 /// ([`search_input`]).
-pub const NEAR_SPECULAR_SAMPLES: usize = 32;
+pub(crate) const NEAR_SPECULAR_SAMPLES: usize = 32;
 
 /// Parameters that enter the model linearly (solved exactly at each grid point).
-pub use crate::fit::problem::LINEAR;
+pub(crate) use crate::fit::problem::LINEAR;
 
 /// Grid values for a nonlinear parameter, in the unit of the reference wavelength `lambda`.
 fn grid_for(name: &str, lambda: f64) -> Vec<f64> {
@@ -90,7 +90,11 @@ fn grid_for(name: &str, lambda: f64) -> Vec<f64> {
 }
 
 /// Whether a layout parameter is linear.
-pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::ParamSpec]) -> bool {
+pub(crate) fn is_linear(
+    layout: &ParamLayout,
+    k: usize,
+    model_specs: &[crate::model::ParamSpec],
+) -> bool {
     LINEAR.contains(&model_specs[layout.params[k].spec].name)
 }
 
@@ -107,7 +111,7 @@ pub fn is_linear(layout: &ParamLayout, k: usize, model_specs: &[crate::model::Pa
 /// Once `stop` is requested no further grid point is started: the candidates are the best
 /// of the points completed by then (every cost is that of a whole point), or the fallback
 /// start (all ones, infinite cost) when the grid's model side was not complete.
-pub fn initial_values(
+pub(crate) fn initial_values(
     problem: &FitProblem,
     grid_model: &dyn crate::model::Model,
     input: &FitInput,
@@ -417,20 +421,20 @@ fn pick_distinct(
 }
 
 /// Grid candidates kept per regime band for KBS models (see `pick_distinct`).
-pub const PER_BAND: usize = 2;
+pub(crate) const PER_BAND: usize = 2;
 
 /// Relative grid cost above the grid's best within which a band's second lobe is kept: a
 /// lobe the grid ranks far worse than the best point is no rival on the whole data either
 /// (the second lobes that win on the whole data for Cornell acryl_blue, tests/trust/corpus.rs, are
 /// kept at this margin; it keeps the texel batch's throughput, benches/texels.sh).
-pub const SECOND_MARGIN: f64 = 0.25;
+pub(crate) const SECOND_MARGIN: f64 = 0.25;
 
 /// Most KBS candidates: [`PER_BAND`] in each of the three regime bands.
-pub const KBS_CANDIDATES: usize = 3 * PER_BAND;
+pub(crate) const KBS_CANDIDATES: usize = 3 * PER_BAND;
 
 /// Factor by which the lobe shape of two candidates of one band must differ to count as
 /// two valleys: the grid's T axis steps by ≈ 2.1, so neighbours of one valley are closer.
-pub const SHAPE_APART: f64 = 3.0;
+pub(crate) const SHAPE_APART: f64 = 3.0;
 
 /// The logarithms of what sets a KBS lobe's shape in a regime band (σ, T at layout indices
 /// `ks`): T/σ in the rough band (the rough limit depends on σ and T only through it), T in
@@ -455,14 +459,6 @@ fn options_bits(model: &dyn crate::model::Model) -> Vec<u64> {
     }
 }
 
-/// Solve the linear parameters `linear` of `p` (with the other parameters held; see
-/// [`amplitudes::solve`]); returns the resulting cost, or None when the model gives
-/// non-finite values.
-pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Option<f64> {
-    let basis = grid_cache::point_basis(problem, p, linear)?;
-    amplitudes::solve(problem, &basis, &Prepared::new(problem), p, linear)
-}
-
 /// The start search's sample of `input` (at most `max` samples): the
 /// [`NEAR_SPECULAR_SAMPLES`] samples nearest the mirror direction (smallest v_xy²/v_z², the
 /// facet slope that reflects into them) and a [`subsample`] spread over the file. A narrow
@@ -474,7 +470,7 @@ pub fn solve_linear(problem: &FitProblem, p: &mut [f64], linear: &[usize]) -> Op
 /// rest, so the near-mirror ones carry weight m/(n − k) (k of them, m spread samples among
 /// the other n − k). Depends on the angles only, so every fit of one angular layout draws
 /// the same samples.
-pub fn search_input(input: &FitInput, max: usize) -> FitInput {
+pub(crate) fn search_input(input: &FitInput, max: usize) -> FitInput {
     let geo = &input.geo;
     let n = geo.len();
     let near = NEAR_SPECULAR_SAMPLES.min(max / 4);
@@ -505,7 +501,7 @@ pub fn search_input(input: &FitInput, max: usize) -> FitInput {
 /// step near n(√5 − 1)/2 that is coprime to n, modulo n, sorted. A scan stored in nested
 /// loops (θi × θr × φr) is then covered in every loop; a plain stride aliases with the
 /// inner loops (a stride of 20 through 40 azimuths picks only two of them).
-pub fn subsample(n: usize, max: usize) -> Vec<usize> {
+pub(crate) fn subsample(n: usize, max: usize) -> Vec<usize> {
     if n <= max {
         return (0..n).collect();
     }

@@ -16,11 +16,11 @@ use crate::geometry::Geometry;
 use std::sync::{Arc, Mutex};
 
 /// Grids kept (the most recently used first).
-pub const CACHE_ENTRIES: usize = 8;
+pub(crate) const CACHE_ENTRIES: usize = 8;
 
 /// The model at one grid point: f = rest + Σ_k p_k · column_k over the linear parameters.
 #[derive(Debug)]
-pub struct PointBasis {
+pub(crate) struct PointBasis {
     /// The part of f that does not come from the linear parameters (0 for every goniofit
     /// model, kept for generality).
     pub rest: Vec<f64>,
@@ -31,7 +31,7 @@ pub struct PointBasis {
 /// The model side of a whole grid: one entry per flat grid index (None where the model is
 /// not finite).
 #[derive(Debug)]
-pub struct GridBasis {
+pub(crate) struct GridBasis {
     /// The basis of each grid point, by flat index; None where the model is not finite.
     pub points: Vec<Option<PointBasis>>,
 }
@@ -39,13 +39,13 @@ pub struct GridBasis {
 /// What a grid's basis depends on, as exact bits: the model name and options, the problem
 /// layout, the samples' geometry and channels, the grid's axes and the given values.
 #[derive(Debug, PartialEq)]
-pub struct Key(Vec<u64>);
+pub(crate) struct Key(Vec<u64>);
 
 impl Key {
     /// The key of a grid over `axes` for a model (by name) on samples `geo` with channel
     /// indices `channel`; [`Key::push`] adds what else the grid's points depend on (given
     /// values, parameter indices, model options).
-    pub fn new(
+    pub(crate) fn new(
         model_name: &str,
         geo: &Geometry,
         channel: &crate::fit::problem::Channels,
@@ -78,7 +78,7 @@ impl Key {
     }
 
     /// Append more words (options, indices, given values) to the key.
-    pub fn push(&mut self, words: impl IntoIterator<Item = u64>) {
+    pub(crate) fn push(&mut self, words: impl IntoIterator<Item = u64>) {
         self.0.push(u64::MAX - 1);
         self.0.extend(words);
     }
@@ -95,7 +95,10 @@ fn cache() -> &'static Mutex<Cache> {
 /// threads asking for a new key at once may both compute it (the results are identical).
 /// `compute` returns None when it was stopped before every point was computed: nothing is
 /// cached then (a later fit of the layout computes the whole grid), and None is returned.
-pub fn basis(key: Key, compute: impl FnOnce() -> Option<GridBasis>) -> Option<Arc<GridBasis>> {
+pub(crate) fn basis(
+    key: Key,
+    compute: impl FnOnce() -> Option<GridBasis>,
+) -> Option<Arc<GridBasis>> {
     if let Ok(mut c) = cache().lock() {
         if let Some(pos) = c.iter().position(|(k, _)| **k == key) {
             let hit = c.remove(pos);
@@ -118,7 +121,7 @@ pub fn basis(key: Key, compute: impl FnOnce() -> Option<GridBasis>) -> Option<Ar
 /// 0: it is the rounding of f − Σ columns, on the scale of the model at unit amplitudes,
 /// and the amplitude solve would otherwise fit data in a small unit (10⁻³⁰ of these
 /// values) to that rounding instead of to the data.
-pub fn point_basis(problem: &FitProblem, p: &[f64], linear: &[usize]) -> Option<PointBasis> {
+pub(crate) fn point_basis(problem: &FitProblem, p: &[f64], linear: &[usize]) -> Option<PointBasis> {
     let mut p = p.to_vec();
     for &k in linear {
         p[k] = 1.0;
@@ -146,4 +149,4 @@ pub fn point_basis(problem: &FitProblem, p: &[f64], linear: &[usize]) -> Option<
 
 /// Relative size below which the rest of a [`PointBasis`] is rounding (a few ulps of the
 /// model value per amplitude).
-pub const REST_ROUNDING: f64 = 1e-12;
+pub(crate) const REST_ROUNDING: f64 = 1e-12;

@@ -9,9 +9,9 @@
 //! [`amplitudes`]; the model's side of the grid, computed once per angular layout, is
 //! [`grid_cache`].
 
-pub mod amplitudes;
-pub mod grid;
-pub mod grid_cache;
+pub(crate) mod amplitudes;
+pub(crate) mod grid;
+pub(crate) mod grid_cache;
 
 use super::config::FitConfig;
 use super::problem::{FitInput, FitProblem, ParamLayout};
@@ -23,34 +23,34 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 /// Accuracy of the model on the starting-value grid (it only ranks candidates).
-pub const GRID_TOL: f64 = 1e-4;
+pub(crate) const GRID_TOL: f64 = 1e-4;
 
 /// Relative cost by which an optimum at an edge of the physical domain (T/σ → 0, kT → 0)
 /// must lie below the best one inside it to count as the fit's result (and the fit then
 /// ends `degenerate`): below that margin, the inside optimum explains the data as well,
 /// with a lobe the surface can have. The same margin compares the full solves.
-pub const EDGE_MARGIN: f64 = 1e-3;
+pub(crate) const EDGE_MARGIN: f64 = 1e-3;
 
 /// Relative subsample cost within which the second-best refined candidate is solved on the
 /// full data as well: the subsample (256 samples, coarse tolerances) cannot rank two
 /// valleys closer than this (Cornell acryl_blue 460 nm: the wide lobe won on the
 /// subsample, the narrow one is 6 % lower on the full data).
-pub const RIVAL_MARGIN: f64 = 0.1;
+pub(crate) const RIVAL_MARGIN: f64 = 0.1;
 
 /// Most rival valleys solved on the whole data besides the winner's (`choose_refined`).
-pub const RIVALS: usize = 2;
+pub(crate) const RIVALS: usize = 2;
 
 /// Relative difference in every parameter within which two refined candidates ended at the
 /// same optimum: the refinement stops at relative steps of its `xtol` (10⁻⁶), so one valley
 /// reached from two starts agrees far closer than this, while distinct valleys of the grid
 /// lie a factor of ~2 apart ([`grid::initial_values`]).
-pub const SAME_OPTIMUM: f64 = 1e-3;
+pub(crate) const SAME_OPTIMUM: f64 = 1e-3;
 
 /// Relative cost difference within which two refined KBS points with the same T/σ (to
 /// [`SAME_OPTIMUM`]·10) lie in one valley of the rough ridge: the refinement with the rough
 /// approximation holds σ, so one valley reached from two starts ends at two σ along the
 /// ridge, with the same lobe and cost.
-pub const SAME_RIDGE_COST: f64 = 1e-5;
+pub(crate) const SAME_RIDGE_COST: f64 = 1e-5;
 
 /// Whether two refined points (layout order, with their costs) are the same optimum (see
 /// [`SAME_OPTIMUM`]), or, for KBS (`ridge`: layout indices of σ and T), the same valley of
@@ -70,7 +70,7 @@ fn same_optimum(a: (f64, &[f64]), b: (f64, &[f64]), ridge: Option<(usize, usize)
 
 /// Model accuracy of the quick refinement on a subsample (it only has to land near the
 /// optimum; the full fit then works at the requested accuracy).
-pub const REFINE_TOL: f64 = 1e-6;
+pub(crate) const REFINE_TOL: f64 = 1e-6;
 
 /// Where the full fit starts, and when the search for it ended.
 pub(super) struct Start {
@@ -94,7 +94,7 @@ pub(super) struct Start {
 impl Start {
     /// A start at `p0` (layout order) without a search: no alternatives or rivals, the
     /// search's times those of the call (from the fit's start `t0`).
-    pub fn given(p0: Vec<f64>, t0: Instant) -> Start {
+    pub(super) fn given(p0: Vec<f64>, t0: Instant) -> Start {
         let now = t0.elapsed().as_secs_f64();
         Start {
             grid_start: p0.clone(),
@@ -281,7 +281,7 @@ impl<'m> Refiners<'m> {
 /// index n measured by the factor's shape r₀ = |n − 1|/(n + 1) (the grazing rise is
 /// 1/r₀²), κ as it is: the grid's index steps by about 2 in r₀, so a smaller move stays
 /// in the valley the grid point was in.
-pub const FACTOR_RUNAWAY: f64 = 2.0;
+pub(crate) const FACTOR_RUNAWAY: f64 = 2.0;
 
 /// The quick refinement's solver settings: loose tolerances, at most 100 iterations.
 fn coarse_config(config: &FitConfig) -> LmConfig {
@@ -668,11 +668,11 @@ fn stopped(stop: Option<&Stop>) -> bool {
 }
 
 /// Factor by which `slide_rough_ridge` scales σ and T per step.
-pub const RIDGE_STEP: f64 = 2.0;
+pub(crate) const RIDGE_STEP: f64 = 2.0;
 
 /// Most steps of `slide_rough_ridge` (σ up to 2¹² ≈ 4000 times the refined one; the
 /// domain's g limit usually ends the slide first).
-pub const RIDGE_STEPS: usize = 12;
+pub(crate) const RIDGE_STEPS: usize = 12;
 
 /// Slide a point refined with the rough approximation along the rough ridge to where the
 /// exact model fits the subsample best, and return (exact cost, point). The ridge scales σ

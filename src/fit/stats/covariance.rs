@@ -19,7 +19,7 @@ use nalgebra::{DMatrix, DVector};
 
 /// Covariance and identifiability from the Jacobian at the optimum.
 #[derive(Debug, Clone)]
-pub struct Uncertainty {
+pub(crate) struct Uncertainty {
     /// `s²(JᵀJ)⁺`, `s² = 2·cost/(n−p)`.
     pub covariance: DMatrix<f64>,
     /// Standard errors √Cⱼⱼ of the free variables (the solver's x, length `p`).
@@ -42,7 +42,7 @@ pub struct Uncertainty {
 /// optimum (`n × p`), `cost = ½ Σ r̃ᵢ²` there, `n` observations; singular values at or below
 /// `rel_threshold · σ_max` count as zero (e.g. `1e-10`; a negative or NaN threshold is
 /// treated as 0, i.e. only exact zeros are dropped).
-pub fn uncertainty(
+pub(crate) fn uncertainty(
     jacobian: &DMatrix<f64>,
     cost: f64,
     n: usize,
@@ -203,7 +203,7 @@ fn unscaled_direction(v: DVector<f64>, norms: &[f64]) -> DVector<f64> {
 
 /// Correlations `Cᵢⱼ / (sᵢ sⱼ)` of covariance `cov` with standard errors `stderr` (NaN
 /// where a standard error is 0).
-pub fn correlation(cov: &DMatrix<f64>, stderr: &DVector<f64>) -> DMatrix<f64> {
+pub(crate) fn correlation(cov: &DMatrix<f64>, stderr: &DVector<f64>) -> DMatrix<f64> {
     DMatrix::from_fn(cov.nrows(), cov.ncols(), |a, b| {
         let d = stderr[a] * stderr[b];
         if d > 0.0 {

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Deserializer};
 
 /// An `f64` field: a number as it is, `null` as NaN.
-pub fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+pub(crate) fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 

@@ -35,13 +35,13 @@ use crate::lm::{self, LeastSquaresProblem, LmConfig, Stop};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
 
-pub use super::quantile::{incomplete_beta, normal_quantile, student_t_quantile};
+pub(crate) use super::quantile::{normal_quantile, student_t_quantile};
 
 /// The probabilities of the reported intervals: one standard deviation (68.27 %) and 95 %.
-pub const LEVELS: [f64; 2] = [0.682_689_492_137_086, 0.95];
+pub(crate) const LEVELS: [f64; 2] = [0.682_689_492_137_086, 0.95];
 
 /// How far a positive parameter is searched: a factor e^LOG_RANGE (10³) either way.
-pub const LOG_RANGE: f64 = 6.907_755_278_982_137;
+pub(crate) const LOG_RANGE: f64 = 6.907_755_278_982_137;
 
 /// Maximum number of doubling steps on one side.
 const MAX_STEPS: usize = 24;
@@ -146,7 +146,7 @@ impl Interval {
 /// What is profiled: a parameter by its layout index, or ln Π p_j^{c_j} over layout
 /// indices, solved for `eliminate` (a log-transformed free parameter with c ≠ 0).
 #[derive(Debug, Clone)]
-pub enum Target {
+pub(crate) enum Target {
     /// The free parameter at this layout index, searched in its fit variable x (ln p where
     /// log-transformed).
     Param(usize),
@@ -298,7 +298,7 @@ impl LeastSquaresProblem for Restricted<'_, '_> {
 type Limit = (f64, bool);
 
 /// The profile of one target over a full problem whose best fit is `p_best`.
-pub struct Profiler<'a, 'p> {
+pub(crate) struct Profiler<'a, 'p> {
     /// The full problem (every free parameter) the refits minimise.
     pub problem: &'a FitProblem<'p>,
     /// Best-fit parameters (layout order) of `problem`.
@@ -317,7 +317,12 @@ pub struct Profiler<'a, 'p> {
 impl<'a, 'p> Profiler<'a, 'p> {
     /// Set up at `p_best` (the optimum of `problem`): χ² and the x-space standard errors
     /// from the Jacobian there.
-    pub fn new(problem: &'a FitProblem<'p>, p_best: &[f64], absolute: bool, lm: &LmConfig) -> Self {
+    pub(crate) fn new(
+        problem: &'a FitProblem<'p>,
+        p_best: &[f64],
+        absolute: bool,
+        lm: &LmConfig,
+    ) -> Self {
         let x = problem.layout.to_x(p_best);
         let (r, j) = problem.residuals_and_jacobian(&x);
         let chi2_min = r.norm_squared();
@@ -505,7 +510,7 @@ impl<'a, 'p> Profiler<'a, 'p> {
 
     /// The intervals of `target` at every [`LEVELS`] probability, in the variable t
     /// (x of a parameter, ln ψ of a product), mapped back to ψ.
-    pub fn interval(&self, name: &str, target: &Target) -> Option<Interval> {
+    pub(crate) fn interval(&self, name: &str, target: &Target) -> Option<Interval> {
         let (t0, se, lo_lim, hi_lim) = self.start(target)?;
         let (z0, held) = self.z_best(target)?;
         let thr: Vec<f64> = LEVELS

@@ -4,7 +4,7 @@
 
 /// The standard normal quantile: Φ⁻¹(q) for q ∈ (0, 1), by bisection and Newton on
 /// Φ(z) = erfc(−z/√2)/2 (to 1e-14 absolute).
-pub fn normal_quantile(q: f64) -> f64 {
+pub(crate) fn normal_quantile(q: f64) -> f64 {
     let cdf = |z: f64| 0.5 * libm::erfc(-z / std::f64::consts::SQRT_2);
     let (mut lo, mut hi) = (-40.0f64, 40.0f64);
     for _ in 0..200 {
@@ -50,7 +50,7 @@ pub fn student_t_quantile(q: f64, nu: f64) -> f64 {
 /// The regularised incomplete beta function I_x(a, b), by its continued fraction (Lentz),
 /// accurate to about 1e-10 for the a, b of the t distribution (lgamma's rounding in the
 /// prefactor dominates).
-pub fn incomplete_beta(a: f64, b: f64, x: f64) -> f64 {
+pub(crate) fn incomplete_beta(a: f64, b: f64, x: f64) -> f64 {
     if x <= 0.0 {
         return 0.0;
     }

@@ -22,10 +22,10 @@
 use serde::Serialize;
 
 /// Smallest rms radius of curvature, in wavelengths, for the Kirchhoff approximation.
-pub const MIN_CURVATURE_RADIUS: f64 = 1.0;
+pub(crate) const MIN_CURVATURE_RADIUS: f64 = 1.0;
 
 /// Largest shadowed fraction of the surface (1 − S) at which shadowing counts as negligible.
-pub const MAX_SHADOWED: f64 = 0.05;
+pub(crate) const MAX_SHADOWED: f64 = 0.05;
 
 /// One assumption checked at the fitted surface.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -59,7 +59,7 @@ impl Validity {
 /// Smith's shadowing function S(θ) of a Gaussian surface with rms slope `m` along one
 /// direction: the lit fraction seen from polar angle θ (rad, 0 ≤ θ ≤ π/2); 1 at θ = 0 or
 /// m = 0, → 0 at grazing.
-pub fn smith_shadowing(theta: f64, m: f64) -> f64 {
+pub(crate) fn smith_shadowing(theta: f64, m: f64) -> f64 {
     let cot = theta.cos() / theta.sin();
     if cot.is_nan() || cot <= 0.0 {
         return 0.0;
@@ -90,7 +90,7 @@ fn unshadowed_up_to(m: f64) -> f64 {
 }
 
 /// What the validity checks need of a fit.
-pub struct Surface {
+pub(crate) struct Surface {
     /// Fitted σ and T (unit of λ).
     pub sigma: f64,
     /// Fitted correlation length T (unit of λ).
@@ -107,7 +107,7 @@ pub struct Surface {
 
 /// The checks at a fitted surface, over samples with polar angles `theta_i`, `theta_r`
 /// (rad).
-pub fn check(surface: &Surface, theta_i: &[f64], theta_r: &[f64]) -> Validity {
+pub(crate) fn check(surface: &Surface, theta_i: &[f64], theta_r: &[f64]) -> Validity {
     Validity {
         checks: vec![curvature(surface), shadowing(surface, theta_i, theta_r)],
     }

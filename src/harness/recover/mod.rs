@@ -40,20 +40,20 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Duration;
 
-pub mod outliers;
+pub(crate) mod outliers;
 mod text;
-pub use outliers::Outlier;
+pub(crate) use outliers::Outlier;
 
 /// Two-sided normal coverage of ±2 standard errors.
-pub const NOMINAL_COVERAGE: f64 = 0.9545;
+pub(crate) const NOMINAL_COVERAGE: f64 = 0.9545;
 
 /// Width of the coverage interval, in standard errors.
-pub const COVERAGE_K: f64 = 2.0;
+pub(crate) const COVERAGE_K: f64 = 2.0;
 
 /// Where a scene lives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Regime {
+pub(crate) enum Regime {
     /// g ≪ 1 everywhere (σ/λ from 0.003 to 0.015).
     Smooth,
     /// g around 1 (σ/λ from 0.08 to 0.4): all of σ, T, scale are determined.
@@ -66,7 +66,7 @@ pub enum Regime {
 
 impl Regime {
     /// All regimes, in report order.
-    pub const ALL: [Regime; 4] = [
+    pub(crate) const ALL: [Regime; 4] = [
         Regime::Smooth,
         Regime::Intermediate,
         Regime::Rough,
@@ -74,7 +74,7 @@ impl Regime {
     ];
 
     /// Lower-case name.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Regime::Smooth => "smooth",
             Regime::Intermediate => "intermediate",
@@ -86,7 +86,7 @@ impl Regime {
 
 /// One synthetic scene: truth, layout and noise.
 #[derive(Debug, Clone, Serialize)]
-pub struct Scene {
+pub(crate) struct Scene {
     /// Index of the scene in the run's draw order (0-based); [`RecoverConfig::only`] selects
     /// scenes by it.
     pub id: usize,
@@ -153,7 +153,7 @@ impl Scene {
 
 /// One scored quantity of one scene.
 #[derive(Debug, Clone, Serialize)]
-pub struct Check {
+pub(crate) struct Check {
     /// Report name of the quantity (`sigma`, `T`, `scale`, `T/sigma`, `amplitude`, `n`,
     /// `kappa`).
     pub name: String,
@@ -172,7 +172,7 @@ pub struct Check {
 
 /// The outcome of one scene.
 #[derive(Debug, Clone, Serialize)]
-pub struct SceneResult {
+pub(crate) struct SceneResult {
     /// The scene that was fitted.
     pub scene: Scene,
     /// Number of samples of the scene's data (0 when the data could not be generated).
@@ -203,7 +203,7 @@ pub struct SceneResult {
 
 /// Error statistics of one quantity within a regime.
 #[derive(Debug, Clone, Serialize)]
-pub struct QuantitySummary {
+pub(crate) struct QuantitySummary {
     /// Report name of the quantity (see [`Check::name`]).
     pub name: String,
     /// Scenes in which it was scored.
@@ -220,7 +220,7 @@ pub struct QuantitySummary {
 
 /// Summary of one regime.
 #[derive(Debug, Clone, Serialize)]
-pub struct RegimeSummary {
+pub(crate) struct RegimeSummary {
     /// The regime summarised.
     pub regime: Regime,
     /// Number of scenes of the regime in the run.
@@ -243,7 +243,7 @@ pub struct RegimeSummary {
 
 /// The whole recovery run.
 #[derive(Debug, Clone, Serialize)]
-pub struct RecoverReport {
+pub(crate) struct RecoverReport {
     /// Number of scenes fitted (those selected by `only`, or all).
     pub scenes: usize,
     /// Seed of the scene draws (the same seed gives the same scenes).
@@ -281,7 +281,7 @@ pub struct RecoverReport {
 
 /// How to run a recovery.
 #[derive(Debug, Clone)]
-pub struct RecoverConfig {
+pub(crate) struct RecoverConfig {
     /// Number of scenes to draw.
     pub scenes: usize,
     /// Seed of the scene draws (scene parameters, layouts and noise seeds).
@@ -319,7 +319,7 @@ fn log_uniform(rng: &mut StdRng, lo: f64, hi: f64) -> f64 {
 
 /// The scenes of a run: regimes in turn (smooth, intermediate, rough, grazing), the layout
 /// alternating sparse/dense every full turn, parameters drawn log-uniformly.
-pub fn draw_scenes(n: usize, seed: u64, noise: f64) -> Vec<Scene> {
+pub(crate) fn draw_scenes(n: usize, seed: u64, noise: f64) -> Vec<Scene> {
     let mut rng = StdRng::seed_from_u64(seed);
     (0..n)
         .map(|id| {
@@ -390,13 +390,13 @@ const INDEX_STREAM: u64 = 0x006e_5f6b_6170_7061;
 /// The layout of every twelfth scene (id ≡ 5 mod 12, an intermediate one) of a run with a
 /// Fresnel factor: in-plane scans with θi, |θr| ≤ 40°, so no sample reaches θ_loc = 60°
 /// and the fit must say that n is not determined.
-pub const NARROW_LAYOUT: &str = "inplane theta_i=10,25,40 step=1 max=40";
+pub(crate) const NARROW_LAYOUT: &str = "inplane theta_i=10,25,40 step=1 max=40";
 
 /// [`draw_scenes`] with `fresnel` and `shadowing` on every scene's lobe: the same σ, T,
 /// scale, layouts and noise, and n drawn log-uniformly from 1.3 to 2.5 (a paint's or a
 /// glass's; κ from 0.5 to 5 for a conductor) from a stream of its own; with a Fresnel
 /// factor, scenes id ≡ 5 (mod 12) on [`NARROW_LAYOUT`].
-pub fn draw_scenes_with(
+pub(crate) fn draw_scenes_with(
     n: usize,
     seed: u64,
     noise: f64,
@@ -429,11 +429,11 @@ pub fn draw_scenes_with(
 /// below 1e-9 of its peak (1387 of 2160 samples of a smooth scene), so those samples would
 /// add nothing to χ² yet count in n − p, the fit's s² would come out near 0.36 and its
 /// standard errors 0.6 times too small (±2 s.e. would cover 0.84 of smooth truths).
-pub const SIGMA_L_FLOOR: f64 = 1e-100;
+pub(crate) const SIGMA_L_FLOOR: f64 = 1e-100;
 
 /// The fit's data for a scene, with weights 1/σ_L² (σ_L floored at [`SIGMA_L_FLOOR`] of its
 /// largest value).
-pub fn scene_input(scene: &Scene) -> Result<FitInput> {
+pub(crate) fn scene_input(scene: &Scene) -> Result<FitInput> {
     let model = model::by_name("kbs", &scene.model_options())?;
     let params = scene.params();
     let angles = scene.layout_value()?.angles();
@@ -466,7 +466,7 @@ pub fn scene_input(scene: &Scene) -> Result<FitInput> {
 
 /// The truth of the parameters and ratio quantities a KBS fit reports, by report name (the
 /// amplitude depends on the verdict: see [`score`]).
-pub fn truths(scene: &Scene) -> BTreeMap<&'static str, f64> {
+pub(crate) fn truths(scene: &Scene) -> BTreeMap<&'static str, f64> {
     let ratio = scene.corr_len / scene.sigma;
     let mut t = BTreeMap::from([
         ("sigma", scene.sigma),
@@ -498,7 +498,7 @@ fn check(name: &str, truth: f64, value: f64, stderr: Option<f64>) -> Check {
 }
 
 /// Score a finished fit against its scene: the determined quantities, per the verdict.
-pub fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
+pub(crate) fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
     let t = truths(scene);
     let s_l = scene.sigma / scene.wavelength;
     let ratio = scene.corr_len / scene.sigma;
@@ -545,7 +545,7 @@ pub fn score(scene: &Scene, fit: &FitResult) -> Vec<Check> {
 /// Fit one scene (its solver limited by `config.fit_timeout`), stopped by `stop` too: a
 /// fit that a signal or the caller's flag cut short (`stop` requested as
 /// [`Termination::Interrupted`]) is no result of the scene's and gives None.
-pub fn run_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> Option<SceneResult> {
+pub(crate) fn run_scene(scene: &Scene, config: &RecoverConfig, stop: &Stop) -> Option<SceneResult> {
     let stop = stop.part(config.fit_timeout);
     let result = fit_scene(scene, config, &stop);
     (stop.requested() != Some(Termination::Interrupted)).then_some(result)
@@ -623,7 +623,7 @@ fn coverage_of<'a>(checks: impl Iterator<Item = &'a Check>) -> (Option<f64>, usi
 }
 
 /// Summarise scene results of a run of `config`.
-pub fn summarize(
+pub(crate) fn summarize(
     results: Vec<SceneResult>,
     config: &RecoverConfig,
     total_seconds: f64,
@@ -750,7 +750,7 @@ fn quantity_summaries(rs: &[&SceneResult]) -> Vec<QuantitySummary> {
 /// end at their next step, and the run is [`Error::Stopped`] (saying how many scenes were
 /// fitted): a recovery cut short has no summary, and its interrupted scenes are no errors.
 /// `stop`'s deadline, if any, limits each scene's fit like `config.fit_timeout`.
-pub fn run(
+pub(crate) fn run(
     config: &RecoverConfig,
     stop: &Stop,
     on_done: &(dyn Fn(&SceneResult) + Sync),

@@ -11,14 +11,14 @@ use crate::fit::driver::Verdict;
 use serde::Serialize;
 
 /// Standard errors past which a converged scene's miss counts as confidently wrong.
-pub const WRONG_SE: f64 = 10.0;
+pub(crate) const WRONG_SE: f64 = 10.0;
 
 /// Relative error past which a converged scene's miss counts as confidently wrong.
-pub const WRONG_REL: f64 = 0.2;
+pub(crate) const WRONG_REL: f64 = 0.2;
 
 /// One scored quantity whose truth lies outside ±k standard errors.
 #[derive(Debug, Clone, Serialize)]
-pub struct Miss {
+pub(crate) struct Miss {
     /// Report name of the quantity (see [`super::Check::name`]).
     pub name: String,
     /// (value − truth)/stderr.
@@ -29,7 +29,7 @@ pub struct Miss {
 
 /// A scene with at least one [`Miss`], and how to reproduce it.
 #[derive(Debug, Clone, Serialize)]
-pub struct Outlier {
+pub(crate) struct Outlier {
     /// The scene's id (pass it to `recover --only`).
     pub id: usize,
     /// The scene's regime.
@@ -53,7 +53,7 @@ pub struct Outlier {
 }
 
 /// The scenes of `results` with a truth outside ±[`super::COVERAGE_K`] s.e., in scene order.
-pub fn outliers(results: &[SceneResult], config: &RecoverConfig) -> Vec<Outlier> {
+pub(crate) fn outliers(results: &[SceneResult], config: &RecoverConfig) -> Vec<Outlier> {
     results
         .iter()
         .filter_map(|r| {
@@ -118,7 +118,7 @@ pub fn outliers(results: &[SceneResult], config: &RecoverConfig) -> Vec<Outlier>
 
 /// The outliers as text: one line per scene (its misses in standard errors and percent,
 /// the confidently wrong ones marked), then its three commands.
-pub fn table(outliers: &[Outlier]) -> String {
+pub(crate) fn table(outliers: &[Outlier]) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
     for o in outliers {

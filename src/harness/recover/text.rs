@@ -32,7 +32,7 @@ fn fmt_num(v: Option<f64>) -> String {
 impl RecoverReport {
     /// With a Fresnel factor: in how many scenes the fit says the data determines n, and
     /// how many of those without (those on [`NARROW_LAYOUT`] among them).
-    pub fn index_line(&self) -> Option<String> {
+    pub(crate) fn index_line(&self) -> Option<String> {
         let with: Vec<&SceneResult> = self
             .results
             .iter()
@@ -57,7 +57,7 @@ impl RecoverReport {
     }
 
     /// The report as a text table.
-    pub fn table(&self) -> String {
+    pub(crate) fn table(&self) -> String {
         use std::fmt::Write as _;
         let mut s = String::new();
         let _ = writeln!(

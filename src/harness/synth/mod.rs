@@ -41,11 +41,10 @@
 //!
 //! # Example
 //! ```
-//! use goniofit::geometry::Quantity;
-//! use goniofit::model::{by_name, parse_params, ModelOptions};
-//! use goniofit::harness::synth::{generate, Layout, Noise, NoiseKind};
+//! use goniofit::synth::{generate, Layout, Noise, NoiseKind};
+//! use goniofit::{model, parse_params, ModelOptions, Quantity};
 //!
-//! let model = by_name("kbs", &ModelOptions::default())?;
+//! let model = model("kbs", &ModelOptions::default())?;
 //! let params = parse_params(model.as_ref(), "sigma=0.3,T=2,scale=1")?;
 //! let layout = Layout::parse("hemisphere 5x18x36")?;
 //! let noise = Noise { kind: NoiseKind::Relative, level: 0.01, seed: 1 };

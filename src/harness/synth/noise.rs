@@ -56,7 +56,7 @@ impl Noise {
 
 /// Noisy values and their standard deviations (one per exact value).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Noisy {
+pub(crate) struct Noisy {
     /// The noisy values, in the unit of the exact ones.
     pub value: Vec<f64>,
     /// The standard deviation σ_L of each value's noise (0 everywhere without noise).
@@ -65,7 +65,7 @@ pub struct Noisy {
 
 /// Add seeded noise to `exact` (see the module documentation). `level` must be finite and
 /// ≥ 0; with `level = 0` the values are `exact` bit for bit and every σ_L is 0.
-pub fn add_noise(exact: &[f64], noise: &Noise) -> Result<Noisy> {
+pub(crate) fn add_noise(exact: &[f64], noise: &Noise) -> Result<Noisy> {
     if !(noise.level.is_finite() && noise.level >= 0.0) {
         return Err(Error::Usage(format!(
             "noise level {} must be finite and non-negative",

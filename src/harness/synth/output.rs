@@ -58,11 +58,11 @@ pub fn generate(
 
 /// The model's values on a prepared batch, checked: right parameter count, every value
 /// finite ([`crate::model::domain::evaluate_checked`]).
-pub fn evaluate(model: &dyn Model, params: &[f64], geo: &Geometry) -> Result<Vec<f64>> {
+pub(crate) fn evaluate(model: &dyn Model, params: &[f64], geo: &Geometry) -> Result<Vec<f64>> {
     crate::model::domain::evaluate_checked(model, params, geo)
 }
 
-/// Which optional columns [`SynthData::write_csv`] writes.
+/// Which optional columns `SynthData::write_csv` writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct CsvOptions {
     /// Add a `sigma_L` column (the noise standard deviation of each value).
@@ -253,7 +253,7 @@ impl Truth {
 }
 
 /// Lower-case name of a KBS evaluation mode, as in the truth file and `--mode`.
-pub fn eval_mode_name(mode: EvalMode) -> &'static str {
+pub(crate) fn eval_mode_name(mode: EvalMode) -> &'static str {
     match mode {
         EvalMode::Auto => "auto",
         EvalMode::Series => "series",
@@ -263,7 +263,7 @@ pub fn eval_mode_name(mode: EvalMode) -> &'static str {
 }
 
 /// Inverse of [`eval_mode_name`] (case-insensitive).
-pub fn parse_eval_mode(text: &str) -> Result<EvalMode> {
+pub(crate) fn parse_eval_mode(text: &str) -> Result<EvalMode> {
     match text.to_ascii_lowercase().as_str() {
         "auto" => Ok(EvalMode::Auto),
         "series" => Ok(EvalMode::Series),

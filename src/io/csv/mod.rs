@@ -45,8 +45,10 @@ mod plain;
 mod records;
 
 pub(crate) use plain::parse_plain;
-pub use records::{split_records, split_records_limited, Record, MAX_FIELDS};
+#[cfg(test)]
+pub(crate) use records::{split_records, split_records_limited};
 pub(crate) use records::{Fault, Limit, Records};
+pub(crate) use records::{Record, MAX_FIELDS};
 
 use super::{check_angles, parse_finite, Dataset, ReadOptions};
 use crate::error::{Error, Result};
@@ -78,7 +80,7 @@ const ROLES: [(Role, &str, &[&str]); 8] = [
 ];
 
 /// The role names `--columns` accepts, for help texts and messages.
-pub const ROLE_NAMES: [&str; 8] = [
+pub(crate) const ROLE_NAMES: [&str; 8] = [
     "theta_i",
     "theta_r",
     "phi_r",

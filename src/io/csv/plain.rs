@@ -63,7 +63,7 @@ fn parse_plain_by(
 }
 
 /// Bytes of text in one piece of a table parsed on its own (the last line completed).
-pub const PIECE_BYTES: usize = 1 << 20;
+pub(super) const PIECE_BYTES: usize = 1 << 20;
 
 /// What reading a plain table's records needs.
 struct Reading<'a> {
@@ -197,7 +197,7 @@ fn trim(s: &str) -> &str {
 /// The longest line the plain reader holds (a row of [`MAX_FIELDS`] numbers of up to 100
 /// characters): a longer one is left to the general reader, which never holds a record
 /// beyond its field cap.
-pub const MAX_LINE_BYTES: usize = 1 << 20;
+pub(super) const MAX_LINE_BYTES: usize = 1 << 20;
 
 /// Text [`parse_plain`] does not read (the general reader does).
 struct NotPlain;

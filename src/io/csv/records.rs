@@ -21,31 +21,34 @@
 use std::io::BufRead;
 
 /// One CSV record: the 1-based line it starts on, and its fields.
-pub type Record = (usize, Vec<String>);
+pub(crate) type Record = (usize, Vec<String>);
 
 /// The most fields a header may have ([`split_records`]); a data row may have at most as
 /// many as its header. Rows are cut off at that many fields while they are read, so a
 /// hostile line of millions of fields is refused without holding them (reading stays
 /// O(file size) in memory).
-pub const MAX_FIELDS: usize = 10_000;
+pub(crate) const MAX_FIELDS: usize = 10_000;
 
 /// Split CSV text into records, each with the 1-based line it starts on, by the rules of
 /// the module docs. Errors: (line, message) for an unterminated quote, text after a
 /// closing quote, or a record of more than [`MAX_FIELDS`] fields.
-pub fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, String)> {
+#[cfg(test)]
+pub(crate) fn split_records(text: &str) -> std::result::Result<Vec<Record>, (usize, String)> {
     split(text, Limit::Each(MAX_FIELDS))
 }
 
 /// [`split_records`] for a table: at most `max_fields` fields in the header (the first
 /// record) and at most the header's count in every later record; a longer record is an
 /// error as soon as its field `max + 1` starts, so it is never held field by field.
-pub fn split_records_limited(
+#[cfg(test)]
+pub(crate) fn split_records_limited(
     text: &str,
     max_fields: usize,
 ) -> std::result::Result<Vec<Record>, (usize, String)> {
     split(text, Limit::Table(max_fields))
 }
 
+#[cfg(test)]
 fn split(text: &str, limit: Limit) -> std::result::Result<Vec<Record>, (usize, String)> {
     Records::new(text.as_bytes(), limit)
         .map(|r| {
@@ -60,7 +63,8 @@ fn split(text: &str, limit: Limit) -> std::result::Result<Vec<Record>, (usize, S
 /// How many fields a record may have.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Limit {
-    /// At most this many in every record.
+    /// At most this many in every record (the tests' whole-text splitter).
+    #[cfg_attr(not(test), allow(dead_code))]
     Each(usize),
     /// At most this many in the header (the first record), the header's count after it.
     Table(usize),

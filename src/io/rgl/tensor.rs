@@ -15,21 +15,19 @@
 //! more than the file's own size.
 
 /// The dtype code of a 32-bit float field.
-pub const FLOAT32: u8 = 10;
-/// The dtype code of an unsigned byte field.
-pub const UINT8: u8 = 1;
+pub(crate) const FLOAT32: u8 = 10;
 
 /// The magic bytes a tensor file starts with.
-pub const MAGIC: &[u8; 12] = b"tensor_file\0";
+pub(crate) const MAGIC: &[u8; 12] = b"tensor_file\0";
 
 /// One field of a tensor file: where its header and its data are.
 #[derive(Debug, Clone)]
-pub struct Field {
+pub(crate) struct Field {
     /// The field's name as stored (UTF-8).
     pub name: String,
     /// Byte offset of the field's header entry.
     pub header_at: usize,
-    /// Its element type code (see the module doc; [`FLOAT32`], [`UINT8`], …).
+    /// Its element type code (see the module doc; [`FLOAT32`], …).
     pub dtype: u8,
     /// Byte offset of the data.
     pub offset: usize,
@@ -39,7 +37,7 @@ pub struct Field {
 
 /// A parsed tensor file over its bytes.
 #[derive(Debug)]
-pub struct TensorFile<'a> {
+pub(crate) struct TensorFile<'a> {
     bytes: &'a [u8],
     /// The fields in the order the header lists them.
     pub fields: Vec<Field>,
@@ -57,7 +55,7 @@ fn dtype_size(dtype: u8) -> usize {
 }
 
 /// A dtype code as a name, for messages.
-pub fn dtype_name(dtype: u8) -> String {
+pub(crate) fn dtype_name(dtype: u8) -> String {
     let names = [
         "invalid", "uint8", "int8", "uint16", "int16", "uint32", "int32", "uint64", "int64",
         "float16", "float32", "float64",
@@ -101,14 +99,14 @@ impl<'a> Cursor<'a> {
 }
 
 /// Whether `bytes` start like a tensor file (the magic).
-pub fn is_tensor_file(bytes: &[u8]) -> bool {
+pub(crate) fn is_tensor_file(bytes: &[u8]) -> bool {
     bytes.starts_with(MAGIC)
 }
 
 impl<'a> TensorFile<'a> {
     /// Parse the header and check that every field's data lies within the file. The error
     /// text (without the path) names the byte offset, the field and what was expected.
-    pub fn parse(bytes: &'a [u8]) -> Result<TensorFile<'a>, String> {
+    pub(crate) fn parse(bytes: &'a [u8]) -> Result<TensorFile<'a>, String> {
         let mut c = Cursor { bytes, at: 0 };
         let magic = c.take(12, "magic")?;
         if magic != MAGIC {
@@ -140,7 +138,7 @@ impl<'a> TensorFile<'a> {
     }
 
     /// The field called `name`, or an error saying which fields there are.
-    pub fn field(&self, name: &str) -> Result<&Field, String> {
+    pub(crate) fn field(&self, name: &str) -> Result<&Field, String> {
         self.fields.iter().find(|f| f.name == name).ok_or_else(|| {
             let names: Vec<&str> = self.fields.iter().map(|f| f.name.as_str()).collect();
             format!(
@@ -151,13 +149,13 @@ impl<'a> TensorFile<'a> {
     }
 
     /// The raw bytes of a field's data (bounds checked at parse time).
-    pub fn data(&self, f: &Field) -> &'a [u8] {
+    pub(crate) fn data(&self, f: &Field) -> &'a [u8] {
         let n: usize = f.shape.iter().product::<usize>() * dtype_size(f.dtype);
         &self.bytes[f.offset..f.offset + n]
     }
 
     /// A float32 field's values.
-    pub fn f32_values(&self, f: &Field) -> Vec<f32> {
+    pub(crate) fn f32_values(&self, f: &Field) -> Vec<f32> {
         self.data(f)
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes(b.try_into().unwrap()))

@@ -25,7 +25,7 @@ struct Slice {
 
 /// A 2-D density on an `nx × ny` grid (x contiguous), per value of a parameter.
 #[derive(Debug, Clone)]
-pub struct Warp {
+pub(crate) struct Warp {
     nx: usize,
     ny: usize,
     params: Vec<f32>,
@@ -60,7 +60,7 @@ impl Blend<'_> {
 /// The index `i` in `[0, size − 2]` with `pred(i)` true and `pred(i + 1)` false, by
 /// bisection over a monotone predicate (clamped at both ends, as the loader's
 /// `find_interval`). `size` ≥ 2.
-pub fn find_interval(size: usize, pred: impl Fn(usize) -> bool) -> usize {
+pub(crate) fn find_interval(size: usize, pred: impl Fn(usize) -> bool) -> usize {
     let mut first = 1usize;
     let mut len = size as isize - 2;
     while len > 0 {
@@ -90,7 +90,7 @@ impl Warp {
 
     /// A plain bilinear interpolant per parameter value: `data` holds `params.len()`
     /// slices of `nx × ny` values. `nx, ny ≥ 2`, `params` ascending and non-empty.
-    pub fn plain(nx: usize, ny: usize, params: Vec<f32>, data: &[f32]) -> Warp {
+    pub(crate) fn plain(nx: usize, ny: usize, params: Vec<f32>, data: &[f32]) -> Warp {
         let norm = 1.0 / ((nx - 1) as f32 * (ny - 1) as f32);
         let slices = data
             .chunks_exact(nx * ny)
@@ -107,7 +107,12 @@ impl Warp {
     /// cells, with its marginal (rows) and conditional (columns) CDFs, summed in f64 and
     /// stored in f32 as the loader does. A slice whose integral is not positive and finite
     /// is refused (the message says which).
-    pub fn sampling(nx: usize, ny: usize, params: Vec<f32>, data: &[f32]) -> Result<Warp, String> {
+    pub(crate) fn sampling(
+        nx: usize,
+        ny: usize,
+        params: Vec<f32>,
+        data: &[f32],
+    ) -> Result<Warp, String> {
         let mut slices = Vec::new();
         for (k, d) in data.chunks_exact(nx * ny).enumerate() {
             let mut conditional = vec![0.0f32; nx * ny];
@@ -177,7 +182,7 @@ impl Warp {
 
     /// The bilinear interpolant at `pos` ∈ [0, 1]² and parameter `p` (for a sampling warp
     /// the normalised density), as the loader's `eval`.
-    pub fn eval(&self, pos: [f32; 2], p: f32) -> f32 {
+    pub(crate) fn eval(&self, pos: [f32; 2], p: f32) -> f32 {
         let b = self.blend(p);
         let ([cx, cy], w1) = self.cell(pos);
         let i = cx + cy * self.nx;
@@ -192,7 +197,7 @@ impl Warp {
     /// Map a point of the unit square through the warp at parameter `p` (a sampling warp):
     /// the marginal CDF picks the row, the conditional CDF the column, each inverted
     /// exactly for the bilinear density.
-    pub fn sample(&self, u: [f32; 2], p: f32) -> [f32; 2] {
+    pub(crate) fn sample(&self, u: [f32; 2], p: f32) -> [f32; 2] {
         let lo = 1.0 - ONE_MINUS_EPSILON;
         let mut s = [
             u[0].max(lo).min(ONE_MINUS_EPSILON),
@@ -223,7 +228,7 @@ impl Warp {
 
     /// The inverse of [`Warp::sample`] at parameter `p`: the point of the unit square that
     /// maps to `pos`.
-    pub fn invert(&self, pos: [f32; 2], p: f32) -> [f32; 2] {
+    pub(crate) fn invert(&self, pos: [f32; 2], p: f32) -> [f32; 2] {
         let b = self.blend(p);
         let nx = self.nx;
         let ([cx, cy], mut s) = self.cell(pos);

@@ -8,7 +8,7 @@ use super::super::Mode;
 use super::terms::LnQ;
 
 /// Highest order of the asymptotic expansion tabulated.
-pub const ASYM_ORDERS: usize = 18;
+pub(crate) const ASYM_ORDERS: usize = 18;
 const ASYM_DEG: usize = 2 * ASYM_ORDERS + 4; // ≥ 2n + 1, padded to a multiple of 4
 const ASYM_K: usize = 2 * ASYM_ORDERS + 1;
 

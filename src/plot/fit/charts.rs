@@ -16,7 +16,7 @@ use plotters::prelude::*;
 /// colour each, named in the legend. More: colour by θi on a continuous scale (a colour bar
 /// in the legend) and, when there are several wavelengths, the wavelength by line style
 /// and marker (named in the legend; the four styles repeat beyond four wavelengths).
-pub struct GroupStyles {
+pub(crate) struct GroupStyles {
     /// Per group (in the order of the groups given), the colour of its curve and points: a
     /// palette colour, or its θi's colour on [`GroupStyles::key`].
     pub colors: Vec<RGBColor>,
@@ -29,7 +29,7 @@ pub struct GroupStyles {
 }
 
 /// The styles of `gs` (see [`GroupStyles`]).
-pub fn group_styles(gs: &[Group]) -> GroupStyles {
+pub(crate) fn group_styles(gs: &[Group]) -> GroupStyles {
     if gs.len() <= crate::plot::PALETTE {
         return GroupStyles {
             colors: (0..gs.len()).map(series_color).collect(),
@@ -100,7 +100,7 @@ impl GroupStyles {
 /// data's top, unless a few points far above the curves would crush the rest (Cornell
 /// paints at grazing angles, 50× the lobe): then 1.15 × the larger of the curves' top and
 /// the data's 95th percentile, and the points above are drawn as arrows at the top.
-pub fn linear_top(curve_max: f64, data: &[f64]) -> f64 {
+pub(crate) fn linear_top(curve_max: f64, data: &[f64]) -> f64 {
     let mut d: Vec<f64> = data.iter().copied().filter(|v| v.is_finite()).collect();
     d.sort_by(f64::total_cmp);
     let Some(&max) = d.last() else {
@@ -121,7 +121,7 @@ pub fn linear_top(curve_max: f64, data: &[f64]) -> f64 {
 
 /// Measured vs fitted over signed θr for each θi (in-plane samples). `log_y` for the
 /// logarithmic version; the linear one chooses its top with [`linear_top`].
-pub fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
+pub(crate) fn fit_chart(input: &FitPlotInput, log_y: bool) -> Result<XyPlot> {
     let gs = checked_groups(input)?;
     let multi = gs.iter().any(|g| g.wavelength != gs[0].wavelength);
     let mut plot = fit_chart_frame(input, log_y);
@@ -321,7 +321,7 @@ fn dense_plane_curve(
 }
 
 /// Standardized residuals over θr (`over_phi` false) or φr (true), coloured by θi.
-pub fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
+pub(crate) fn residual_chart(input: &FitPlotInput, over_phi: bool) -> Result<XyPlot> {
     let gs = checked_groups(input)?;
     let geo = input.geo;
     let multi = gs.iter().any(|g| g.wavelength != gs[0].wavelength);

@@ -10,7 +10,7 @@ use crate::plot::fmt_num;
 use std::f64::consts::PI;
 
 /// What the fit pictures need.
-pub struct FitPlotInput<'a> {
+pub(crate) struct FitPlotInput<'a> {
     /// Model name and fitted parameters.
     pub title: String,
     /// The fit's status under the title: T/σ, the verdict, converged or why not; empty for
@@ -41,7 +41,7 @@ pub struct FitPlotInput<'a> {
 
 /// The channels of a joint fit: every channel is drawn with its own parameters.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Channels<'a> {
+pub(crate) struct Channels<'a> {
     /// Per sample, its channel (an index into `params` and `names`); empty: one channel,
     /// whose parameters are [`FitPlotInput::params`].
     pub of_sample: &'a [usize],
@@ -74,7 +74,7 @@ const PLANE_TOL: f64 = PI / 180.0;
 
 /// Samples sharing an incidence angle, wavelength and channel.
 #[derive(Debug, Clone)]
-pub struct Group {
+pub(crate) struct Group {
     /// The shared incidence angle, radians (of the group's first sample; the others lie
     /// within 1e-4° of it).
     pub theta_i: f64,
@@ -90,7 +90,7 @@ pub struct Group {
 
 /// Group samples by θi (to 1e-4°), wavelength (to 1e-9 relative) and channel (`channel`
 /// per sample; empty: all 0), sorted by θi, λ, channel.
-pub fn groups(geo: &Geometry, channel: &[usize]) -> Vec<Group> {
+pub(crate) fn groups(geo: &Geometry, channel: &[usize]) -> Vec<Group> {
     let mut out: Vec<Group> = Vec::new();
     for k in 0..geo.len() {
         let (ti, wl) = (geo.theta_i[k], geo.wavelength[k]);
@@ -120,7 +120,7 @@ pub fn groups(geo: &Geometry, channel: &[usize]) -> Vec<Group> {
 }
 
 /// Signed view angle in degrees: θr on the forward side (|φr| ≤ 90°), −θr otherwise.
-pub fn signed_theta_r_deg(theta_r: f64, phi_r: f64) -> f64 {
+pub(crate) fn signed_theta_r_deg(theta_r: f64, phi_r: f64) -> f64 {
     if phi_r.abs() > 0.5 * PI {
         -theta_r.to_degrees()
     } else {
@@ -136,7 +136,7 @@ pub(super) fn plane_distance(phi_r: f64) -> f64 {
 
 /// The samples of `g` in the plane of incidence, or, when there are none, those nearest
 /// to it; and whether they are truly in the plane.
-pub fn plane_samples(geo: &Geometry, g: &Group) -> (Vec<usize>, bool) {
+pub(crate) fn plane_samples(geo: &Geometry, g: &Group) -> (Vec<usize>, bool) {
     let dmin = g
         .idx
         .iter()

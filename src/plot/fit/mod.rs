@@ -15,15 +15,15 @@ pub(crate) mod input;
 mod of_fit;
 mod polar;
 
-pub use charts::{fit_chart, group_styles, linear_top, residual_chart, GroupStyles};
+pub(crate) use charts::{fit_chart, residual_chart};
 use input::{busiest, check, eval_group, plane_curve_samples, wavelength_text};
 pub(crate) use input::{checked_groups, group_label, quantity_desc};
-pub use input::{groups, plane_samples, signed_theta_r_deg, Channels, FitPlotInput, Group};
-pub use of_fit::{
-    key_svg_of_outcome, plot_fit, png_of_outcome, svg_of_fit, svg_of_outcome, with_plot_input,
-    FitToDraw,
-};
-pub use polar::{polar_plot, PolarPlot, POLAR_RIM};
+pub(crate) use input::{plane_samples, signed_theta_r_deg, Channels, FitPlotInput, Group};
+pub(crate) use of_fit::plot_fit;
+#[cfg(test)]
+pub(crate) use of_fit::with_plot_input;
+pub use of_fit::{key_svg_of_outcome, png_of_outcome, svg_of_outcome};
+pub(crate) use polar::{polar_plot, PolarPlot};
 
 use super::contour::{linspace, Grid};
 use super::figures::{ContourPlot, LEVELS};
@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 
 /// The fitted model over (θr, φr) at the θi with the most samples, with that θi's sample
 /// positions marked.
-pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
+pub(crate) fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
     let gs = checked_groups(input)?;
     let geo = input.geo;
     let g = busiest(&gs);
@@ -90,7 +90,7 @@ pub fn contour_plot(input: &FitPlotInput) -> Result<ContourPlot> {
 /// The names of the pictures [`fit_pictures`] draws (without an extension; files get
 /// `.png` and `.svg`), in order: the six drawn for every fit, then up to
 /// [`MAX_HEMISPHERES`] hemisphere pictures (`hemisphere_1` … in the order of θi).
-pub const PICTURES: [&str; 6 + MAX_HEMISPHERES] = [
+pub(crate) const PICTURES: [&str; 6 + MAX_HEMISPHERES] = [
     "fit_linear",
     "fit_log",
     "residuals_theta",
@@ -104,7 +104,7 @@ pub const PICTURES: [&str; 6 + MAX_HEMISPHERES] = [
 ];
 
 /// One picture of a fit, of any kind.
-pub enum FitPicture {
+pub(crate) enum FitPicture {
     /// An x–y chart: measured vs fitted over signed θr (linear or log y), or the
     /// standardized residuals over θr or φr.
     Xy(XyPlot),
@@ -148,7 +148,7 @@ impl Picture for FitPicture {
 /// θi, sample positions marked), and hemisphere_k (measured, fitted and residuals on the
 /// projected hemisphere, for up to [`MAX_HEMISPHERES`] incidence angles: those with the
 /// most samples).
-pub fn fit_pictures(input: &FitPlotInput) -> Result<Vec<(String, FitPicture)>> {
+pub(crate) fn fit_pictures(input: &FitPlotInput) -> Result<Vec<(String, FitPicture)>> {
     check(input)?;
     let mut out = vec![
         (PICTURES[0], FitPicture::Xy(fit_chart(input, false)?)),
@@ -168,7 +168,7 @@ pub fn fit_pictures(input: &FitPlotInput) -> Result<Vec<(String, FitPicture)>> {
 }
 
 /// The pictures of [`fit_pictures`] rendered in memory as SVG documents: (name, SVG).
-pub fn svg_pictures(input: &FitPlotInput) -> Result<Vec<(String, String)>> {
+pub(crate) fn svg_pictures(input: &FitPlotInput) -> Result<Vec<(String, String)>> {
     fit_pictures(input)?
         .into_iter()
         .map(|(name, p)| Ok((name, super::svg_string(&p)?)))
@@ -177,7 +177,7 @@ pub fn svg_pictures(input: &FitPlotInput) -> Result<Vec<(String, String)>> {
 
 /// The pictures of [`fit_pictures`] rendered in memory as PNG files' bytes: (name, PNG),
 /// rendered side by side on the thread pool.
-pub fn png_pictures(input: &FitPlotInput) -> Result<Vec<(String, Vec<u8>)>> {
+pub(crate) fn png_pictures(input: &FitPlotInput) -> Result<Vec<(String, Vec<u8>)>> {
     fit_pictures(input)?
         .into_par_iter()
         .map(|(name, p)| Ok((name, super::png_bytes(&p)?)))
@@ -187,7 +187,7 @@ pub fn png_pictures(input: &FitPlotInput) -> Result<Vec<(String, Vec<u8>)>> {
 /// Write the pictures of [`fit_pictures`] into `dir` (created if needed), each as PNG and
 /// SVG, rendered side by side on the thread pool. Returns the written paths, in the order
 /// of [`PICTURES`].
-pub fn write_fit_plots(dir: &Path, input: &FitPlotInput) -> Result<Vec<PathBuf>> {
+pub(crate) fn write_fit_plots(dir: &Path, input: &FitPlotInput) -> Result<Vec<PathBuf>> {
     let pictures = fit_pictures(input)?;
     std::fs::create_dir_all(dir).map_err(|source| Error::Io {
         path: dir.to_path_buf(),

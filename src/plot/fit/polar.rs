@@ -17,7 +17,7 @@ use plotters::prelude::*;
 /// The fitted lobe in the plane of incidence at one θi, in polar form: radius L / L_max at
 /// the signed view angle from the normal.
 #[derive(Debug, Clone)]
-pub struct PolarPlot {
+pub(crate) struct PolarPlot {
     /// The first title line: the fit's title, θi and (for a joint fit) the channel.
     pub title: String,
     /// A second title line; empty for none.
@@ -35,7 +35,7 @@ pub struct PolarPlot {
 
 /// The radius (in L / L_max) of the polar plot's rim: values beyond it are drawn there as
 /// arrows pointing outwards, counted in the legend.
-pub const POLAR_RIM: f64 = 1.15;
+pub(crate) const POLAR_RIM: f64 = 1.15;
 /// The radius of the spoke labels (0°, ±30°, …): just outside the L_max ring, inside the
 /// arrows at the rim (the 60° label touched them).
 const POLAR_LABEL_R: f64 = 1.035;
@@ -48,13 +48,14 @@ const POLAR_MIRROR: RGBColor = RGBColor(120, 120, 120);
 
 impl PolarPlot {
     /// The measured points beyond [`POLAR_RIM`]: (how many, the largest L / L_max).
-    pub fn clipped(&self) -> (usize, f64) {
+    #[cfg(test)]
+    pub(crate) fn clipped(&self) -> (usize, f64) {
         let b = Beyond::above(self.measured.iter().map(|p| p.1), POLAR_RIM);
         (b.count, b.worst)
     }
 
     /// The legend's lines (drawn in rows above the plot).
-    pub fn legend_entries(&self) -> Vec<Entry> {
+    pub(crate) fn legend_entries(&self) -> Vec<Entry> {
         let line = |color, dash| Glyph::Line {
             color,
             width: 2,
@@ -96,7 +97,7 @@ impl PolarPlot {
 }
 
 /// The polar plot of the fit at the θi with the most samples.
-pub fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
+pub(crate) fn polar_plot(input: &FitPlotInput) -> Result<PolarPlot> {
     let gs = checked_groups(input)?;
     let geo = input.geo;
     let g = busiest(&gs);

@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 /// The 27 problems in NIST's order of difficulty (lower, average, higher).
-pub const NAMES: [&str; 27] = [
+pub(super) const NAMES: [&str; 27] = [
     "Misra1a", "Chwirut2", "Chwirut1", "Lanczos3", "Gauss1", "Gauss2", "DanWood", "Misra1b",
     "Kirby2", "Hahn1", "Nelson", "MGH17", "Lanczos1", "Lanczos2", "Gauss3", "Misra1c", "Misra1d",
     "Roszman1", "ENSO", "MGH09", "Thurber", "BoxBOD", "Rat42", "MGH10", "Eckerle4", "Rat43",
@@ -20,7 +20,7 @@ type ModelFn = fn(&[f64], f64, f64, &mut [f64]) -> f64;
 
 /// One NIST problem: data, starts, certified values.
 #[derive(Clone)]
-pub struct Nist {
+pub(super) struct Nist {
     pub name: String,
     pub starts: [Vec<f64>; 2],
     pub certified: Vec<f64>,
@@ -40,7 +40,7 @@ fn num(tok: &str) -> f64 {
 
 impl Nist {
     /// Parse `dir/<name>.dat`.
-    pub fn load(dir: &Path, name: &str) -> Nist {
+    pub(super) fn load(dir: &Path, name: &str) -> Nist {
         let text = std::fs::read_to_string(dir.join(format!("{name}.dat")))
             .unwrap_or_else(|e| panic!("{name}.dat: {e}"));
         let lines: Vec<&str> = text.lines().map(|l| l.trim_end()).collect();
@@ -91,20 +91,20 @@ impl Nist {
     }
 
     /// All 27 problems from `dir`.
-    pub fn load_all(dir: &Path) -> Vec<Nist> {
+    pub(super) fn load_all(dir: &Path) -> Vec<Nist> {
         NAMES.iter().map(|n| Nist::load(dir, n)).collect()
     }
 
-    pub fn n_params(&self) -> usize {
+    pub(super) fn n_params(&self) -> usize {
         self.certified.len()
     }
 
-    pub fn n_obs(&self) -> usize {
+    pub(super) fn n_obs(&self) -> usize {
         self.y.len()
     }
 
     /// Model value at observation `i`, writing `∂f/∂b` into `grad`.
-    pub fn eval(&self, b: &[f64], i: usize, grad: &mut [f64]) -> f64 {
+    pub(super) fn eval(&self, b: &[f64], i: usize, grad: &mut [f64]) -> f64 {
         (self.model)(b, self.x1[i], self.x2[i], grad)
     }
 }
@@ -134,7 +134,7 @@ impl LeastSquaresProblem for Nist {
 }
 
 /// The log relative error `−log10(|est − cert| / |cert|)`, capped at 11 (and 11 when equal).
-pub fn lre(est: f64, cert: f64) -> f64 {
+pub(super) fn lre(est: f64, cert: f64) -> f64 {
     if !est.is_finite() {
         return 0.0;
     }

@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 
 /// Upper tail of the standard normal, P(Z ≥ z) = erfc(z/√2)/2 (to ~1e-15 relative; libm).
-pub fn normal_sf(z: f64) -> f64 {
+pub(crate) fn normal_sf(z: f64) -> f64 {
     0.5 * libm::erfc(z / std::f64::consts::SQRT_2)
 }
 
@@ -13,7 +13,7 @@ pub fn normal_sf(z: f64) -> f64 {
 /// P(X ≥ x) = Q(ν/2, x/2), the regularized upper incomplete gamma function, by its power
 /// series below a + 1 and Lentz's continued fraction above (Numerical Recipes §6.2;
 /// ~1e-14 relative). 1 for x ≤ 0; NaN for ν ≤ 0 or a NaN argument.
-pub fn chi2_sf(x: f64, nu: f64) -> f64 {
+pub(crate) fn chi2_sf(x: f64, nu: f64) -> f64 {
     if nu.is_nan() || nu <= 0.0 || x.is_nan() {
         return f64::NAN;
     }
@@ -65,7 +65,7 @@ pub fn chi2_sf(x: f64, nu: f64) -> f64 {
 
 /// Two-sided sign test: the probability, for `n` fair coin flips, of a count of heads at
 /// least as far from n/2 as `k` (exact binomial sum, min(1, 2·P(X ≥ max(k, n − k)))).
-pub fn sign_test(k: usize, n: usize) -> f64 {
+pub(crate) fn sign_test(k: usize, n: usize) -> f64 {
     if n == 0 {
         return 1.0;
     }
@@ -84,7 +84,7 @@ pub fn sign_test(k: usize, n: usize) -> f64 {
 /// sequence with n₊ and n₋ signs (n = n₊ + n₋), E R = 1 + 2n₊n₋/n and
 /// Var R = 2n₊n₋(2n₊n₋ − n)/(n²(n − 1)).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Runs {
+pub(crate) struct Runs {
     /// Observed number of runs (maximal blocks of one sign), summed over the sequences.
     pub runs: usize,
     /// Signs counted (sequences of one sample contribute their one run, and no variance).
@@ -97,7 +97,7 @@ pub struct Runs {
 
 impl Runs {
     /// The runs of `sequences` (true: positive).
-    pub fn of<'a>(sequences: impl IntoIterator<Item = &'a [bool]>) -> Runs {
+    pub(crate) fn of<'a>(sequences: impl IntoIterator<Item = &'a [bool]>) -> Runs {
         let mut out = Runs {
             runs: 0,
             signs: 0,
@@ -123,7 +123,7 @@ impl Runs {
 
     /// (R − E R)/√Var R: negative when the signs cluster (fewer runs than chance); NaN
     /// without variance.
-    pub fn z(&self) -> f64 {
+    pub(crate) fn z(&self) -> f64 {
         if self.variance > 0.0 {
             (self.runs as f64 - self.expected) / self.variance.sqrt()
         } else {
@@ -155,7 +155,7 @@ fn ranks(v: &[f64]) -> Vec<f64> {
 /// Spearman's rank correlation of `x` and `y` (equal lengths): Pearson's correlation of
 /// their ranks (ties at mean ranks). Under independence √(n − 1)·ρ is asymptotically
 /// N(0, 1). NaN for fewer than two pairs or a constant variable.
-pub fn spearman(x: &[f64], y: &[f64]) -> f64 {
+pub(crate) fn spearman(x: &[f64], y: &[f64]) -> f64 {
     let (rx, ry) = rayon::join(|| ranks(x), || ranks(y));
     pearson(&rx, &ry)
 }
@@ -181,7 +181,7 @@ fn pearson(x: &[f64], y: &[f64]) -> f64 {
 }
 
 /// Least-squares slope of `y` on `x` (NaN for fewer than two points or constant `x`).
-pub fn slope(x: &[f64], y: &[f64]) -> f64 {
+pub(crate) fn slope(x: &[f64], y: &[f64]) -> f64 {
     let n = x.len() as f64;
     if x.len() < 2 {
         return f64::NAN;
@@ -198,7 +198,7 @@ pub fn slope(x: &[f64], y: &[f64]) -> f64 {
 
 /// Weighted R² = 1 − Σ wᵢ(fᵢ − tᵢ)² / Σ wᵢ(tᵢ − t̄)² of values `f` against data `t` in one
 /// space (t̄ the weighted mean; `sqrt_w` gives √wᵢ); NaN when the data has no spread.
-pub fn r_squared(t: &[f64], f: &[f64], sqrt_w: impl Fn(usize) -> f64) -> f64 {
+pub(crate) fn r_squared(t: &[f64], f: &[f64], sqrt_w: impl Fn(usize) -> f64) -> f64 {
     let wsum: f64 = (0..t.len()).map(|i| sqrt_w(i).powi(2)).sum();
     let tbar = (0..t.len()).map(|i| t[i] * sqrt_w(i).powi(2)).sum::<f64>() / wsum;
     let ss_tot: f64 = (0..t.len())

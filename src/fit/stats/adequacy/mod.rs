@@ -25,7 +25,7 @@
 //! of tests run (Bonferroni: the chance that a correct model with correct weights is
 //! flagged at all is at most [`ALPHA`]).
 
-pub mod distributions;
+pub(crate) mod distributions;
 mod wording;
 
 use crate::fit::problem::channels::Channels;
@@ -37,13 +37,13 @@ use rustc_hash::FxHashMap;
 use std::borrow::Cow;
 
 /// Family-wise significance level of the adequacy tests (Bonferroni-corrected).
-pub const ALPHA: f64 = 1e-3;
+pub(crate) const ALPHA: f64 = 1e-3;
 /// Incidence or reflection angle beyond which a sample is grazing, degrees.
-pub const GRAZING_DEG: f64 = 70.0;
+pub(crate) const GRAZING_DEG: f64 = 70.0;
 /// Angular distance from the mirror direction beyond which a sample is far from it, degrees.
-pub const FAR_DEG: f64 = 45.0;
+pub(crate) const FAR_DEG: f64 = 45.0;
 /// Fewest samples (signs, triples, region members) a test is run on.
-pub const MIN_SAMPLES: usize = 10;
+pub(crate) const MIN_SAMPLES: usize = 10;
 
 /// The verdict on a fit's adequacy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -202,7 +202,7 @@ impl Adequacy {
 }
 
 /// What the tests need of a finished fit.
-pub struct FitResiduals<'a> {
+pub(crate) struct FitResiduals<'a> {
     /// rᵢ = model − data in the fitted space (value, relative deviation or logarithm).
     pub residuals: &'a [f64],
     /// √wᵢ.
@@ -236,7 +236,7 @@ struct Outcome {
 }
 
 /// The adequacy of a fit from its residuals (see the module doc).
-pub fn assess(fr: &FitResiduals) -> Adequacy {
+pub(crate) fn assess(fr: &FitResiduals) -> Adequacy {
     let n = fr.residuals.len();
     if n == 0 || fr.fitted.len() != n || fr.geo.len() != n {
         return Adequacy::not_computed(fr.r2);
@@ -305,10 +305,10 @@ struct Weighted {
 }
 
 /// A residual within this fraction of the model's value is rounding error.
-pub const ROUNDING: f64 = 1e-12;
+pub(crate) const ROUNDING: f64 = 1e-12;
 
 /// Weighted residuals below this fraction of their rms are exactly fitted: not tested.
-pub const EXACT_FIT: f64 = 1e-6;
+pub(crate) const EXACT_FIT: f64 = 1e-6;
 
 impl Weighted {
     fn of(fr: &FitResiduals) -> Weighted {

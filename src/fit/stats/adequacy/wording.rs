@@ -13,7 +13,7 @@ pub(super) fn is_misfit(code: &str) -> bool {
 }
 
 /// A p-value for the text: two significant digits, or "< 1e-300" at 0.
-pub fn p_text(p: f64) -> String {
+pub(super) fn p_text(p: f64) -> String {
     if p <= 0.0 {
         "p < 1e-300".into()
     } else if p >= 0.01 {
