@@ -97,6 +97,7 @@ mod invalid;
 mod lmpar;
 mod norm;
 mod polish;
+#[cfg(feature = "progress")]
 mod progress;
 mod qr;
 mod run;

@@ -5,6 +5,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+#[cfg(feature = "progress")]
 use argmin::core::observers::ObserverMode;
 use argmin::core::{
     Error as ArgminError, Executor, Jacobian, Operator, OptimizationResult, State,
@@ -13,6 +14,7 @@ use argmin::core::{
 use nalgebra::{DMatrix, DVector};
 
 use super::norm::enorm;
+#[cfg(feature = "progress")]
 use super::progress::ProgressObserver;
 use super::stop::Stop;
 use super::{LevenbergMarquardt, LmState, Termination};
@@ -99,7 +101,8 @@ pub struct LmConfig {
     /// Wall-clock limit of this run (ignored with [`Self::stop`], which carries its own
     /// deadline). Default none.
     pub timeout: Option<Duration>,
-    /// Show a progress line on the terminal (stderr, via indicatif). Default false.
+    /// Show a progress line on the terminal (stderr, via indicatif; with the crate's
+    /// `progress` feature, ignored without it). Default false.
     pub progress: bool,
     /// Stop when this flag becomes true (in addition to the host's signals). Default none.
     pub interrupt: Option<Arc<AtomicBool>>,
@@ -176,12 +179,14 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     config: &LmConfig,
 ) -> LmReport {
     let start = Instant::now();
-    let mut exec = Executor::new(ArgminAdapter(problem), solver_for(config))
-        .configure(|s| s.param(x0.clone()).max_iters(config.max_iters))
-        .ctrlc(false);
-    if config.progress {
-        exec = exec.add_observer(ProgressObserver::new(), ObserverMode::Always);
-    }
+    let exec = Executor::new(ArgminAdapter(problem), solver_for(config))
+        .configure(|s| s.param(x0.clone()).max_iters(config.max_iters));
+    #[cfg(feature = "progress")]
+    let exec = if config.progress {
+        exec.add_observer(ProgressObserver::new(), ObserverMode::Always)
+    } else {
+        exec
+    };
     match exec.run() {
         Ok(result) => report_of(problem, &x0, result, start),
         // Unreachable with this adapter (it never fails) and the Executor's handler off.

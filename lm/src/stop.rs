@@ -6,8 +6,8 @@
 //! any [`Stop`] is alive it bumps a global generation counter that every running solver and
 //! every evaluation that checks the token sees, and returns true; when none is alive
 //! (nothing is being computed) it returns false and the host ends as it sees fit (the
-//! command line removes its unfinished outputs and exits with 130). argmin's Executor
-//! handler is turned off by [`super::minimize`]. A host that owns its signals otherwise
+//! command line removes its unfinished outputs and exits with 130). argmin is built
+//! without its Ctrl-C handler. A host that owns its signals otherwise
 //! (the Python interpreter) sets a [`Stop`]'s flag instead.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};

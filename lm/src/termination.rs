@@ -1,7 +1,8 @@
 //! Termination reasons of a run.
 
 /// Which stopping rule ended a run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum Termination {
     /// Relative reduction of the cost (actual and predicted) at most `ftol`, or at machine
     /// precision.

@@ -346,7 +346,6 @@ fn runs_as_an_argmin_solver_through_the_executor() {
     let solver = LevenbergMarquardt::new().with_ftol(1e-12).unwrap();
     let res = Executor::new(ArgminAdapter(&p), solver)
         .configure(|s| s.param(v(&[-1.2, 1.0])).max_iters(200))
-        .ctrlc(false)
         .run()
         .unwrap();
     let x = res.state.get_best_param().unwrap();
