@@ -37,7 +37,7 @@ use std::sync::{Arc, OnceLock};
 /// The font family every picture uses.
 pub(crate) const FONT: &str = "sans-serif";
 
-static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+pub(crate) static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Register the bundled font under [`FONT`] (once per process).
 pub(crate) fn ensure_font() -> Result<()> {

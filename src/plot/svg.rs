@@ -251,9 +251,27 @@ impl<T: BackendTextStyle> BackendTextStyle for Scaled<'_, T> {
 
 /// How much larger than plotters' SVG backend writes it text must be set to have the size
 /// plotters measures and lays it out with: the backend writes `font-size` = size / 1.24,
-/// while plotters' ab_glyph fonts set a size-`s` text with ascent − descent = `s`, which
-/// for DejaVu Sans ((1901 + 483) / 2048 em) is an em of `s` · 2048 / 2384.
-pub(crate) const TEXT_SCALE: f64 = 1.24 * 2048.0 / 2384.0;
+/// while plotters' ab_glyph fonts set a size-`s` text with ascent − descent = `s`, an em of
+/// `s` · em / (ascent − descent) in the bundled font's own units.
+fn text_scale() -> f64 {
+    use ab_glyph::Font;
+    static SCALE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    *SCALE.get_or_init(|| {
+        // The font is bundled and parses; were it not to, text keeps the backend's size.
+        let em_per_height = ab_glyph::FontRef::try_from_slice(super::FONT_BYTES)
+            .ok()
+            .and_then(|font| {
+                let em = f64::from(font.units_per_em()?);
+                Some(em / f64::from(font.ascent_unscaled() - font.descent_unscaled()))
+            })
+            .unwrap_or(1.0);
+        SVG_BACKEND_SHRINK * em_per_height
+    })
+}
+
+/// The factor by which plotters' SVG backend divides a text's size when it writes
+/// `font-size` (plotters-svg 0.3).
+const SVG_BACKEND_SHRINK: f64 = 1.24;
 
 impl DrawingBackend for SvgCanvas<'_> {
     type ErrorType = <SVGBackend<'static> as DrawingBackend>::ErrorType;
@@ -378,7 +396,7 @@ impl DrawingBackend for SvgCanvas<'_> {
     ) -> DrawResult<Self::ErrorType> {
         let scaled = Scaled {
             inner: style,
-            scale: TEXT_SCALE,
+            scale: text_scale(),
         };
         self.inner.draw_text(text, &scaled, pos)
     }
@@ -495,8 +513,8 @@ mod tests {
 
     #[test]
     fn text_is_written_at_the_size_plotters_measures() {
-        // plotters' SVG backend writes size / 1.24; scaled, that is the em of a size-20
-        // DejaVu Sans text as ab_glyph sets it, 20 · 2048 / 2384.
+        // A size-20 text as ab_glyph sets it spans ascent − descent = 20: DejaVu Sans'
+        // (1901 + 483) / 2048 em, so an em of 20 · 2048 / 2384.
         crate::plot::ensure_font().unwrap();
         let svg = document(|c| {
             c.draw_text("x", &crate::plot::font(20.0).color(&BLACK), (5, 5))
