@@ -38,8 +38,9 @@
 //! quantities, measurement layouts); `io` (readers and writers); `model` (one file per
 //! model, [`series`] the KBS sum); `fit` (the fit pipeline and its statistics); [`design`];
 //! [`plot`] and [`report`]; `harness` (synthetic data, recovery and work–precision runs);
-//! the command line (`cli`, `commands`). [`settings`] validates the numeric options of
-//! every front end.
+//! the command line (`cli`, `commands`). [`settings`] holds what a fit is asked to do
+//! ([`Settings`]: the CLI, the Python package and the report's replay share it) and
+//! validates the numeric options of every front end.
 
 #![warn(missing_docs)]
 #![warn(unreachable_pub)]
@@ -86,6 +87,7 @@ pub use fit::driver::{fit_model, FitConfig, FitInput, FitResult, ParamResult, Ve
 pub use fit::problem::loss::{Loss, LossKind};
 pub use fit::problem::{Channels, ResidualKind};
 pub use report::json::FitReport;
+pub use settings::Settings;
 
 /// Samples from arrays: a dataset built from per-sample columns (the Python binding's input).
 pub mod arrays {

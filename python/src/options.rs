@@ -1,22 +1,21 @@
-//! Keyword options of the fit functions → the library's settings ([`DatasetFit`]), and the
-//! per-sample arrays → an [`arrays::Columns`] view. Every option maps to one CLI flag of
-//! `goniofit fit`; [`FitOptions::cli_args`] writes the equivalent command line into the
-//! report (`command`, `replay.args`).
+//! Keyword options of the fit functions → the library's [`Settings`] (every keyword but
+//! the per-sample arrays, checked by [`Settings::check`]), and the per-sample arrays → an
+//! [`arrays::Columns`] view.
 
 use crate::convert::to_py_err;
-use goniofit::lm::LmConfig;
-use goniofit::report::SettingSource;
+use goniofit::fit::problem::loss::LossKind;
+use goniofit::fit::problem::ResidualKind;
+use goniofit::geometry::Quantity;
+use goniofit::io::arrays;
+use goniofit::model::fresnel::Fresnel;
+use goniofit::model::shadowing::Shadowing;
+use goniofit::model::{self, EvalMode, Model};
 use goniofit::settings::{self, Front};
-use goniofit::{
-    arrays, DatasetFit, EvalMode, FitConfig, Fresnel, Loss, LossKind, Model, ModelOptions,
-    Quantity, ResidualKind, Shadowing,
-};
+use goniofit::Settings;
 use numpy::PyReadonlyArray1;
 use pyo3::exceptions::{PyRuntimeWarning, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 
 /// Options are named as Python spells them.
 pub const PY: Front = Front::Python;
@@ -52,83 +51,19 @@ pub const OPTION_NAMES: [&str; 27] = [
     "shadowing",
 ];
 
-/// The fit options of one call.
-#[derive(Debug, Clone)]
+/// A fit call's keywords: the fit's settings, and the per-sample arrays beside them.
+#[derive(Debug, Clone, Default)]
 pub struct FitOptions {
-    pub model: String,
-    /// A scalar wavelength (overrides per-sample ones).
-    pub wavelength: Option<f64>,
-    /// Per-sample wavelengths.
-    pub wavelengths: Option<Vec<f64>>,
-    /// The unit of λ (and so of σ, T), e.g. `nm`; None when not stated.
-    pub wavelength_unit: Option<String>,
-    pub quantity: Quantity,
-    quantity_name: String,
-    pub residual: ResidualKind,
-    residual_name: String,
+    /// What the fit is asked to do (the keywords that are not per-sample arrays).
+    pub settings: Settings,
+    /// Per-sample weights.
     pub weights: Option<Vec<f64>>,
+    /// Per-sample standard uncertainties of L.
     pub sigma_l: Option<Vec<f64>>,
-    pub init: Vec<(String, f64)>,
-    pub fix: Vec<(String, f64)>,
+    /// Per-sample wavelengths (a scalar `wavelength` is a setting).
+    pub wavelengths: Option<Vec<f64>>,
+    /// Per-sample channel labels: a joint fit of the channels.
     pub channel: Option<Vec<String>>,
-    pub radians: bool,
-    pub signed_theta_r: bool,
-    pub model_opts: ModelOptions,
-    mode_name: String,
-    pub floor: Option<f64>,
-    pub max_iter: u64,
-    pub timeout: Option<f64>,
-    pub reduce: bool,
-    /// Threads for parallel group fits (None: all cores).
-    pub threads: Option<usize>,
-    /// Groups started at their neighbour's optimum (the CLI's `--warm-start`).
-    pub warm_start: bool,
-    /// Standard errors from `sigma_L` as stated (scipy's `absolute_sigma=True`).
-    pub absolute_sigma: bool,
-    /// Whether `quantity` was given (the report says where the quantity came from).
-    quantity_given: bool,
-    /// Profile-likelihood intervals: None = for a single fit, not for fits of many groups
-    /// (as the CLI: one dataset gets them, `--by-group` does not).
-    pub intervals: Option<bool>,
-    /// The robust loss on the weighted residuals (scipy's names; `linear`: least squares).
-    pub loss: LossKind,
-    /// The loss scale C, in the unit of the weighted residual (unused with `linear`).
-    pub f_scale: f64,
-}
-
-impl Default for FitOptions {
-    fn default() -> Self {
-        FitOptions {
-            model: "kbs".into(),
-            wavelength: None,
-            wavelengths: None,
-            wavelength_unit: None,
-            quantity: Quantity::Radiance,
-            quantity_name: "radiance".into(),
-            residual: ResidualKind::Absolute,
-            residual_name: "absolute".into(),
-            weights: None,
-            sigma_l: None,
-            init: Vec::new(),
-            fix: Vec::new(),
-            channel: None,
-            radians: false,
-            signed_theta_r: false,
-            model_opts: ModelOptions::default(),
-            mode_name: "auto".into(),
-            floor: None,
-            max_iter: 500,
-            timeout: None,
-            reduce: true,
-            threads: None,
-            warm_start: false,
-            absolute_sigma: false,
-            quantity_given: false,
-            intervals: None,
-            loss: LossKind::Linear,
-            f_scale: 1.0,
-        }
-    }
 }
 
 /// `radiance` or `brdf`.
@@ -223,7 +158,7 @@ pub fn per_sample(v: &Bound<'_, PyAny>, n: usize, name: &str) -> PyResult<Vec<f6
 /// `init` / `fix`: a dict name → value, or the CLI's `name=value,...` text.
 fn assignments(v: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<(String, f64)>> {
     if let Ok(s) = v.cast::<PyString>() {
-        return goniofit::parse_assignments(&s.to_cow()?).map_err(to_py_err);
+        return model::parse_assignments(&s.to_cow()?).map_err(to_py_err);
     }
     let d = v.cast::<PyDict>().map_err(|_| {
         PyTypeError::new_err(format!(
@@ -266,16 +201,17 @@ pub fn param_vector(m: &dyn Model, params: &Bound<'_, PyAny>) -> PyResult<Vec<f6
             PyTypeError::new_err("params: expected a dict name → value or a sequence of numbers")
         })?
     };
-    goniofit::check_param_count(m, &p).map_err(to_py_err)?;
+    model::check_param_count(m, &p).map_err(to_py_err)?;
     for (s, &v) in specs.iter().zip(&p) {
-        goniofit::check_param_value(s, v).map_err(to_py_err)?;
+        model::check_param_value(s, v).map_err(to_py_err)?;
     }
     Ok(p)
 }
 
 impl FitOptions {
     /// Options from a call's keyword arguments; `None` values keep the defaults. An unknown
-    /// keyword is a `TypeError`, a bad value a `ValueError` naming the option.
+    /// keyword is a `TypeError`, a bad value a `ValueError` naming the option
+    /// ([`Settings::check`]); more threads than cores a `RuntimeWarning`.
     pub fn from_kwargs(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let mut o = FitOptions::default();
         let Some(kwargs) = kwargs else {
@@ -291,209 +227,60 @@ impl FitOptions {
             }
             o.set(&key, &v)?;
         }
+        checked(o.settings.check(PY))?;
+        if let (_, Some(note)) = checked(settings::threads(PY, o.settings.threads))? {
+            let py = kwargs.py();
+            let category = py.get_type::<PyRuntimeWarning>();
+            PyErr::warn(py, &category, &std::ffi::CString::new(note)?, 1)?;
+        }
         Ok(o)
     }
 
     fn set(&mut self, key: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
+        let s = &mut self.settings;
         match key {
-            "model" => self.model = v.extract()?,
-            "wavelength_unit" => self.wavelength_unit = Some(v.extract()?),
+            "model" => s.model = v.extract()?,
+            "wavelength_unit" => s.wavelength_unit = Some(v.extract()?),
             "wavelength" if v.is_instance_of::<PyString>() => {
                 // As the CLI's --wavelength: a number with an optional unit (633nm, 0.633um).
                 let text: String = v.extract()?;
-                let (l, unit) = goniofit::parse_length(&text).map_err(to_py_err)?;
-                self.wavelength = Some(l);
+                let (l, unit) = goniofit::io::parse_length(&text).map_err(to_py_err)?;
+                s.wavelength = Some(l);
                 if let Some(u) = unit {
-                    self.wavelength_unit = Some(u.to_string());
+                    s.wavelength_unit = Some(u.to_string());
                 }
             }
             "wavelength" => match v.extract::<f64>() {
-                Ok(l) => self.wavelength = Some(checked(settings::length(PY, "wavelength", l))?),
+                Ok(l) => s.wavelength = Some(l),
                 Err(_) => self.wavelengths = Some(vector(v, "wavelength")?),
             },
-            "quantity" => {
-                self.quantity_name = v.extract()?;
-                self.quantity = quantity(&self.quantity_name)?;
-                self.quantity_given = true;
-            }
-            "residual" => {
-                self.residual_name = v.extract()?;
-                self.residual = residual(&self.residual_name)?;
-            }
+            "quantity" => s.quantity = Some(quantity(&v.extract::<String>()?)?),
+            "residual" => s.residual = residual(&v.extract::<String>()?)?,
             "weights" => self.weights = Some(vector(v, "weights")?),
             "sigma_L" => self.sigma_l = Some(vector(v, "sigma_L")?),
-            "init" => self.init = assignments(v, "init")?,
-            "fix" => self.fix = assignments(v, "fix")?,
+            "init" => s.init = assignments(v, "init")?,
+            "fix" => s.fix = assignments(v, "fix")?,
             "channel" => self.channel = Some(v.extract()?),
-            "radians" => self.radians = v.extract()?,
-            "signed_theta_r" => self.signed_theta_r = v.extract()?,
-            "mode" => {
-                self.mode_name = v.extract()?;
-                self.model_opts.mode = eval_mode(&self.mode_name)?;
-            }
-            "tol" => self.model_opts.tol = checked(settings::tol(PY, v.extract()?))?,
-            "patch" => {
-                let opts = self.model_opts;
-                let patch = Some(v.extract::<(f64, f64)>()?);
-                self.model_opts = ModelOptions {
-                    fresnel: opts.fresnel,
-                    shadowing: opts.shadowing,
-                    ..checked(settings::model_options(PY, opts.mode, opts.tol, patch))?
-                };
-            }
-            "floor" => self.floor = checked(settings::floor(PY, Some(v.extract()?)))?,
-            "max_iter" => self.max_iter = v.extract()?,
-            "timeout" => {
-                let t: f64 = v.extract()?;
-                checked(settings::timeout(PY, Some(t)))?;
-                self.timeout = Some(t);
-            }
-            "reduce" => self.reduce = v.extract()?,
-            "threads" => {
-                let (n, note) = checked(settings::threads(PY, Some(v.extract()?)))?;
-                if let Some(note) = note {
-                    let category = v.py().get_type::<PyRuntimeWarning>();
-                    PyErr::warn(v.py(), &category, &std::ffi::CString::new(note)?, 1)?;
-                }
-                self.threads = Some(n);
-            }
-            "warm_start" => self.warm_start = v.extract()?,
-            "absolute_sigma" => self.absolute_sigma = v.extract()?,
-            "intervals" => self.intervals = Some(v.extract()?),
-            "loss" => self.loss = loss(&v.extract::<String>()?)?,
-            "f_scale" => self.f_scale = checked(settings::f_scale(PY, v.extract()?))?,
-            "fresnel" => self.model_opts.fresnel = fresnel(&v.extract::<String>()?)?,
-            "shadowing" => self.model_opts.shadowing = shadowing(&v.extract::<String>()?)?,
+            "radians" => s.radians = v.extract()?,
+            "signed_theta_r" => s.signed_theta_r = v.extract()?,
+            "mode" => s.mode = eval_mode(&v.extract::<String>()?)?,
+            "tol" => s.tol = v.extract()?,
+            "patch" => s.patch = Some(v.extract()?),
+            "floor" => s.floor = Some(v.extract()?),
+            "max_iter" => s.max_iter = v.extract()?,
+            "timeout" => s.timeout = Some(v.extract()?),
+            "reduce" => s.reduce = v.extract()?,
+            "threads" => s.threads = Some(v.extract()?),
+            "warm_start" => s.warm_start = v.extract()?,
+            "absolute_sigma" => s.absolute_sigma = v.extract()?,
+            "intervals" => s.intervals = Some(v.extract()?),
+            "loss" => s.loss = loss(&v.extract::<String>()?)?,
+            "f_scale" => s.f_scale = v.extract()?,
+            "fresnel" => s.fresnel = fresnel(&v.extract::<String>()?)?,
+            "shadowing" => s.shadowing = shadowing(&v.extract::<String>()?)?,
             _ => return Err(unknown(key)),
         }
         Ok(())
-    }
-
-    /// The library's settings of a dataset's fit, with a fresh interrupt flag that the
-    /// binding sets on Ctrl-C (the interpreter keeps its signals). `single`: one
-    /// dataset (profile intervals unless `intervals=False`).
-    pub fn dataset_fit(&self, single: bool) -> DatasetFit {
-        let lm = LmConfig {
-            max_iters: self.max_iter,
-            // Checked when set (settings::timeout), so the conversion cannot fail.
-            timeout: settings::timeout(PY, self.timeout).ok().flatten(),
-            progress: false,
-            interrupt: Some(Arc::new(AtomicBool::new(false))),
-            ..FitConfig::default().lm
-        };
-        DatasetFit {
-            model: self.model.clone(),
-            quantity: self.quantity,
-            wavelength: self.wavelength,
-            config: FitConfig {
-                model: self.model.clone(),
-                model_opts: self.model_opts,
-                residual: self.residual,
-                loss: Loss {
-                    kind: self.loss,
-                    f_scale: self.f_scale,
-                },
-                floor: self.floor,
-                init: self.init.clone(),
-                fix: self.fix.clone(),
-                lm,
-                weights_are_uncertainties: self.sigma_l.is_some(),
-                reduce: self.reduce,
-            },
-            absolute_sigma: self.absolute_sigma,
-            intervals: self.intervals.unwrap_or(single),
-        }
-    }
-
-    /// What the report's setting says about where the fit's choices came from.
-    pub fn setting_source(&self) -> SettingSource {
-        let wavelength_source = match (self.wavelength, &self.wavelengths) {
-            (Some(_), _) => "wavelength keyword",
-            (None, Some(_)) => "wavelength array",
-            (None, None) => "none",
-        };
-        SettingSource {
-            quantity: self.quantity,
-            quantity_source: if self.quantity_given {
-                "quantity keyword"
-            } else {
-                "default"
-            }
-            .into(),
-            residual: self.residual,
-            floor: self.floor,
-            wavelength_source: wavelength_source.into(),
-            wavelength_unit: self.wavelength_unit.clone(),
-            loss: self.loss.name().into(),
-            f_scale: (self.loss != LossKind::Linear).then_some(self.f_scale),
-            absolute_sigma: self.absolute_sigma,
-            ..SettingSource::default()
-        }
-    }
-
-    /// The `goniofit fit` arguments equivalent to these options (without a file: the
-    /// samples came as arrays).
-    pub fn cli_args(&self) -> Vec<String> {
-        let mut a: Vec<String> = vec!["fit".into(), "--model".into(), self.model.clone()];
-        let mut flag = |name: &str, value: String| {
-            a.push(format!("--{name}"));
-            a.push(value);
-        };
-        flag("quantity", self.quantity_name.to_ascii_lowercase());
-        flag("residual", self.residual_name.to_ascii_lowercase());
-        flag("mode", self.mode_name.to_ascii_lowercase());
-        flag("tol", format!("{:e}", self.model_opts.tol));
-        flag("max-iter", self.max_iter.to_string());
-        if self.loss != LossKind::Linear {
-            flag("loss", self.loss.name().into());
-            flag("f-scale", self.f_scale.to_string());
-        }
-        if let Some(l) = self.wavelength {
-            flag("wavelength", l.to_string());
-        }
-        let join = |v: &[(String, f64)]| {
-            v.iter()
-                .map(|(k, x)| format!("{k}={x}"))
-                .collect::<Vec<_>>()
-                .join(",")
-        };
-        if !self.init.is_empty() {
-            flag("init", join(&self.init));
-        }
-        if !self.fix.is_empty() {
-            flag("fix", join(&self.fix));
-        }
-        if let Some((x, y)) = self.model_opts.patch {
-            flag("patch", format!("{x},{y}"));
-        }
-        if self.model_opts.fresnel != Fresnel::None {
-            flag("fresnel", self.model_opts.fresnel.name().into());
-        }
-        if self.model_opts.shadowing != Shadowing::None {
-            flag("shadowing", self.model_opts.shadowing.name().into());
-        }
-        if let Some(f) = self.floor {
-            flag("floor", f.to_string());
-        }
-        if let Some(t) = self.timeout {
-            flag("timeout", t.to_string());
-        }
-        if self.radians {
-            a.push("--radians".into());
-        }
-        if self.signed_theta_r {
-            a.push("--signed-theta-r".into());
-        }
-        if !self.reduce {
-            a.push("--no-reduce".into());
-        }
-        if self.absolute_sigma {
-            a.push("--absolute-sigma".into());
-        }
-        if self.intervals == Some(false) {
-            a.push("--no-intervals".into());
-        }
-        a
     }
 }
 
@@ -545,11 +332,11 @@ impl SampleArrays {
 
     /// The library's checked dataset of these samples (`arrays` in reports); a bad
     /// element is a `ValueError` naming its array and index.
-    pub fn dataset(&self, o: &FitOptions) -> PyResult<goniofit::Dataset> {
+    pub fn dataset(&self, o: &FitOptions) -> PyResult<goniofit::io::Dataset> {
         crate::convert::guard(|| self.checked(o))?.map_err(to_py_err)
     }
 
-    fn checked(&self, o: &FitOptions) -> goniofit::Result<goniofit::Dataset> {
+    fn checked(&self, o: &FitOptions) -> goniofit::Result<goniofit::io::Dataset> {
         let cols = arrays::Columns {
             theta_i: &self.theta_i,
             theta_r: &self.theta_r,
@@ -560,9 +347,10 @@ impl SampleArrays {
             wavelength: self.wavelength.as_deref(),
             channel: self.channel.as_deref(),
         };
-        let ds = arrays::dataset("arrays", &cols, o.radians, o.signed_theta_r)?;
+        let s = &o.settings;
+        let ds = arrays::dataset("arrays", &cols, s.radians, s.signed_theta_r)?;
         // As the CLI after reading: values and weights the fit cannot square are refused.
-        goniofit::check_magnitudes(&ds)?;
+        goniofit::fit::dataset::check_magnitudes(&ds)?;
         Ok(ds)
     }
 }

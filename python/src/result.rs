@@ -4,9 +4,14 @@
 
 use crate::convert::json_to_py;
 use crate::convert::to_py_err;
-use crate::options::FitOptions;
+use crate::options::{FitOptions, PY};
+use goniofit::fit::dataset::Outcome;
+use goniofit::fit::driver::FitConfig;
+use goniofit::plot;
+use goniofit::report::json::FitReport;
+use goniofit::report::setting::InputInfo;
 use goniofit::report::{self, RunInfo};
-use goniofit::{plot, FitConfig, FitReport, Outcome};
+use goniofit::Settings;
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -25,7 +30,7 @@ use std::sync::OnceLock;
 pub struct FitResult {
     outcome: Outcome,
     info: RunInfo,
-    args: Vec<String>,
+    settings: Settings,
     report: OnceLock<FitReport>,
     json: OnceLock<Value>,
     /// The settings the pictures need (the chosen model with its factors, residual kind,
@@ -35,33 +40,30 @@ pub struct FitResult {
 }
 
 impl FitResult {
-    /// The result of `outcome`, fitted with options `o` (written into the report as the
+    /// The result of `outcome`, fitted with options `o` (the report's `command` is the
     /// equivalent CLI command).
     pub fn new(outcome: Outcome, o: &FitOptions) -> Self {
-        let args = o.cli_args();
-        let setting = report::setting(&outcome.dataset, &outcome.input, &o.setting_source());
+        let settings = o.settings.clone();
         let info = RunInfo {
             input: outcome.label.clone(),
-            command: format!("goniofit {} ({})", args.join(" "), outcome.label),
+            command: format!("{} ({})", settings.command_line(), outcome.label),
             version: env!("CARGO_PKG_VERSION").to_string(),
-            setting,
+            setting: report::outcome::setting(
+                &outcome.dataset,
+                &outcome.input,
+                (&settings, PY),
+                InputInfo::default(),
+            ),
             intervals: outcome.intervals.clone(),
             interval_seconds: outcome.interval_seconds,
         };
-        let mut config = o.dataset_fit(true).config;
-        config.model = outcome.result.model.clone();
-        config.model_opts = config
-            .model_opts
-            .with_factors_of(&outcome.result.full_model())
-            .1;
-        let unit = match o.wavelength {
-            Some(_) => o.wavelength_unit.clone(),
-            None => outcome.dataset.wavelength_unit.clone(),
-        };
+        let uncertainties = o.sigma_l.is_some();
+        let config = settings.fit_config(&outcome.result.full_model(), uncertainties);
+        let unit = settings.wavelength_unit(&outcome.dataset);
         FitResult {
             outcome,
             info,
-            args,
+            settings,
             report: OnceLock::new(),
             json: OnceLock::new(),
             config,
@@ -72,7 +74,7 @@ impl FitResult {
     /// The CLI's report of this fit (built once).
     fn typed_report(&self) -> &FitReport {
         self.report
-            .get_or_init(|| report::fit_report(&self.outcome, &self.info, &self.args))
+            .get_or_init(|| report::outcome::report(&self.outcome, &self.info, &self.settings))
     }
 
     /// The report as a JSON value (built once).
@@ -91,7 +93,7 @@ impl FitResult {
     /// The report's pictures as (name, SVG document).
     fn svg_figures(&self) -> PyResult<Vec<(String, String)>> {
         let (line, undetermined) = self.status();
-        plot::svg_of_outcome(
+        plot::fit::svg_of_outcome(
             &self.config,
             &self.outcome,
             (&line, &undetermined),
@@ -203,7 +205,7 @@ impl FitResult {
 
     /// The CLI's text report of this fit.
     fn report(&self) -> String {
-        report::to_text(&self.outcome, &self.info)
+        report::outcome::to_text(&self.outcome, &self.info)
     }
 
     /// The CLI's JSON report of this fit (``goniofit fit --json``), key for key.
@@ -234,7 +236,7 @@ impl FitResult {
             "png" | "matplotlib" => {
                 let (line, undetermined) = self.status();
                 let pngs = py.detach(|| {
-                    plot::png_of_outcome(
+                    plot::fit::png_of_outcome(
                         &self.config,
                         &self.outcome,
                         (&line, &undetermined),
@@ -265,7 +267,7 @@ impl FitResult {
     /// tables, and the fit on a log scale.
     fn _repr_html_(&self) -> String {
         let (line, undetermined) = self.status();
-        let key = plot::key_svg_of_outcome(
+        let key = plot::fit::key_svg_of_outcome(
             &self.config,
             &self.outcome,
             (&line, &undetermined),
@@ -273,10 +275,10 @@ impl FitResult {
         )
         .ok()
         .flatten();
-        report::html_fragment(
+        report::html::fragment(
             &self.outcome.result,
             &self.info,
-            &report::comparison(&self.outcome),
+            &report::outcome::comparison(&self.outcome),
             key.as_deref(),
         )
     }
@@ -309,7 +311,7 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
 }
 
 /// The result of an outcome.
-fn r(o: &Outcome) -> &goniofit::FitResult {
+fn r(o: &Outcome) -> &goniofit::fit::driver::FitResult {
     &o.result
 }
 
@@ -340,7 +342,7 @@ fn fit_columns(py: Python<'_>, out: &Bound<'_, PyDict>, outcomes: &[Outcome]) ->
     // As the JSON report spells them (report::json).
     out.set_item(
         "termination",
-        text(&|o| report::termination_name(r(o).termination)),
+        text(&|o| report::json::termination_name(r(o).termination)),
     )?;
     let verdict = |o: &Outcome| match serde_json::to_value(r(o).verdict) {
         Ok(Value::String(s)) => s,

@@ -3,8 +3,12 @@
 //! interrupt flag.
 
 use crate::convert::{guard, panic_error, to_py_err, to_py_err_in};
-use crate::options::FitOptions;
-use goniofit::{check_finite, fit_dataset_near, in_chains, Dataset, Geometry, Model, Outcome};
+use crate::options::{checked, FitOptions, PY};
+use goniofit::fit::dataset::{batch, fit_dataset_near, Outcome};
+use goniofit::geometry::Geometry;
+use goniofit::io::Dataset;
+use goniofit::model::{domain, Model};
+use goniofit::settings;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -79,7 +83,7 @@ pub fn evaluate_interruptible(
 ) -> PyResult<(Vec<f64>, Option<Vec<f64>>)> {
     let (values, jac) = evaluate_blocks(py, model, p, geo, jacobian)?;
     let n = geo.len();
-    let check = |v: &[f64], what: &str| check_finite(model, p, geo, v, what);
+    let check = |v: &[f64], what: &str| domain::check_finite(model, p, geo, v, what);
     check(&values, "").map_err(to_py_err)?;
     if let Some(j) = &jac {
         for (column, spec) in j.chunks_exact(n.max(1)).zip(model.params()) {
@@ -180,18 +184,24 @@ pub fn fit_all(
     jobs: Vec<(String, Dataset)>,
     single: bool,
 ) -> PyResult<Vec<Outcome>> {
-    let spec = o.dataset_fit(single);
-    let interrupt = spec.config.lm.interrupt.clone();
+    // All cores (rayon's default) unless the call names a count, capped at the cores.
+    let threads = match o.settings.threads {
+        Some(_) => Some(checked(settings::threads(PY, o.settings.threads))?.0),
+        None => None,
+    };
+    let interrupt = Arc::new(AtomicBool::new(false));
     let stop = interrupt.clone();
-    let warm = o.warm_start && !single;
-    let results = interruptible(py, interrupt, o.threads, move || {
-        Ok(in_chains(jobs, warm, |(label, ds), previous| {
+    let warm = o.settings.warm_start && !single;
+    let results = interruptible(py, Some(interrupt.clone()), threads, move || {
+        Ok(batch::in_chains(jobs, warm, |(label, ds), previous| {
             // After Ctrl-C the jobs not yet started are skipped (the call raises
             // KeyboardInterrupt and drops every result).
-            if stop.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
+            if stop.load(Ordering::SeqCst) {
                 return Err((label, goniofit::Error::Usage("interrupted".into())));
             }
             let near = previous.and_then(|r: &Result<Outcome, _>| r.as_ref().ok());
+            let mut spec = o.settings.dataset_fit(&ds, single);
+            spec.config.lm.interrupt = Some(interrupt.clone());
             let r = fit_dataset_near(&spec, label.clone(), ds, near);
             r.map_err(|e| (label, e))
         }))

@@ -18,15 +18,22 @@ RUN_FIELDS = {"seconds", "init_seconds", "start_seconds", "interval_seconds", "i
 # for Python (the values themselves, floor, weights, residual, quantity, units, agree).
 PROVENANCE = {".setting.input", ".setting.wavelength.source", ".setting.quantity_source",
               ".setting.channel"}
+# The replay's settings of how a file is read, which arrays do not have, and those a file
+# can state instead (null in the CLI's settings then).
+READING = {"channel", "radians", "signed_theta_r", "columns", "subsample", "by_group"}
+STATED = {"quantity", "wavelength_unit"}
 
 
 def assert_same_report(cli, py, rtol=1e-12, path=""):
     """Every key of the CLI's JSON is in the Python report and vice versa; numbers agree
-    to ``rtol`` (relative), everything else exactly. ``replay.args`` differs by design."""
+    to ``rtol`` (relative), everything else exactly. The replay's settings agree but for
+    how a file is read and what the CLI left to the file to state."""
     if isinstance(cli, dict):
         assert sorted(cli) == sorted(py), f"{path}: keys {sorted(cli)} vs {sorted(py)}"
         for k in cli:
-            if path == "" and k in RUN_FIELDS or (path == ".replay" and k == "args"):
+            if path == "" and k in RUN_FIELDS:
+                continue
+            if path == ".replay.settings" and (k in READING or k in STATED and cli[k] is None):
                 continue
             if f"{path}.{k}" in PROVENANCE:
                 continue
@@ -65,6 +72,34 @@ def test_garnet_matches_cli_json(cli_json):
     assert lo < r.params["sigma"]["value"] < hi
     assert r.params["sigma"]["interval95"] == cli["params"]["sigma"]["interval95"]
     assert r.L_fit.shape == (1439,) and r.residuals.shape == (1439,)
+
+
+def test_cli_and_python_ask_for_equal_settings_and_report_alike(cli_json):
+    # Every setting both front ends have, away from its default, as flags and as keywords.
+    path = DATA / "synthetic" / "kbs_hemisphere.csv"
+    cli = cli_json("--model", "kbs", "--quantity", "radiance", "--wavelength", "1nm",
+                   "--residual", "relative", "--loss", "huber", "--f-scale", "0.5",
+                   "--floor", "1e-9", "--init", "sigma=0.3,T=2", "--fix", "scale=1",
+                   "--mode", "series", "--tol", "1e-9", "--patch", "50,60", "--max-iter", "300",
+                   "--timeout", "600", "--no-reduce", "--absolute-sigma", "--no-intervals",
+                   "--threads", "1", "--warm-start", path)
+    d = read_csv(path)
+    r = goniofit.fit(d["theta_i"], d["theta_r"], d["phi_r"], d["L"], sigma_L=d["sigma_L"],
+                     model="kbs", quantity="radiance", wavelength="1nm", residual="relative",
+                     loss="huber", f_scale=0.5, floor=1e-9, init={"sigma": 0.3, "T": 2},
+                     fix="scale=1", mode="series", tol=1e-9, patch=(50, 60), max_iter=300,
+                     timeout=600, reduce=False, absolute_sigma=True, intervals=False,
+                     threads=1, warm_start=True)
+    settings = r.to_dict()["replay"]["settings"]
+    assert settings == cli["replay"]["settings"]
+    assert settings["wavelength_unit"] == "nm" and settings["patch"] == [50.0, 60.0]
+    assert_same_report(cli, r.to_dict())
+    # The report's command asks for the same settings.
+    assert r.to_dict()["command"].startswith(
+        "goniofit fit --model kbs --quantity radiance --residual relative --mode series "
+        "--tol 1e-9 --max-iter 300 --loss huber --f-scale 0.5 --wavelength 1nm "
+        "--init sigma=0.3,T=2 --fix scale=1 --patch 50,60 --floor 0.000000001 --timeout 600 "
+        "--threads 1 --no-reduce --absolute-sigma --no-intervals --warm-start (arrays)")
 
 
 def test_adequacy_flags_the_garnet_fresnel_rise_as_the_cli_does(cli_json):

@@ -1,61 +1,27 @@
 //! `goniofit fit`: a measurement file in, a fit report out.
 
-use super::args::LossArg;
-use super::fit_args::{fit_config, wavelength_unit, FitArgs, CLI};
+use super::fit_args::{FitArgs, CLI};
 use crate::fit::dataset::{batch, fit_dataset_near, DatasetFit, Outcome};
-use crate::fit::driver::FitInput;
-use crate::fit::problem::loss::LossKind;
 use crate::io::{self, Dataset, ReadOptions};
 use crate::lm::Stop;
-use crate::report::outcome::SettingSource;
 use crate::report::{self, RunInfo};
-use crate::settings;
+use crate::settings::Settings;
 use crate::Error;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 
-/// The whole setting of one dataset's fit, for the report (`report::Setting`).
-pub(crate) fn setting_of(
-    args: &FitArgs,
-    ds: &Dataset,
-    input: &FitInput,
-    file: &report::setting::InputInfo,
-) -> report::Setting {
-    let (quantity, quantity_source) = args.quantity_for(ds);
-    let unit = wavelength_unit(args, ds);
-    let source = match (args.wavelength, &ds.wavelength) {
-        (Some(_), _) => "--wavelength",
-        (None, Some(_)) => ds.wavelength_origin.unwrap_or("wavelength column"),
-        (None, None) => "none",
-    };
-    let source = SettingSource {
-        file: file.clone(),
-        channel: args.channel.clone(),
-        quantity,
-        quantity_source: quantity_source.into(),
-        residual: args.residual.into(),
-        floor: args.floor,
-        wavelength_unit: unit,
-        wavelength_source: source.into(),
-        loss: LossKind::from(args.loss).name().into(),
-        f_scale: (args.loss != LossArg::Linear).then_some(args.f_scale),
-        absolute_sigma: args.absolute_sigma,
-    };
-    report::outcome::setting(ds, input, &source)
-}
-
-/// The units a dataset's fit is reported in (the `units` of [`setting_of`]), without the
+/// The units a dataset's fit is reported in (those of its report's setting), without the
 /// rest of the setting: λ's unit and the measured quantity.
-fn units_of(args: &FitArgs, ds: &Dataset) -> report::Units {
+fn units_of(s: &Settings, ds: &Dataset) -> report::Units {
     report::Units {
-        length: wavelength_unit(args, ds),
-        quantity: args.quantity_for(ds).0,
+        length: s.wavelength_unit(ds),
+        quantity: s.quantity_for(ds, CLI).0,
         radiance: None,
     }
 }
 
 /// The input file's absolute path, size and SHA-256.
-pub(crate) fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
+pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
     let io_error = |source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -78,48 +44,37 @@ fn command_line() -> String {
         .join(" ")
 }
 
-/// The library's settings of a dataset's fit from the arguments, for dataset `ds` (its
-/// quantity may come from the file). `single`: the only dataset of the command (progress
-/// shown on a terminal, profile intervals unless `--no-intervals`).
-fn dataset_fit(args: &FitArgs, ds: &Dataset, single: bool) -> anyhow::Result<DatasetFit> {
-    let mut config = fit_config(args, &args.model, false)?;
-    config.lm.progress = single && args.show_progress();
-    Ok(DatasetFit {
-        model: args.model.clone(),
-        quantity: args.quantity_for(ds).0,
-        wavelength: args.wavelength_value(),
-        config,
-        absolute_sigma: args.absolute_sigma,
-        intervals: single && !args.no_intervals,
-    })
+/// The fit of dataset `ds` with the command's settings. `single`: the only dataset of the
+/// command (progress shown on a terminal, profile intervals unless `--no-intervals`).
+fn dataset_fit(c: &Command, ds: &Dataset, single: bool) -> DatasetFit {
+    let mut spec = c.settings.dataset_fit(ds, single);
+    spec.config.lm.progress = single && c.args.show_progress();
+    spec
 }
 
-/// The fit input of a dataset with the quantity, wavelength, residual and floor of `args`.
-pub(crate) fn input_of(
-    args: &FitArgs,
-    ds: &Dataset,
-    needs_wavelength: bool,
-) -> anyhow::Result<FitInput> {
-    Ok(dataset_fit(args, ds, false)?.input(ds, needs_wavelength)?)
+/// A `fit` command: its arguments (the files and outputs) and the fit's settings from them.
+pub struct Command {
+    pub args: FitArgs,
+    pub settings: Settings,
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC among the usable fits.
 /// Every fit shares `stop` (the command's `--timeout` and signals); `near`: the fit of its
 /// neighbour in the input (`--warm-start`), whose optima each candidate is first started at.
 fn fit_one(
-    args: &FitArgs,
+    c: &Command,
     (label, ds): (String, Dataset),
     single: bool,
     stop: &Stop,
     near: Option<&Outcome>,
 ) -> anyhow::Result<Outcome> {
-    let mut spec = dataset_fit(args, &ds, single)?;
+    let mut spec = dataset_fit(c, &ds, single);
     spec.config.lm.stop = Some(stop.clone());
-    let context = format!("{label}: fitting model {}", args.model);
+    let context = format!("{label}: fitting model {}", c.settings.model);
     fit_dataset_near(&spec, label, ds, near).context(context)
 }
 
-pub(crate) fn run(args: FitArgs) -> anyhow::Result<u8> {
+pub fn run(args: FitArgs) -> anyhow::Result<u8> {
     // Refused before any file is read.
     if args.json && summary_on_stdout(&args) {
         return Err(Error::Usage(
@@ -127,26 +82,29 @@ pub(crate) fn run(args: FitArgs) -> anyhow::Result<u8> {
         )
         .into());
     }
+    let settings = args.settings()?;
+    settings.check(CLI)?;
     // From the start Ctrl-C, SIGTERM and SIGHUP stop the command instead of ending the
     // process, and `--timeout` counts from here: reading stops within a MiB (nothing
     // fitted, exit 3), a fit reports its best point (exit 3).
-    let config = fit_config(&args, &args.model, false)?;
-    let stop = Stop::new(config.lm.timeout, None);
-    let (threads, note) = settings::threads(CLI, args.threads)?;
+    let stop = Stop::new(settings.fit_config(&settings.model, false).lm.timeout, None);
+    let (threads, note) = crate::settings::threads(CLI, settings.threads)?;
     if let Some(note) = note {
         eprintln!("goniofit: {note}");
     }
-    let opts = args.read_options()?;
+    let opts = settings.read_options()?;
+    let c = Command { args, settings };
+    let (args, model) = (&c.args, &c.settings.model);
     let heartbeat = super::heartbeat::Heartbeat::start(!args.quiet);
     heartbeat.stage(format!("reading {}", io::shown(&args.file[0])));
     // Every input is read (and checked) before any fit starts.
     let t_read = std::time::Instant::now();
-    let (jobs, files) = read_jobs(&args, &opts, &stop)?;
+    let (jobs, files) = read_jobs(args, &opts, &stop)?;
     let read = t_read.elapsed().as_secs_f64();
     let single = jobs.len() == 1;
     heartbeat.stage(match single {
-        true => format!("fitting {} (model {})", jobs[0].0, args.model),
-        false => format!("fitting {} datasets (model {})", jobs.len(), args.model),
+        true => format!("fitting {} (model {model})", jobs[0].0),
+        false => format!("fitting {} datasets (model {model})", jobs.len()),
     });
     if !single && args.residuals.is_some() {
         return Err(Error::Usage(
@@ -160,10 +118,10 @@ pub(crate) fn run(args: FitArgs) -> anyhow::Result<u8> {
         .num_threads(threads)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    if !single && rows_only(&args) {
-        return rows_batch(&args, jobs, &stop, (&pool, &heartbeat), (read, t0));
+    if !single && rows_only(args) {
+        return rows_batch(&c, jobs, &stop, (&pool, &heartbeat), (read, t0));
     }
-    let (outcomes, skipped) = fit_jobs(&args, jobs, &stop, (&pool, &heartbeat), |o| o)?;
+    let (outcomes, skipped) = fit_jobs(&c, jobs, &stop, (&pool, &heartbeat), |o| o)?;
     let wall = t0.elapsed().as_secs_f64();
     heartbeat.stage("writing the reports and outputs");
     // The reports' parts of a big batch are built on the fit's threads.
@@ -171,15 +129,15 @@ pub(crate) fn run(args: FitArgs) -> anyhow::Result<u8> {
     let infos: Vec<RunInfo> = pool.install(|| {
         outcomes
             .par_iter()
-            .map(|o| run_info(&args, o, &files))
+            .map(|o| run_info(&c.settings, o, &files))
             .collect()
     });
     let threads = pool.current_num_threads();
-    pool.install(|| print_reports(&args, &outcomes, &infos, &skipped, wall, threads))?;
+    pool.install(|| print_reports(&c, &outcomes, &infos, &skipped, wall, threads))?;
     if single {
-        super::fit_outputs::write_single_outputs(&args, &outcomes[0], &infos[0])?;
+        super::fit_outputs::write_single_outputs(&c, &outcomes[0], &infos[0])?;
     } else {
-        super::fit_outputs::write_batch_outputs(&args, &outcomes, &infos, &skipped)?;
+        super::fit_outputs::write_batch_outputs(&c, &outcomes, &infos, &skipped)?;
     }
     if super::stages::wanted() {
         let times: Vec<_> = outcomes.iter().map(super::stages::Times::of).collect();
@@ -217,14 +175,14 @@ fn usable(o: &Outcome) -> bool {
 /// row once no later fit starts from it, the rows written after the last fit, with the
 /// batch's messages, stage timing and exit code as for any batch.
 fn rows_batch(
-    args: &FitArgs,
+    c: &Command,
     jobs: Vec<(String, Dataset)>,
     stop: &Stop,
     (pool, heartbeat): (&rayon::ThreadPool, &super::heartbeat::Heartbeat),
     (read, t0): (f64, std::time::Instant),
 ) -> anyhow::Result<u8> {
-    let (kept, skipped) = fit_jobs(args, jobs, stop, (pool, heartbeat), |o| {
-        let row = report::summary::row(&o.label, &o.result, &units_of(args, &o.dataset));
+    let (kept, skipped) = fit_jobs(c, jobs, stop, (pool, heartbeat), |o| {
+        let row = report::summary::row(&o.label, &o.result, &units_of(&c.settings, &o.dataset));
         (row, usable(&o), super::stages::Times::of(&o))
     })?;
     let wall = t0.elapsed().as_secs_f64();
@@ -232,7 +190,7 @@ fn rows_batch(
         kept.into_iter().map(|(row, u, t)| (row, (u, t))).unzip();
     let csv = report::summary::csv_rows(&rows);
     io::write_csv(Path::new("-"), &report::summary::csv_header(), &csv)?;
-    batch_messages(args, &rows, &skipped, wall, pool.current_num_threads());
+    batch_messages(&c.args, &rows, &skipped, wall, pool.current_num_threads());
     if super::stages::wanted() {
         let times: Vec<_> = rest.iter().map(|k| k.1).collect();
         super::stages::print((read, wall, t0.elapsed().as_secs_f64() - wall), &times);
@@ -295,7 +253,7 @@ fn read_jobs(
 /// progress; several: in parallel, with a bar of datasets fitted), all sharing `stop`.
 /// Returns the fits and the labels of the datasets a stop request kept from a result.
 fn fit_jobs<K: Send>(
-    args: &FitArgs,
+    c: &Command,
     mut jobs: Vec<(String, Dataset)>,
     stop: &Stop,
     (pool, heartbeat): (&rayon::ThreadPool, &super::heartbeat::Heartbeat),
@@ -303,10 +261,10 @@ fn fit_jobs<K: Send>(
 ) -> anyhow::Result<(Vec<K>, Vec<String>)> {
     if jobs.len() == 1 {
         let job = jobs.pop().expect("one job");
-        let one = pool.install(|| fit_one(args, job, true, stop, None))?;
+        let one = pool.install(|| fit_one(c, job, true, stop, None))?;
         return Ok((vec![keep(one)], Vec::new()));
     }
-    let bar = if args.show_progress() {
+    let bar = if c.args.show_progress() {
         super::recover::progress_bar(jobs.len() as u64, "datasets fitted")
     } else {
         indicatif::ProgressBar::hidden()
@@ -318,12 +276,13 @@ fn fit_jobs<K: Send>(
             return Err(not_fitted(&label, stop));
         }
         let near = previous.and_then(|r| r.as_ref().ok());
-        let outcome = fit_one(args, (label, ds), false, stop, near);
+        let outcome = fit_one(c, (label, ds), false, stop, near);
         bar.inc(1);
         heartbeat.inc();
         outcome
     };
-    let done = pool.install(|| batch::in_chains_kept(jobs, args.warm_start, fit, |r| r.map(&keep)));
+    let warm = c.settings.warm_start;
+    let done = pool.install(|| batch::in_chains_kept(jobs, warm, fit, |r| r.map(&keep)));
     bar.finish_and_clear();
     fitted_and_stopped(done)
 }
@@ -366,7 +325,7 @@ fn fitted_and_stopped<T>(
 }
 
 /// What a report says about the run besides the fit: input, command, setting, intervals.
-fn run_info(args: &FitArgs, o: &Outcome, files: &[InputFile]) -> RunInfo {
+fn run_info(s: &Settings, o: &Outcome, files: &[InputFile]) -> RunInfo {
     let file = files
         .iter()
         .find(|(p, _)| *p == o.dataset.path)
@@ -376,7 +335,7 @@ fn run_info(args: &FitArgs, o: &Outcome, files: &[InputFile]) -> RunInfo {
         input: o.label.clone(),
         command: command_line(),
         version: env!("CARGO_PKG_VERSION").to_string(),
-        setting: setting_of(args, &o.dataset, &o.input, &file),
+        setting: report::outcome::setting(&o.dataset, &o.input, (s, CLI), file),
         intervals: o.intervals.clone(),
         interval_seconds: o.interval_seconds,
     }
@@ -385,7 +344,7 @@ fn run_info(args: &FitArgs, o: &Outcome, files: &[InputFile]) -> RunInfo {
 /// Print the reports (JSON or text, with the summary table after several fits or a joint
 /// one), write `--summary`, and say on standard error how long several fits took.
 fn print_reports(
-    args: &FitArgs,
+    c: &Command,
     outcomes: &[Outcome],
     infos: &[RunInfo],
     skipped: &[String],
@@ -400,8 +359,9 @@ fn print_reports(
         .zip(infos)
         .map(|(o, i)| report::summary::row(&o.label, &o.result, &i.setting.units))
         .collect();
+    let args = &c.args;
     if args.json && single {
-        let v = report::outcome::report(&outcomes[0], &infos[0], &replay_args());
+        let v = report::outcome::report(&outcomes[0], &infos[0], &c.settings);
         io::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&v)?))?;
     } else if args.json {
         let head = serde_json::json!({
@@ -413,7 +373,7 @@ fn print_reports(
             "threads": threads,
             "summary": summary_json(&rows),
         });
-        print_batch_json(&head, outcomes, infos)?;
+        print_batch_json(&head, outcomes, infos, &c.settings)?;
     } else if summary_on_stdout(args) {
         // The summary rows are the standard output (written below).
     } else {
@@ -489,20 +449,20 @@ fn print_batch_json(
     head: &serde_json::Value,
     outcomes: &[Outcome],
     infos: &[RunInfo],
+    settings: &Settings,
 ) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(head)?;
     let mark = serde_json::to_string(FITS_MARK)?;
     let (before, after) = text
         .split_once(&mark)
         .ok_or_else(|| anyhow::anyhow!("the batch report's head has no fits"))?;
-    let replay = replay_args();
     io::write_atomic(Path::new("-"), |w| {
         w.write_all(before.as_bytes())?;
         if outcomes.is_empty() {
             w.write_all(b"[]")?;
         }
         for (k, (o, i)) in outcomes.iter().zip(infos).enumerate() {
-            let fit = report::outcome::report(o, i, &replay);
+            let fit = report::outcome::report(o, i, settings);
             let fit = serde_json::to_string_pretty(&fit).map_err(std::io::Error::other)?;
             // Two levels deeper than alone: JSON strings hold no raw line breaks.
             w.write_all(if k == 0 { b"[\n    " } else { b",\n    " })?;
@@ -549,13 +509,4 @@ fn summary_json(rows: &[report::summary::Row]) -> serde_json::Value {
             })
             .collect(),
     )
-}
-
-/// The fit's command-line arguments (without the program name), for the JSON report's
-/// `replay` block that `goniofit plot` parses again.
-fn replay_args() -> Vec<String> {
-    std::env::args_os()
-        .skip(1)
-        .map(|a| a.to_string_lossy().into_owned())
-        .collect()
 }

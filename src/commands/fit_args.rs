@@ -1,15 +1,11 @@
-//! The `fit` command's options (`goniofit fit --help`) and what they set: the library's
-//! fit configuration and the unit of the fitted lengths.
+//! The `fit` command's options (`goniofit fit --help`) and the fit [`Settings`] they ask for.
 
 use super::args::{parse_patch, LossArg, ModeArg, QuantityArg};
-use crate::fit::driver::FitConfig;
-use crate::fit::problem::loss::Loss;
 use crate::fit::problem::ResidualKind;
 use crate::geometry::Quantity;
-use crate::io::{self, Dataset, FileSet, ReadOptions};
-use crate::lm::LmConfig;
+use crate::io::FileSet;
 use crate::model::parse_assignments;
-use crate::settings::{self, Front};
+use crate::settings::{Front, Settings};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 
@@ -51,7 +47,7 @@ Examples:
 
 #[derive(Debug, Args)]
 #[command(after_help = FIT_EXAMPLES)]
-pub(crate) struct FitArgs {
+pub struct FitArgs {
     /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
     /// (fits lambert, lambert-specular, kbs, kbs+lambert and kbs+lambert with --fresnel
     /// dielectric --shadowing smith, and keeps the lowest BIC).
@@ -189,7 +185,7 @@ pub(crate) struct FitArgs {
 impl FitArgs {
     /// The measurement files; the report on standard output, `--residuals`, `--html`,
     /// `--summary` and the pictures in the `--plot` folder.
-    pub(crate) fn files(&self) -> FileSet {
+    pub fn files(&self) -> FileSet {
         let mut set = FileSet::new();
         for f in &self.file {
             set = set.input("input", f);
@@ -207,102 +203,43 @@ impl FitArgs {
 
     /// Whether progress is drawn: on a terminal unless `--quiet` (indicatif draws nothing
     /// when standard error is not a terminal, so `--progress` cannot force it there).
-    pub(crate) fn show_progress(&self) -> bool {
+    pub fn show_progress(&self) -> bool {
         !self.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr())
     }
 
-    /// How the input files are read (`--radians`, `--signed-theta-r`, `--columns`,
-    /// `--channel`); values are required.
-    pub(crate) fn read_options(&self) -> anyhow::Result<ReadOptions> {
-        // --by-group needs every channel (ASTM) or every wavelength (CSV) read.
-        let channel = match (&self.channel, self.by_group) {
-            (None, true) => Some("all".to_string()),
-            (c, _) => c.clone(),
-        };
-        Ok(ReadOptions {
+    /// What the fit is asked to do ([`Settings`]): every option but the outputs and the
+    /// files, `--patch`, `--init` and `--fix` parsed; the values are checked by
+    /// [`Settings::check`].
+    pub fn settings(&self) -> anyhow::Result<Settings> {
+        Ok(Settings {
+            model: self.model.clone(),
+            wavelength: self.wavelength.map(|w| w.0),
+            wavelength_unit: self.wavelength.and_then(|w| w.1).map(String::from),
+            quantity: self.quantity.map(Quantity::from),
+            channel: self.channel.clone(),
+            by_group: self.by_group,
             radians: self.radians,
             signed_theta_r: self.signed_theta_r,
-            columns: io::csv::parse_columns(self.columns.as_deref().unwrap_or(""))?,
-            require_value: true,
-            channel,
+            columns: self.columns.clone(),
             subsample: self.subsample,
+            residual: self.residual.into(),
+            loss: self.loss.into(),
+            f_scale: self.f_scale,
+            floor: self.floor,
+            init: parse_assignments(self.init.as_deref().unwrap_or(""))?,
+            fix: parse_assignments(self.fix.as_deref().unwrap_or(""))?,
+            mode: self.mode.into(),
+            tol: self.tol,
+            patch: self.patch.as_deref().map(parse_patch).transpose()?,
+            fresnel: self.factors.fresnel.into(),
+            shadowing: self.factors.shadowing.into(),
+            max_iter: self.max_iter,
+            timeout: self.timeout,
+            reduce: !self.no_reduce,
+            absolute_sigma: self.absolute_sigma,
+            intervals: self.no_intervals.then_some(false),
+            warm_start: self.warm_start,
+            threads: self.threads,
         })
     }
-
-    /// The measured quantity for a dataset and where it came from: `--quantity`, what the
-    /// file states, or radiance by default.
-    pub(crate) fn quantity_for(&self, ds: &Dataset) -> (Quantity, &'static str) {
-        match (self.quantity, ds.quantity) {
-            (Some(q), _) => (q.into(), "--quantity"),
-            (None, Some(q)) => (q, "stated by the file"),
-            (None, None) => (Quantity::Radiance, "default"),
-        }
-    }
-
-    /// The wavelength given on the command line, as a number.
-    pub(crate) fn wavelength_value(&self) -> Option<f64> {
-        self.wavelength.map(|w| w.0)
-    }
-}
-
-/// The fit configuration from the arguments, for a given model name; every numeric option
-/// checked ([`crate::settings`], as the Python package checks its keywords).
-pub(crate) fn fit_config(
-    args: &FitArgs,
-    model: &str,
-    weights_are_uncertainties: bool,
-) -> anyhow::Result<FitConfig> {
-    let lm = LmConfig {
-        max_iters: args.max_iter,
-        timeout: settings::timeout(CLI, args.timeout)?,
-        progress: args.show_progress(),
-        ..FitConfig::default().lm
-    };
-    let patch = args.patch.as_deref().map(parse_patch).transpose()?;
-    Ok(FitConfig {
-        model: model.to_string(),
-        model_opts: args.factors.apply(settings::model_options(
-            CLI,
-            args.mode.into(),
-            args.tol,
-            patch,
-        )?),
-        residual: args.residual.into(),
-        loss: Loss::new(args.loss.into(), settings::f_scale(CLI, args.f_scale)?)?,
-        floor: settings::floor(CLI, args.floor)?,
-        init: parse_assignments(args.init.as_deref().unwrap_or(""))?,
-        fix: parse_assignments(args.fix.as_deref().unwrap_or(""))?,
-        lm,
-        weights_are_uncertainties,
-        reduce: !args.no_reduce,
-    })
-}
-
-/// The unit of λ the fit's σ and T are in: `--wavelength`'s, else the file's.
-pub(crate) fn wavelength_unit(args: &FitArgs, ds: &Dataset) -> Option<String> {
-    match (args.wavelength, &ds.wavelength) {
-        (Some((_, u)), _) => u.map(String::from),
-        (None, Some(_)) => ds.wavelength_unit.clone(),
-        (None, None) => None,
-    }
-}
-
-/// `goniofit fit`'s arguments from a command line without the program name (`fit …`, as
-/// a report's `replay.args` keeps it), parsed as `goniofit` parses them; Err with clap's
-/// message when they do not parse or are not a fit's.
-pub(crate) fn parse_fit_line(args: Vec<String>) -> Result<FitArgs, clap::Error> {
-    #[derive(clap::Parser)]
-    #[command(name = "goniofit")]
-    struct FitLine {
-        #[command(subcommand)]
-        command: FitOnly,
-    }
-    #[derive(clap::Subcommand)]
-    enum FitOnly {
-        Fit(Box<FitArgs>),
-    }
-    use clap::Parser;
-    let line = FitLine::try_parse_from(std::iter::once("goniofit".to_string()).chain(args))?;
-    let FitOnly::Fit(args) = line.command;
-    Ok(*args)
 }

@@ -2,7 +2,7 @@
 //! `--plot` pictures, for one fit (one page, one folder of pictures) and for a batch (one
 //! page with every fit, one folder per fit).
 
-use super::fit_args::{fit_config, wavelength_unit, FitArgs};
+use super::fit::Command;
 use crate::fit::dataset::Outcome;
 use crate::fit::driver::{FitConfig, FitResult};
 use crate::io::{self, Dataset};
@@ -15,11 +15,8 @@ use std::path::{Path, PathBuf};
 /// A fit whose stop request cut the evaluation of its fitted values (see
 /// [`FitResult::fitted_computed`]) writes neither the residuals file nor pictures, and
 /// says so.
-pub(crate) fn write_single_outputs(
-    args: &FitArgs,
-    o: &Outcome,
-    info: &RunInfo,
-) -> anyhow::Result<()> {
+pub fn write_single_outputs(c: &Command, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
+    let args = &c.args;
     if !o.result.fitted_computed {
         if args.residuals.is_some() || args.plot.is_some() {
             eprintln!("goniofit: no residuals file and no pictures written: the fit was stopped before its fitted values were evaluated");
@@ -28,7 +25,7 @@ pub(crate) fn write_single_outputs(
         write_residuals(path, &o.dataset, &o.result)?;
     }
     if let Some(path) = &args.html {
-        let pictures = svg_pictures(args, o, info)?;
+        let pictures = svg_pictures(c, o, info)?;
         let text = report::outcome::to_text(o, info);
         let comparison = report::outcome::comparison(o);
         let page = report::html::page(&o.result, info, &text, &comparison, &pictures);
@@ -40,7 +37,7 @@ pub(crate) fn write_single_outputs(
         );
     }
     if let Some(dir) = args.plot.as_ref().filter(|_| o.result.fitted_computed) {
-        let written = draw_pictures(args, dir, o, info)?;
+        let written = draw_pictures(c, dir, o, info)?;
         eprintln!(
             "goniofit: wrote {} pictures to {}",
             written.len(),
@@ -53,18 +50,19 @@ pub(crate) fn write_single_outputs(
 /// The outputs of a batch of fits: `--html` as one page (summary table, overview, one
 /// section per fit), `--plot` as one folder per fit ([`fit_folder`]). Fits whose fitted
 /// values were not evaluated get no pictures.
-pub(crate) fn write_batch_outputs(
-    args: &FitArgs,
+pub fn write_batch_outputs(
+    c: &Command,
     outcomes: &[Outcome],
     infos: &[RunInfo],
     skipped: &[String],
 ) -> anyhow::Result<()> {
+    let args = &c.args;
     if let Some(dir) = &args.plot {
         let mut count = 0;
         for (k, (o, info)) in outcomes.iter().zip(infos).enumerate() {
             if o.result.fitted_computed {
                 let sub = dir.join(fit_folder(k, outcomes.len(), &o.label));
-                count += draw_pictures(args, &sub, o, info)?.len();
+                count += draw_pictures(c, &sub, o, info)?.len();
             }
         }
         eprintln!(
@@ -87,7 +85,7 @@ pub(crate) fn write_batch_outputs(
             info,
             text: report::outcome::to_text(o, info),
             comparison: report::outcome::comparison(o),
-            pictures: svg_pictures(args, o, info)?,
+            pictures: svg_pictures(c, o, info)?,
         });
     }
     let (overview_x, overview) = overview(outcomes, infos)?;
@@ -112,7 +110,7 @@ pub(crate) fn write_batch_outputs(
 /// The folder of fit `k` (0-based) of `n` in a batch's `--plot` folder: its number
 /// (zero-padded, so folders sort in the summary's order) and its label with every
 /// character but letters, digits, `.`, `-` and `_` made `_` (the file's folders left out).
-pub(crate) fn fit_folder(k: usize, n: usize, label: &str) -> String {
+pub fn fit_folder(k: usize, n: usize, label: &str) -> String {
     let width = n.to_string().len();
     // "data/cornell/garnet_red.astm [550nm]" → "garnet_red.astm [550nm]".
     let (file, group) = match label.find(" [") {
@@ -213,15 +211,11 @@ fn overview(
 
 /// The pictures of one outcome in memory as (name, SVG), none when its fitted values were
 /// not evaluated.
-fn svg_pictures(
-    args: &FitArgs,
-    o: &Outcome,
-    info: &RunInfo,
-) -> anyhow::Result<Vec<(String, String)>> {
-    let config = outcome_config(args, o)?;
+fn svg_pictures(c: &Command, o: &Outcome, info: &RunInfo) -> anyhow::Result<Vec<(String, String)>> {
+    let config = outcome_config(c, o);
     let report = FitReport::of(&o.result, info);
     let (line, undetermined) = (report.status_line(), report.undetermined());
-    let unit = wavelength_unit(args, &o.dataset);
+    let unit = c.settings.wavelength_unit(&o.dataset);
     Ok(svg_of_outcome(
         &config,
         o,
@@ -231,30 +225,34 @@ fn svg_pictures(
 }
 
 /// The fit configuration of an outcome's chosen model, with its factors (an `auto`
-/// choice's are not among the arguments).
-fn outcome_config(args: &FitArgs, o: &Outcome) -> anyhow::Result<FitConfig> {
-    let mut config = fit_config(args, &o.result.model, o.dataset.sigma_l.is_some())?;
-    config.model_opts = config.model_opts.with_factors_of(&o.result.full_model()).1;
-    Ok(config)
+/// choice's are not among the settings).
+fn outcome_config(c: &Command, o: &Outcome) -> FitConfig {
+    let uncertainties = o.dataset.sigma_l.is_some();
+    c.settings.fit_config(&o.result.full_model(), uncertainties)
 }
 
 /// Draw the pictures of one outcome into `dir` (PNG and SVG; see [`plot_fit`]), with the
 /// status line of its report; returns the files written.
 fn draw_pictures(
-    args: &FitArgs,
+    c: &Command,
     dir: &Path,
     o: &Outcome,
     info: &RunInfo,
 ) -> anyhow::Result<Vec<PathBuf>> {
-    let config = outcome_config(args, o)?;
+    let config = outcome_config(c, o);
     let report = FitReport::of(&o.result, info);
     Ok(plot_fit(
         dir,
         &config,
         &o.input,
-        (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
+        (
+            &o.result.layout,
+            &o.result.values,
+            Some(&o.result.fitted),
+            o.result.n_free,
+        ),
         (&report.status_line(), &report.undetermined()),
-        wavelength_unit(args, &o.dataset).as_deref(),
+        c.settings.wavelength_unit(&o.dataset).as_deref(),
     )?)
 }
 

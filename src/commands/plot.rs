@@ -1,9 +1,7 @@
 //! `goniofit plot`: redraw a fit's pictures from its saved JSON report (`goniofit fit
-//! --json > fit.json`), without fitting again: the report carries the fit's arguments and
+//! --json > fit.json`), without fitting again: the report carries the fit's settings and
 //! the fitted values.
 
-use super::fit::input_of;
-use super::fit_args::fit_config;
 use crate::fit::driver::{FitConfig, FitInput};
 use crate::fit::problem::ParamLayout;
 use crate::io::{self, FileSet};
@@ -15,7 +13,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
-pub(crate) struct PlotArgs {
+pub struct PlotArgs {
     /// A fit report written by `goniofit fit --json`.
     pub report: PathBuf,
     /// Folder for the pictures (PNG and SVG).
@@ -25,7 +23,7 @@ pub(crate) struct PlotArgs {
 
 impl PlotArgs {
     /// The report and the measurement file it names; the pictures in the `--out` folder.
-    pub(crate) fn files(&self) -> FileSet {
+    pub fn files(&self) -> FileSet {
         let mut set = FileSet::new().input("report", &self.report);
         let data = std::fs::read_to_string(&self.report)
             .ok()
@@ -44,12 +42,13 @@ pub(super) fn saved_input(report: &FitReport) -> Option<PathBuf> {
     (!path.is_empty()).then(|| PathBuf::from(path))
 }
 
-/// A fit report read back with the data it fitted: the fit's arguments, model, fitted
-/// values (layout order), settings and input, and the unit of λ.
-pub(crate) struct SavedFit {
+/// A fit report read back with the data it fitted: the fit's model, fitted values (layout
+/// order) and number of free parameters, configuration and input, and the unit of λ.
+pub struct SavedFit {
     pub report: FitReport,
     pub model: String,
     pub values: Vec<f64>,
+    pub n_free: usize,
     pub config: FitConfig,
     pub input: FitInput,
     pub layout: ParamLayout,
@@ -59,7 +58,7 @@ pub(crate) struct SavedFit {
 /// Read a report written by `goniofit fit --json` and re-read the file it fitted (warning
 /// when the file changed since). Errors: not such a report (a bad input, exit 2), or the
 /// data no longer readable.
-pub(crate) fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
+pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -78,14 +77,11 @@ pub(crate) fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
         .replay
         .clone()
         .ok_or_else(|| bad("no 'replay' block"))?;
-    let fa = super::fit_args::parse_fit_line(replay.args)
-        .map_err(|e| bad(&format!("its fit arguments do not parse: {e}")))?;
-    let opts = fa.read_options()?;
-    // The report's absolute input path (a fit of arrays has none: the path as typed).
-    let file = match saved_input(&report) {
-        Some(p) => p,
-        None => fa.file.first().ok_or_else(|| bad("no input file"))?.clone(),
-    };
+    let settings = replay.settings;
+    settings.check(crate::settings::Front::Json)?;
+    let opts = settings.read_options()?;
+    // The report's absolute input path (a fit of arrays has none).
+    let file = saved_input(&report).ok_or_else(|| bad("no input file"))?;
     let ds = io::read_dataset(&file, &opts)
         .with_context(|| format!("re-reading the data of {}", crate::io::shown(path)))?;
     let want = &report.setting.input.sha256;
@@ -98,24 +94,24 @@ pub(crate) fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
             );
         }
     }
-    let (model, factors, values) = (replay.model, replay.factors, replay.values);
-    let input = input_of(&fa, &ds, model.starts_with("kbs"))?;
-    // The factors of the fitted model (an `auto` choice's are not among the arguments).
-    let mut config = fit_config(&fa, &model, ds.sigma_l.is_some())?;
-    config.model_opts = config
-        .model_opts
-        .with_factors_of(&format!("{model} {factors}"))
-        .1;
+    let (model, factors, values, n_free) =
+        (replay.model, replay.factors, replay.values, replay.n_free);
+    let input = settings
+        .dataset_fit(&ds, false)
+        .input(&ds, model.starts_with("kbs"))?;
+    // The factors of the fitted model (an `auto` choice's are not among the settings).
+    let config = settings.fit_config(&format!("{model} {factors}"), ds.sigma_l.is_some());
     let m = crate::model::by_name(&model, &config.model_opts)?;
     let layout = ParamLayout::new(m.as_ref(), &input.channel_names);
     if layout.len() != values.len() {
         return Err(bad("parameter count does not match the model").into());
     }
-    let unit = super::fit_args::wavelength_unit(&fa, &ds);
+    let unit = settings.wavelength_unit(&ds);
     Ok(SavedFit {
         report,
         model,
         values,
+        n_free,
         config,
         input,
         layout,
@@ -123,10 +119,11 @@ pub(crate) fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
     })
 }
 
-pub(crate) fn run(args: PlotArgs) -> anyhow::Result<u8> {
+pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
     let SavedFit {
         report,
         values,
+        n_free,
         config,
         input,
         layout,
@@ -137,7 +134,7 @@ pub(crate) fn run(args: PlotArgs) -> anyhow::Result<u8> {
         &args.out,
         &config,
         &input,
-        (&layout, &values, None),
+        (&layout, &values, None, n_free),
         (&report.status_line(), &report.undetermined()),
         unit.as_deref(),
     )?;

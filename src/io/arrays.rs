@@ -89,7 +89,7 @@ pub fn dataset(name: &str, cols: &Columns, radians: bool, signed_theta_r: bool) 
         sigma_l: cols.sigma_l.map(<[f64]>::to_vec),
         wavelength,
         wavelength_unit: None,
-        wavelength_origin: None,
+        wavelength_origin: cols.wavelength.map(|_| "wavelength array"),
         channel: cols.channel.map(<[String]>::to_vec),
         quantity: None,
     })

@@ -62,7 +62,8 @@ impl Mode {
 }
 
 /// How the KBS sum S(g, a) is evaluated.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum EvalMode {
     /// Per sample, the cheapest evaluation whose error bound meets the tolerance.
     #[default]

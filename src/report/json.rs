@@ -217,13 +217,13 @@ pub struct Pair {
     pub rho: Option<f64>,
 }
 
-/// What `goniofit plot` needs to redraw a fit: the fit's command-line arguments, the model
-/// with its factor options (those of an `auto` choice are not among the arguments), and
-/// the value of every parameter in layout order.
+/// What `goniofit plot` and `goniofit design --from` need to rebuild a fit: the fit's
+/// settings, the model with its factor options (those of an `auto` choice are not among
+/// the settings), and the value of every parameter in layout order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Replay {
-    /// The fit's command-line arguments (without the program's name).
-    pub args: Vec<String>,
+    /// What the fit was asked to do (how its file is read, the model, the residual, …).
+    pub settings: crate::settings::Settings,
     /// The model's name of the fit (the chosen one for `--model auto`).
     pub model: String,
     /// Its factor options as command-line text, empty without.

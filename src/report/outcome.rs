@@ -5,6 +5,7 @@
 use super::{json, text, RunInfo};
 use crate::fit::dataset::Outcome;
 use crate::fit::driver::FitResult;
+use crate::settings::{Front, Settings};
 
 /// One candidate of a model comparison (`--model auto`), as every report shows it.
 pub struct Candidate<'a> {
@@ -47,7 +48,7 @@ impl Candidate<'_> {
 }
 
 /// The outcome's candidates with their ΔBIC to the chosen fit and the ties
-/// (`crate::fit::dataset::tied_with`); empty when only one model was fitted.
+/// ([`crate::fit::dataset::tied_with`]); empty when only one model was fitted.
 pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
     if o.candidates.len() < 2 {
         return Vec::new();
@@ -74,11 +75,11 @@ pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
 }
 
 /// The outcome's report: [`json::FitReport::of`] the chosen fit, with its `replay` block
-/// and, for several candidates, the `comparison`. `args` are the fit's
-/// command-line arguments (without the program name) that `goniofit plot` parses again.
-pub fn report(o: &Outcome, info: &RunInfo, args: &[String]) -> json::FitReport {
+/// ([`replay`]) and, for several candidates, the `comparison`. `settings` are the fit's
+/// settings, which `goniofit plot` rebuilds the fit from.
+pub fn report(o: &Outcome, info: &RunInfo, settings: &Settings) -> json::FitReport {
     let mut report = json::FitReport::of(&o.result, info);
-    report.replay = Some(replay(&o.result, args));
+    report.replay = Some(replay(&o.result, settings));
     let rows = comparison(o);
     if !rows.is_empty() {
         report.comparison = Some(rows.iter().map(comparison_row).collect());
@@ -104,7 +105,7 @@ fn comparison_row(c: &Candidate) -> json::ComparisonRow {
 
 /// The outcome's report as text: the model comparison (the lowest BIC among the usable
 /// fits wins; ΔBIC < 2 is a tie) when several candidates ran, each candidate marked with
-/// what became of its fit, then `text::render` of the chosen fit.
+/// what became of its fit, then [`text::render`] of the chosen fit.
 pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
     let mut s = String::new();
     let rows = comparison(o);
@@ -134,11 +135,11 @@ pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
     s + &text::render(&o.result, info)
 }
 
-/// What `goniofit plot` needs to redraw fit `r` ([`json::Replay`]), `args` being the
-/// fit's command-line arguments.
-pub(crate) fn replay(r: &FitResult, args: &[String]) -> json::Replay {
+/// What `goniofit plot` needs to redraw fit `r` ([`json::Replay`]), `settings` being the
+/// fit's settings.
+pub fn replay(r: &FitResult, settings: &Settings) -> json::Replay {
     json::Replay {
-        args: args.to_vec(),
+        settings: settings.clone(),
         model: r.model.clone(),
         factors: r.factors.trim().to_string(),
         names: r.layout.params.iter().map(|p| p.name.clone()).collect(),
@@ -147,50 +148,21 @@ pub(crate) fn replay(r: &FitResult, args: &[String]) -> json::Replay {
     }
 }
 
-/// Where a fit's setting came from, beside the dataset and the fit input: what the caller
-/// (the CLI's arguments, the Python keywords) decided.
-#[derive(Debug, Clone, Default)]
-pub struct SettingSource {
-    /// The input file (absolute path, checksum), or empty for arrays.
-    pub file: super::setting::InputInfo,
-    /// `--channel` as given.
-    pub channel: Option<String>,
-    /// The quantity fitted and where it came from (`--quantity`, `stated by the file`,
-    /// `default`).
-    pub quantity: crate::geometry::Quantity,
-    /// Where the quantity came from (`--quantity`, `stated by the file`, `default`).
-    pub quantity_source: String,
-    /// The residual kind asked for: absolute, relative or log.
-    pub residual: crate::fit::problem::ResidualKind,
-    /// The floor asked for (None: 1e-6 × max |L|).
-    pub floor: Option<f64>,
-    /// The unit of λ and where λ came from (`--wavelength`, `channel name`, `wavelength
-    /// column`, `none`).
-    pub wavelength_unit: Option<String>,
-    /// Where λ came from (`--wavelength`, `channel name`, `wavelength column`, `none`).
-    pub wavelength_source: String,
-    /// The robust loss (`linear` = plain least squares; scipy's names) and its scale C
-    /// (None for linear).
-    pub loss: String,
-    /// The loss scale C (`--f-scale`), in the unit of the weighted residual; None for linear.
-    pub f_scale: Option<f64>,
-    /// Whether standard errors come from the stated uncertainties as they are (scipy's
-    /// `absolute_sigma=True`) instead of being rescaled by the residual scatter.
-    pub absolute_sigma: bool,
-}
-
-/// The whole setting of one dataset's fit for the report: the caller's `source`, the
-/// floor and how many values it raised, the weights as transformed for the residual, the
-/// distinct wavelengths of the samples, and the units.
+/// The whole setting of one dataset's fit for the report: the `settings` as `front` gave
+/// them, the input `file` (default for arrays), the floor and how many values it raised,
+/// the weights as transformed for the residual, the distinct wavelengths of the samples,
+/// where the quantity and λ came from, and the units.
 pub fn setting(
     ds: &crate::io::Dataset,
     input: &crate::fit::driver::FitInput,
-    source: &SettingSource,
+    (settings, front): (&Settings, Front),
+    file: super::setting::InputInfo,
 ) -> super::Setting {
+    use crate::fit::problem::loss::LossKind;
     use crate::fit::problem::weights::{floor_raised, residual_weights};
     use crate::fit::problem::ResidualKind;
-    let residual = source.residual;
-    let floor = crate::fit::dataset::floor_for(source.floor, &input.y);
+    let residual = settings.residual;
+    let floor = crate::fit::dataset::floor_for(settings.floor, &input.y);
     let (_, weights) = residual_weights(
         ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
         ds.sigma_l.as_deref(),
@@ -198,25 +170,32 @@ pub fn setting(
         residual,
         floor,
     );
+    let wavelength_source = match (settings.wavelength, &ds.wavelength) {
+        (Some(_), _) => front.source("wavelength"),
+        (None, Some(_)) => ds.wavelength_origin.unwrap_or("wavelength column").into(),
+        (None, None) => "none".to_string(),
+    };
     let mut values: Vec<f64> = Vec::new();
-    if source.wavelength_source != "none" {
+    if wavelength_source != "none" {
         for l in input.geo.wavelength.iter() {
             if !values.contains(&l) {
                 values.push(l);
             }
         }
     }
-    let unit = source.wavelength_unit.clone();
+    let unit = settings.wavelength_unit(ds);
+    let (quantity, quantity_source) = settings.quantity_for(ds, front);
+    let linear = settings.loss == LossKind::Linear;
     super::Setting {
-        input: source.file.clone(),
+        input: file,
         wavelength: super::setting::WavelengthInfo {
             values,
             unit: unit.clone(),
-            source: source.wavelength_source.clone(),
+            source: wavelength_source,
         },
-        channel: source.channel.clone(),
-        quantity: source.quantity,
-        quantity_source: source.quantity_source.clone(),
+        channel: settings.channel.clone(),
+        quantity,
+        quantity_source,
         residual,
         floor: super::setting::FloorInfo {
             value: floor,
@@ -224,12 +203,12 @@ pub fn setting(
             used: residual != ResidualKind::Absolute,
         },
         weights,
-        loss: source.loss.clone(),
-        f_scale: source.f_scale,
-        absolute_sigma: source.absolute_sigma,
+        loss: settings.loss.name().into(),
+        f_scale: (!linear).then_some(settings.f_scale),
+        absolute_sigma: settings.absolute_sigma,
         units: super::Units {
             length: unit,
-            quantity: source.quantity,
+            quantity,
             radiance: None,
         },
     }

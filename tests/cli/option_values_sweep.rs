@@ -160,17 +160,24 @@ fn plot_replays_of_fit_options() {
     let json: serde_json::Value = serde_json::from_slice(&report.stdout).unwrap();
     let mut failures = Vec::new();
     for (option, _, is_pair) in FIT_OPTIONS {
+        // The setting's key, and the value as JSON text (`nan`, `inf`: not JSON).
+        let key = option.trim_start_matches("--").replace('-', "_");
         for v in VALUES {
-            let value = if is_pair { pair(v) } else { plain(v) };
+            let value = if is_pair {
+                format!("[{v}, {v}]")
+            } else {
+                v.to_string()
+            };
             let mut j = json.clone();
-            let args = j["replay"]["args"].as_array_mut().unwrap();
-            args.insert(1, format!("{option}={value}").into());
-            std::fs::write(d.join("r.json"), serde_json::to_vec(&j).unwrap()).unwrap();
+            j["replay"]["settings"][&key] = "\u{1}".into();
+            let text = serde_json::to_string(&j).unwrap();
+            let text = text.replace("\"\\u0001\"", &value);
+            std::fs::write(d.join("r.json"), text).unwrap();
             let (code, out, err, took) = run(d, &["plot".into(), "r.json".into()]);
             let words = unechoed_non_finite_words(&format!("{out}\n{err}"), v, &value);
             if !matches!(code, Some(0 | 2)) || !words.is_empty() || took > LIMIT {
                 failures.push(format!(
-                    "plot of a fit with {option}={value}: exit {code:?}, printed {words:?}: {err}"
+                    "plot of a fit with {key}: {value}: exit {code:?}, printed {words:?}: {err}"
                 ));
             }
         }

@@ -262,6 +262,78 @@ fn plot_works_from_any_directory() {
     assert!(dir.path().join("pics/polar.png").exists());
 }
 
+/// `plot` of a saved report redraws the pictures `fit --plot` wrote, byte for byte: the
+/// report's settings rebuild how the file is read (a channel of an ASTM file; a CSV's
+/// wavelength with its unit) and the fitted model with its factors.
+#[test]
+fn plot_of_a_report_redraws_the_pictures_of_its_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [&[&str]; 2] = [
+        &[
+            "--model",
+            "kbs+lambert",
+            "--channel",
+            "550nm",
+            "--residual",
+            "log",
+            GARNET,
+        ],
+        &[
+            "--wavelength",
+            "633nm",
+            "--residual",
+            "relative",
+            "--fresnel",
+            "dielectric",
+            HEMI,
+        ],
+    ];
+    for (k, case) in cases.into_iter().enumerate() {
+        let (fitted, redrawn) = (
+            dir.path().join(format!("fit{k}")),
+            dir.path().join(format!("plot{k}")),
+        );
+        let out = goniofit()
+            .args(["fit", "--no-intervals", "--json", "--plot"])
+            .arg(&fitted)
+            .args(case)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{case:?}");
+        let report = dir.path().join(format!("fit{k}.json"));
+        std::fs::write(&report, &out.stdout).unwrap();
+        goniofit()
+            .arg("plot")
+            .arg(&report)
+            .arg("--out")
+            .arg(&redrawn)
+            .assert()
+            .code(0);
+        let svgs = |d: &Path| {
+            let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .filter(|p| p.extension().is_some_and(|x| x == "svg"))
+                .map(|p| {
+                    (
+                        p.file_name().unwrap().to_string_lossy().into_owned(),
+                        std::fs::read(&p).unwrap(),
+                    )
+                })
+                .collect();
+            files.sort();
+            files
+        };
+        let (a, b) = (svgs(&fitted), svgs(&redrawn));
+        assert!(a.len() >= 5, "{case:?}: {} pictures", a.len());
+        assert_eq!(a.len(), b.len(), "{case:?}");
+        for ((name, x), (other, y)) in a.iter().zip(&b) {
+            assert_eq!(name, other);
+            assert!(x == y, "{case:?}: {name} differs");
+        }
+    }
+}
+
 #[test]
 fn channel_selects_a_wavelength_of_a_csv() {
     let ptfe = "data/nist-ptfe/PTFE.data.csv";

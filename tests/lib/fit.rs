@@ -443,7 +443,7 @@ fn pictures_standardize_residuals_as_the_report_does_under_a_robust_loss() {
     let drawn = crate::plot::fit::with_plot_input(
         &config,
         &input,
-        (&r.layout, &r.values, Some(&r.fitted)),
+        (&r.layout, &r.values, Some(&r.fitted), r.n_free),
         ("", &[]),
         None,
         |p| Ok(p.std_residuals.to_vec()),

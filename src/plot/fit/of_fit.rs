@@ -7,17 +7,19 @@ use crate::error::Result;
 use crate::fit::driver::{self, FitConfig, FitInput};
 use std::path::{Path, PathBuf};
 
-/// A fit to draw: its layout, parameter values, and fitted values when the fit has them
-/// (else they are evaluated here).
-pub(crate) type FitToDraw<'a> = (
+/// A fit to draw: its layout, parameter values, fitted values when the fit has them (else
+/// they are evaluated here), and its number of free parameters (the standardised
+/// residuals' degrees of freedom are the samples less these).
+pub type FitToDraw<'a> = (
     &'a crate::fit::problem::ParamLayout,
     &'a [f64],
     Option<&'a [f64]>,
+    usize,
 );
 
 /// Draw the pictures of a fit (see [`FitToDraw`]) into `dir` as PNG and SVG (see
 /// [`with_plot_input`] for what `status` and `unit` are); returns the files written.
-pub(crate) fn plot_fit(
+pub fn plot_fit(
     dir: &Path,
     config: &FitConfig,
     input: &FitInput,
@@ -30,16 +32,35 @@ pub(crate) fn plot_fit(
     })
 }
 
+/// The pictures of a fit rendered in memory: (name, SVG document), named as
+/// [`crate::plot::fit::PICTURES`].
+pub fn svg_of_fit(
+    config: &FitConfig,
+    input: &FitInput,
+    fit: FitToDraw,
+    status: (&str, &[String]),
+    unit: Option<&str>,
+) -> Result<Vec<(String, String)>> {
+    with_plot_input(
+        config,
+        input,
+        fit,
+        status,
+        unit,
+        crate::plot::fit::svg_pictures,
+    )
+}
+
 /// Call `draw` with the picture input of a fit at parameter values `fit.1` (layout
 /// `fit.0`; `fit.2` its fitted values when the fit has them, else they are evaluated
 /// here), with `status.0` (the report's status line) under the titles, the parameters of
 /// `status.1` (not determined by the data) named in the title without a value, and λ in
 /// `unit`. A joint fit draws every channel with its own parameters (the polar and contour
 /// maps: the busiest θi's channel, named in their titles).
-pub(crate) fn with_plot_input<T>(
+pub fn with_plot_input<T>(
     config: &FitConfig,
     input: &FitInput,
-    (layout, values, fitted): FitToDraw,
+    (layout, values, fitted, n_free): FitToDraw,
     status: (&str, &[String]),
     unit: Option<&str>,
     draw: impl FnOnce(&crate::plot::fit::FitPlotInput) -> Result<T>,
@@ -63,7 +84,7 @@ pub(crate) fn with_plot_input<T>(
     let std_residuals = driver::standardized_residuals(
         &problem,
         &residuals,
-        layout.free().len(),
+        n_free,
         config.weights_are_uncertainties,
     );
     let n_channels = layout.index.len().max(1);
@@ -208,7 +229,12 @@ fn of_outcome<T>(
     with_plot_input(
         config,
         &o.input,
-        (&o.result.layout, &o.result.values, Some(&o.result.fitted)),
+        (
+            &o.result.layout,
+            &o.result.values,
+            Some(&o.result.fitted),
+            o.result.n_free,
+        ),
         status,
         unit,
         draw,

@@ -29,6 +29,8 @@ pub enum Front {
     Cli,
     /// The Python package: keywords spelled `snake_case`.
     Python,
+    /// A settings object in JSON (a report's `replay.settings`): keys spelled `snake_case`.
+    Json,
 }
 
 impl Front {
@@ -36,7 +38,17 @@ impl Front {
     pub fn name(self, key: &str) -> String {
         match self {
             Front::Cli => format!("--{}", key.replace('_', "-")),
-            Front::Python => key.to_string(),
+            Front::Python | Front::Json => key.to_string(),
+        }
+    }
+
+    /// Where a report says a value given through option `key` came from: `--key`,
+    /// `key keyword` (Python) or `key setting` (JSON).
+    pub fn source(self, key: &str) -> String {
+        match self {
+            Front::Cli => self.name(key),
+            Front::Python => format!("{key} keyword"),
+            Front::Json => format!("{key} setting"),
         }
     }
 
@@ -171,6 +183,43 @@ pub fn model_options(
         patch,
         ..ModelOptions::default()
     })
+}
+
+/// The largest MERL subsampling step (every K-th θd and φd cell; θd has 90 cells).
+pub const MAX_SUBSAMPLE: usize = 90;
+
+impl super::Settings {
+    /// Check every value, as the front end spells the options in its messages: the time
+    /// limit, the KBS evaluation's tolerance and patch, the loss scale, the floor, the
+    /// wavelength, `init` and `fix` (finite numbers), the threads, the CSV columns and the
+    /// MERL subsampling. The model's name is checked when the fit starts.
+    pub fn check(&self, front: Front) -> Result<()> {
+        timeout(front, self.timeout)?;
+        model_options(front, self.mode, self.tol, self.patch)?;
+        f_scale(front, self.f_scale)?;
+        floor(front, self.floor)?;
+        if let Some(l) = self.wavelength {
+            length(front, "wavelength", l)?;
+        }
+        for (name, v) in self.init.iter().chain(&self.fix) {
+            if !v.is_finite() {
+                return Err(Error::Param {
+                    name: name.clone(),
+                    message: format!("{} is not a finite number", short_number(*v)),
+                });
+            }
+        }
+        threads(front, self.threads)?;
+        crate::io::csv::parse_columns(self.columns.as_deref().unwrap_or(""))?;
+        if !(1..=MAX_SUBSAMPLE).contains(&self.subsample) {
+            return Err(Error::Usage(format!(
+                "{} {}: every K-th cell, K in 1 ..= {MAX_SUBSAMPLE}",
+                front.name("subsample"),
+                self.subsample
+            )));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
