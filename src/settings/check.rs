@@ -2,7 +2,8 @@
 //! the command line and the Python package call these same functions, so a value one
 //! refuses the other refuses too, with the same words. A refused value is an
 //! [`Error::Usage`] (CLI exit code 2, Python `ValueError`) naming the option as the caller
-//! spells it ([`Front`]) and saying what is accepted.
+//! spells it ([`Front`]) and saying what is accepted. [`super::Settings::check`] checks a
+//! fit's settings with them.
 //!
 //! | option | accepted |
 //! |---|---|
@@ -13,6 +14,8 @@
 //! | `f_scale` | [1e-100, 1e100] (its square, the loss's scale, stays a normal number) |
 //! | `floor` | finite, > 0 (and below the largest measured value: `crate::fit::dataset`) |
 //! | `wavelength`, `patch` half-sizes | [1e-30, 1e30] |
+//! | `init`, `fix` values | finite |
+//! | `subsample` | 1 ..= 90 |
 //! | `scenes` (recover) | 1 ..= 1,000,000 (every scene is drawn, so the count is memory) |
 
 use crate::error::{Error, Result};
