@@ -54,7 +54,9 @@ fn dataset_fit(c: &Command, ds: &Dataset, single: bool) -> DatasetFit {
 
 /// A `fit` command: its arguments (the files and outputs) and the fit's settings from them.
 pub struct Command {
+    /// The command's arguments: the files, the outputs and how progress is shown.
     pub args: FitArgs,
+    /// What each fit is asked to do ([`FitArgs::settings`], checked).
     pub settings: Settings,
 }
 
