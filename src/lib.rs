@@ -1,28 +1,27 @@
 //! goniofit: fit physical light-scattering models to gonioreflectometer measurements.
 //!
 //! The library's surface is what a program or a binding needs: read a file ([`read`]) or
-//! arrays ([`arrays`]) into a [`Dataset`], fit it ([`fit_dataset`] with a [`DatasetFit`],
-//! or one [`Model`] on prepared arrays with [`fit_model`]), and render the outcome
+//! arrays ([`arrays`]) into a [`Dataset`], fit it ([`fit_dataset`] with the [`DatasetFit`]
+//! its [`Settings`] make, or one [`Model`] on prepared arrays with [`fit_model`]), and render the outcome
 //! ([`report`], [`plot`]); models evaluate on a [`Geometry`] of samples; [`design`] says
 //! what to measure next; [`cli::main`] is the whole command line. Everything else is
 //! private to the crate.
 //!
 //! ```
-//! use goniofit::{fit_dataset, read, DatasetFit, FitConfig, Quantity, ReadOptions, ResidualKind};
+//! use goniofit::{fit_dataset, read, Quantity, ResidualKind, Settings};
 //!
 //! // One channel of a Cornell paint: BRDF samples, λ = 550 nm from the channel's name.
-//! let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
-//! let opts = ReadOptions { channel: Some("550nm".into()), require_value: true, ..Default::default() };
-//! let ds = read(&path, &opts)?;
-//! let spec = DatasetFit {
+//! let settings = Settings {
 //!     model: "kbs+lambert".into(),
-//!     quantity: Quantity::Brdf,
-//!     wavelength: None,
-//!     config: FitConfig { residual: ResidualKind::Log, ..FitConfig::default() },
-//!     absolute_sigma: false,
-//!     intervals: false,
+//!     channel: Some("550nm".into()),
+//!     quantity: Some(Quantity::Brdf),
+//!     residual: ResidualKind::Log,
+//!     ..Settings::default()
 //! };
-//! let outcome = fit_dataset(&spec, "garnet red 550 nm".into(), ds)?;
+//! settings.check(goniofit::settings::Front::Json)?;
+//! let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/cornell/garnet_red.astm");
+//! let ds = read(&path, &settings.read_options()?)?;
+//! let outcome = fit_dataset(&settings.dataset_fit(&ds, false), "garnet red 550 nm".into(), ds)?;
 //! let fit = &outcome.result;
 //! assert!(fit.converged());
 //! for p in &fit.params {

@@ -3,15 +3,10 @@
 //! [`arrays::Columns`] view.
 
 use crate::convert::to_py_err;
-use goniofit::fit::problem::loss::LossKind;
-use goniofit::fit::problem::ResidualKind;
-use goniofit::geometry::Quantity;
-use goniofit::io::arrays;
-use goniofit::model::fresnel::Fresnel;
-use goniofit::model::shadowing::Shadowing;
-use goniofit::model::{self, EvalMode, Model};
 use goniofit::settings::{self, Front};
-use goniofit::Settings;
+use goniofit::{
+    arrays, EvalMode, Fresnel, LossKind, Model, Quantity, ResidualKind, Settings, Shadowing,
+};
 use numpy::PyReadonlyArray1;
 use pyo3::exceptions::{PyRuntimeWarning, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -158,7 +153,7 @@ pub fn per_sample(v: &Bound<'_, PyAny>, n: usize, name: &str) -> PyResult<Vec<f6
 /// `init` / `fix`: a dict name → value, or the CLI's `name=value,...` text.
 fn assignments(v: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<(String, f64)>> {
     if let Ok(s) = v.cast::<PyString>() {
-        return model::parse_assignments(&s.to_cow()?).map_err(to_py_err);
+        return goniofit::parse_assignments(&s.to_cow()?).map_err(to_py_err);
     }
     let d = v.cast::<PyDict>().map_err(|_| {
         PyTypeError::new_err(format!(
@@ -201,9 +196,9 @@ pub fn param_vector(m: &dyn Model, params: &Bound<'_, PyAny>) -> PyResult<Vec<f6
             PyTypeError::new_err("params: expected a dict name → value or a sequence of numbers")
         })?
     };
-    model::check_param_count(m, &p).map_err(to_py_err)?;
+    goniofit::check_param_count(m, &p).map_err(to_py_err)?;
     for (s, &v) in specs.iter().zip(&p) {
-        model::check_param_value(s, v).map_err(to_py_err)?;
+        goniofit::check_param_value(s, v).map_err(to_py_err)?;
     }
     Ok(p)
 }
@@ -244,7 +239,7 @@ impl FitOptions {
             "wavelength" if v.is_instance_of::<PyString>() => {
                 // As the CLI's --wavelength: a number with an optional unit (633nm, 0.633um).
                 let text: String = v.extract()?;
-                let (l, unit) = goniofit::io::parse_length(&text).map_err(to_py_err)?;
+                let (l, unit) = goniofit::parse_length(&text).map_err(to_py_err)?;
                 s.wavelength = Some(l);
                 if let Some(u) = unit {
                     s.wavelength_unit = Some(u.to_string());
@@ -332,11 +327,11 @@ impl SampleArrays {
 
     /// The library's checked dataset of these samples (`arrays` in reports); a bad
     /// element is a `ValueError` naming its array and index.
-    pub fn dataset(&self, o: &FitOptions) -> PyResult<goniofit::io::Dataset> {
+    pub fn dataset(&self, o: &FitOptions) -> PyResult<goniofit::Dataset> {
         crate::convert::guard(|| self.checked(o))?.map_err(to_py_err)
     }
 
-    fn checked(&self, o: &FitOptions) -> goniofit::Result<goniofit::io::Dataset> {
+    fn checked(&self, o: &FitOptions) -> goniofit::Result<goniofit::Dataset> {
         let cols = arrays::Columns {
             theta_i: &self.theta_i,
             theta_r: &self.theta_r,
@@ -350,7 +345,7 @@ impl SampleArrays {
         let s = &o.settings;
         let ds = arrays::dataset("arrays", &cols, s.radians, s.signed_theta_r)?;
         // As the CLI after reading: values and weights the fit cannot square are refused.
-        goniofit::fit::dataset::check_magnitudes(&ds)?;
+        goniofit::check_magnitudes(&ds)?;
         Ok(ds)
     }
 }

@@ -5,13 +5,8 @@
 use crate::convert::json_to_py;
 use crate::convert::to_py_err;
 use crate::options::{FitOptions, PY};
-use goniofit::fit::dataset::Outcome;
-use goniofit::fit::driver::FitConfig;
-use goniofit::plot;
-use goniofit::report::json::FitReport;
-use goniofit::report::setting::InputInfo;
-use goniofit::report::{self, RunInfo};
-use goniofit::Settings;
+use goniofit::report::{self, InputInfo, RunInfo};
+use goniofit::{plot, FitConfig, FitReport, Outcome, Settings};
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -48,7 +43,7 @@ impl FitResult {
             input: outcome.label.clone(),
             command: format!("{} ({})", settings.command_line(), outcome.label),
             version: env!("CARGO_PKG_VERSION").to_string(),
-            setting: report::outcome::setting(
+            setting: report::setting(
                 &outcome.dataset,
                 &outcome.input,
                 (&settings, PY),
@@ -74,7 +69,7 @@ impl FitResult {
     /// The CLI's report of this fit (built once).
     fn typed_report(&self) -> &FitReport {
         self.report
-            .get_or_init(|| report::outcome::report(&self.outcome, &self.info, &self.settings))
+            .get_or_init(|| report::fit_report(&self.outcome, &self.info, &self.settings))
     }
 
     /// The report as a JSON value (built once).
@@ -93,7 +88,7 @@ impl FitResult {
     /// The report's pictures as (name, SVG document).
     fn svg_figures(&self) -> PyResult<Vec<(String, String)>> {
         let (line, undetermined) = self.status();
-        plot::fit::svg_of_outcome(
+        plot::svg_of_outcome(
             &self.config,
             &self.outcome,
             (&line, &undetermined),
@@ -205,7 +200,7 @@ impl FitResult {
 
     /// The CLI's text report of this fit.
     fn report(&self) -> String {
-        report::outcome::to_text(&self.outcome, &self.info)
+        report::to_text(&self.outcome, &self.info)
     }
 
     /// The CLI's JSON report of this fit (``goniofit fit --json``), key for key.
@@ -236,7 +231,7 @@ impl FitResult {
             "png" | "matplotlib" => {
                 let (line, undetermined) = self.status();
                 let pngs = py.detach(|| {
-                    plot::fit::png_of_outcome(
+                    plot::png_of_outcome(
                         &self.config,
                         &self.outcome,
                         (&line, &undetermined),
@@ -267,7 +262,7 @@ impl FitResult {
     /// tables, and the fit on a log scale.
     fn _repr_html_(&self) -> String {
         let (line, undetermined) = self.status();
-        let key = plot::fit::key_svg_of_outcome(
+        let key = plot::key_svg_of_outcome(
             &self.config,
             &self.outcome,
             (&line, &undetermined),
@@ -275,10 +270,10 @@ impl FitResult {
         )
         .ok()
         .flatten();
-        report::html::fragment(
+        report::html_fragment(
             &self.outcome.result,
             &self.info,
-            &report::outcome::comparison(&self.outcome),
+            &report::comparison(&self.outcome),
             key.as_deref(),
         )
     }
@@ -311,7 +306,7 @@ pub fn summary_columns<'py>(py: Python<'py>, outcomes: &[Outcome]) -> PyResult<B
 }
 
 /// The result of an outcome.
-fn r(o: &Outcome) -> &goniofit::fit::driver::FitResult {
+fn r(o: &Outcome) -> &goniofit::FitResult {
     &o.result
 }
 
@@ -342,7 +337,7 @@ fn fit_columns(py: Python<'_>, out: &Bound<'_, PyDict>, outcomes: &[Outcome]) ->
     // As the JSON report spells them (report::json).
     out.set_item(
         "termination",
-        text(&|o| report::json::termination_name(r(o).termination)),
+        text(&|o| report::termination_name(r(o).termination)),
     )?;
     let verdict = |o: &Outcome| match serde_json::to_value(r(o).verdict) {
         Ok(Value::String(s)) => s,

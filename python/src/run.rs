@@ -4,11 +4,8 @@
 
 use crate::convert::{guard, panic_error, to_py_err, to_py_err_in};
 use crate::options::{checked, FitOptions, PY};
-use goniofit::fit::dataset::{batch, fit_dataset_near, Outcome};
-use goniofit::geometry::Geometry;
-use goniofit::io::Dataset;
-use goniofit::model::{domain, Model};
 use goniofit::settings;
+use goniofit::{check_finite, fit_dataset_near, in_chains, Dataset, Geometry, Model, Outcome};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -83,7 +80,7 @@ pub fn evaluate_interruptible(
 ) -> PyResult<(Vec<f64>, Option<Vec<f64>>)> {
     let (values, jac) = evaluate_blocks(py, model, p, geo, jacobian)?;
     let n = geo.len();
-    let check = |v: &[f64], what: &str| domain::check_finite(model, p, geo, v, what);
+    let check = |v: &[f64], what: &str| check_finite(model, p, geo, v, what);
     check(&values, "").map_err(to_py_err)?;
     if let Some(j) = &jac {
         for (column, spec) in j.chunks_exact(n.max(1)).zip(model.params()) {
@@ -193,7 +190,7 @@ pub fn fit_all(
     let stop = interrupt.clone();
     let warm = o.settings.warm_start && !single;
     let results = interruptible(py, Some(interrupt.clone()), threads, move || {
-        Ok(batch::in_chains(jobs, warm, |(label, ds), previous| {
+        Ok(in_chains(jobs, warm, |(label, ds), previous| {
             // After Ctrl-C the jobs not yet started are skipped (the call raises
             // KeyboardInterrupt and drops every result).
             if stop.load(Ordering::SeqCst) {

@@ -21,7 +21,7 @@ fn units_of(s: &Settings, ds: &Dataset) -> report::Units {
 }
 
 /// The input file's absolute path, size and SHA-256.
-pub fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
+pub(crate) fn input_info(path: &Path) -> anyhow::Result<report::setting::InputInfo> {
     let io_error = |source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -53,7 +53,7 @@ fn dataset_fit(c: &Command, ds: &Dataset, single: bool) -> DatasetFit {
 }
 
 /// A `fit` command: its arguments (the files and outputs) and the fit's settings from them.
-pub struct Command {
+pub(crate) struct Command {
     /// The command's arguments: the files, the outputs and how progress is shown.
     pub args: FitArgs,
     /// What each fit is asked to do ([`FitArgs::settings`], checked).
@@ -76,7 +76,7 @@ fn fit_one(
     fit_dataset_near(&spec, label, ds, near).context(context)
 }
 
-pub fn run(args: FitArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: FitArgs) -> anyhow::Result<u8> {
     // Refused before any file is read.
     if args.json && summary_on_stdout(&args) {
         return Err(Error::Usage(

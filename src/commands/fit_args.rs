@@ -47,7 +47,7 @@ Examples:
 
 #[derive(Debug, Args)]
 #[command(after_help = FIT_EXAMPLES)]
-pub struct FitArgs {
+pub(crate) struct FitArgs {
     /// Model: kbs, kbs-smooth, kbs-rough, kbs+lambert, lambert, lambert-specular, or auto
     /// (fits lambert, lambert-specular, kbs, kbs+lambert and kbs+lambert with --fresnel
     /// dielectric --shadowing smith, and keeps the lowest BIC).
@@ -185,7 +185,7 @@ pub struct FitArgs {
 impl FitArgs {
     /// The measurement files; the report on standard output, `--residuals`, `--html`,
     /// `--summary` and the pictures in the `--plot` folder.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         let mut set = FileSet::new();
         for f in &self.file {
             set = set.input("input", f);
@@ -203,14 +203,14 @@ impl FitArgs {
 
     /// Whether progress is drawn: on a terminal unless `--quiet` (indicatif draws nothing
     /// when standard error is not a terminal, so `--progress` cannot force it there).
-    pub fn show_progress(&self) -> bool {
+    pub(crate) fn show_progress(&self) -> bool {
         !self.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr())
     }
 
     /// What the fit is asked to do ([`Settings`]): every option but the outputs and the
     /// files, `--patch`, `--init` and `--fix` parsed; the values are checked by
     /// [`Settings::check`].
-    pub fn settings(&self) -> anyhow::Result<Settings> {
+    pub(crate) fn settings(&self) -> anyhow::Result<Settings> {
         Ok(Settings {
             model: self.model.clone(),
             wavelength: self.wavelength.map(|w| w.0),

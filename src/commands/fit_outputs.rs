@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 /// A fit whose stop request cut the evaluation of its fitted values (see
 /// [`FitResult::fitted_computed`]) writes neither the residuals file nor pictures, and
 /// says so.
-pub fn write_single_outputs(c: &Command, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
+pub(crate) fn write_single_outputs(c: &Command, o: &Outcome, info: &RunInfo) -> anyhow::Result<()> {
     let args = &c.args;
     if !o.result.fitted_computed {
         if args.residuals.is_some() || args.plot.is_some() {
@@ -50,7 +50,7 @@ pub fn write_single_outputs(c: &Command, o: &Outcome, info: &RunInfo) -> anyhow:
 /// The outputs of a batch of fits: `--html` as one page (summary table, overview, one
 /// section per fit), `--plot` as one folder per fit ([`fit_folder`]). Fits whose fitted
 /// values were not evaluated get no pictures.
-pub fn write_batch_outputs(
+pub(crate) fn write_batch_outputs(
     c: &Command,
     outcomes: &[Outcome],
     infos: &[RunInfo],
@@ -110,7 +110,7 @@ pub fn write_batch_outputs(
 /// The folder of fit `k` (0-based) of `n` in a batch's `--plot` folder: its number
 /// (zero-padded, so folders sort in the summary's order) and its label with every
 /// character but letters, digits, `.`, `-` and `_` made `_` (the file's folders left out).
-pub fn fit_folder(k: usize, n: usize, label: &str) -> String {
+pub(crate) fn fit_folder(k: usize, n: usize, label: &str) -> String {
     let width = n.to_string().len();
     // "data/cornell/garnet_red.astm [550nm]" → "garnet_red.astm [550nm]".
     let (file, group) = match label.find(" [") {

@@ -13,7 +13,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
-pub struct PlotArgs {
+pub(crate) struct PlotArgs {
     /// A fit report written by `goniofit fit --json`.
     pub report: PathBuf,
     /// Folder for the pictures (PNG and SVG).
@@ -23,7 +23,7 @@ pub struct PlotArgs {
 
 impl PlotArgs {
     /// The report and the measurement file it names; the pictures in the `--out` folder.
-    pub fn files(&self) -> FileSet {
+    pub(crate) fn files(&self) -> FileSet {
         let mut set = FileSet::new().input("report", &self.report);
         let data = std::fs::read_to_string(&self.report)
             .ok()
@@ -44,7 +44,7 @@ pub(super) fn saved_input(report: &FitReport) -> Option<PathBuf> {
 
 /// A fit report read back with the data it fitted: the fit's model, fitted values (layout
 /// order) and number of free parameters, configuration and input, and the unit of λ.
-pub struct SavedFit {
+pub(crate) struct SavedFit {
     pub report: FitReport,
     pub model: String,
     pub values: Vec<f64>,
@@ -58,7 +58,7 @@ pub struct SavedFit {
 /// Read a report written by `goniofit fit --json` and re-read the file it fitted (warning
 /// when the file changed since). Errors: not such a report (a bad input, exit 2), or the
 /// data no longer readable.
-pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
+pub(crate) fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -119,7 +119,7 @@ pub fn read_saved_fit(path: &Path) -> anyhow::Result<SavedFit> {
     })
 }
 
-pub fn run(args: PlotArgs) -> anyhow::Result<u8> {
+pub(crate) fn run(args: PlotArgs) -> anyhow::Result<u8> {
     let SavedFit {
         report,
         values,

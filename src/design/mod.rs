@@ -67,7 +67,7 @@ pub struct Request {
     pub candidates: Vec<AnglesDeg>,
     /// How many to choose.
     pub n: usize,
-    /// A parameter or derived quantity name ([`quantities`]), or `all` (D-optimal).
+    /// A parameter or derived quantity name (`quantities`), or `all` (D-optimal).
     pub target: String,
     /// See [`DYNAMIC_RANGE`].
     pub dynamic_range: f64,

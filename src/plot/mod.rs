@@ -5,9 +5,9 @@
 //! both for plotters' layout (registered once through its ab_glyph support) and for resvg
 //! (the only font it knows), so no system fonts or fontconfig are needed.
 //!
-//! A picture is a value implementing [`Picture`]: its data are computed when it is built
-//! (so tests can check the data the picture shows), and [`Picture::draw`] only draws.
-//! [`write_picture`] writes a file, [`svg_string`], [`png_bytes`] and [`rgb_buffer`] render
+//! A picture is a value implementing `Picture`: its data are computed when it is built
+//! (so tests can check the data the picture shows), and `Picture::draw` only draws.
+//! `write_picture` writes a file, `svg_string`, `png_bytes` and `rgb_buffer` render
 //! in memory.
 
 pub(crate) mod contour;

@@ -14,8 +14,8 @@ pub(crate) mod text;
 pub use design::{json as design_json, Run as DesignRun};
 pub use html::fragment as html_fragment;
 pub use json::termination_name;
-pub use outcome::{comparison, report as fit_report, setting, to_text, Candidate, SettingSource};
-pub use setting::{Setting, Units};
+pub use outcome::{comparison, report as fit_report, setting, to_text, Candidate};
+pub use setting::{InputInfo, Setting, Units};
 
 /// How the fit was run, for reproducing it.
 #[derive(Debug, Clone, Default, serde::Serialize)]

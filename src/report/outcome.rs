@@ -48,7 +48,7 @@ impl Candidate<'_> {
 }
 
 /// The outcome's candidates with their ΔBIC to the chosen fit and the ties
-/// ([`crate::fit::dataset::tied_with`]); empty when only one model was fitted.
+/// (`crate::fit::dataset::tied_with`); empty when only one model was fitted.
 pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
     if o.candidates.len() < 2 {
         return Vec::new();
@@ -75,7 +75,7 @@ pub fn comparison(o: &Outcome) -> Vec<Candidate<'_>> {
 }
 
 /// The outcome's report: [`json::FitReport::of`] the chosen fit, with its `replay` block
-/// ([`replay`]) and, for several candidates, the `comparison`. `settings` are the fit's
+/// (`replay`) and, for several candidates, the `comparison`. `settings` are the fit's
 /// settings, which `goniofit plot` rebuilds the fit from.
 pub fn report(o: &Outcome, info: &RunInfo, settings: &Settings) -> json::FitReport {
     let mut report = json::FitReport::of(&o.result, info);
@@ -105,7 +105,7 @@ fn comparison_row(c: &Candidate) -> json::ComparisonRow {
 
 /// The outcome's report as text: the model comparison (the lowest BIC among the usable
 /// fits wins; ΔBIC < 2 is a tie) when several candidates ran, each candidate marked with
-/// what became of its fit, then [`text::render`] of the chosen fit.
+/// what became of its fit, then `text::render` of the chosen fit.
 pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
     let mut s = String::new();
     let rows = comparison(o);
@@ -137,7 +137,7 @@ pub fn to_text(o: &Outcome, info: &RunInfo) -> String {
 
 /// What `goniofit plot` needs to redraw fit `r` ([`json::Replay`]), `settings` being the
 /// fit's settings.
-pub fn replay(r: &FitResult, settings: &Settings) -> json::Replay {
+pub(crate) fn replay(r: &FitResult, settings: &Settings) -> json::Replay {
     json::Replay {
         settings: settings.clone(),
         model: r.model.clone(),

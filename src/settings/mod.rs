@@ -39,7 +39,7 @@ pub struct Settings {
     /// The model: `kbs`, `kbs-smooth`, `kbs-rough`, `kbs+lambert`, `lambert`,
     /// `lambert-specular`, or `auto` (compares candidates by BIC). Default `kbs`.
     pub model: String,
-    /// The wavelength λ, the unit of σ and T (> 0, within [`crate::geometry::LENGTH_RANGE`]);
+    /// The wavelength λ, the unit of σ and T (> 0, within `crate::geometry::LENGTH_RANGE`);
     /// overrides the data's own. None: the data's (a wavelength column, an ASTM channel
     /// name), or 1 for models without λ.
     pub wavelength: Option<f64>,
@@ -92,7 +92,7 @@ pub struct Settings {
     /// The relative accuracy target of the KBS evaluation, in [1e-16, 0.1]. Default 1e-10.
     pub tol: f64,
     /// Patch half-sizes (X, Y) in the unit of λ, each within
-    /// [`crate::geometry::LENGTH_RANGE`]: the KBS lobe with its coherent term. None: without.
+    /// `crate::geometry::LENGTH_RANGE`: the KBS lobe with its coherent term. None: without.
     pub patch: Option<(f64, f64)>,
     /// The Fresnel factor on the KBS lobe: `none`, `dielectric`, `conductor`, `schlick`.
     pub fresnel: Fresnel,
@@ -158,7 +158,10 @@ mod pairs {
     use serde::ser::SerializeMap;
     use serde::{Deserializer, Serializer};
 
-    pub fn serialize<S: Serializer>(pairs: &[(String, f64)], s: S) -> Result<S::Ok, S::Error> {
+    pub(super) fn serialize<S: Serializer>(
+        pairs: &[(String, f64)],
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
         let mut map = s.serialize_map(Some(pairs.len()))?;
         for (k, v) in pairs {
             map.serialize_entry(k, v)?;
@@ -166,7 +169,9 @@ mod pairs {
         map.end()
     }
 
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(String, f64)>, D::Error> {
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<Vec<(String, f64)>, D::Error> {
         struct Pairs;
         impl<'de> Visitor<'de> for Pairs {
             type Value = Vec<(String, f64)>;

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 /// A fit to draw: its layout, parameter values, fitted values when the fit has them (else
 /// they are evaluated here), and its number of free parameters (the standardised
 /// residuals' degrees of freedom are the samples less these).
-pub type FitToDraw<'a> = (
+pub(super) type FitToDraw<'a> = (
     &'a crate::fit::problem::ParamLayout,
     &'a [f64],
     Option<&'a [f64]>,
@@ -19,7 +19,7 @@ pub type FitToDraw<'a> = (
 
 /// Draw the pictures of a fit (see [`FitToDraw`]) into `dir` as PNG and SVG (see
 /// [`with_plot_input`] for what `status` and `unit` are); returns the files written.
-pub fn plot_fit(
+pub(crate) fn plot_fit(
     dir: &Path,
     config: &FitConfig,
     input: &FitInput,
@@ -32,32 +32,13 @@ pub fn plot_fit(
     })
 }
 
-/// The pictures of a fit rendered in memory: (name, SVG document), named as
-/// [`crate::plot::fit::PICTURES`].
-pub fn svg_of_fit(
-    config: &FitConfig,
-    input: &FitInput,
-    fit: FitToDraw,
-    status: (&str, &[String]),
-    unit: Option<&str>,
-) -> Result<Vec<(String, String)>> {
-    with_plot_input(
-        config,
-        input,
-        fit,
-        status,
-        unit,
-        crate::plot::fit::svg_pictures,
-    )
-}
-
 /// Call `draw` with the picture input of a fit at parameter values `fit.1` (layout
 /// `fit.0`; `fit.2` its fitted values when the fit has them, else they are evaluated
 /// here), with `status.0` (the report's status line) under the titles, the parameters of
 /// `status.1` (not determined by the data) named in the title without a value, and λ in
 /// `unit`. A joint fit draws every channel with its own parameters (the polar and contour
 /// maps: the busiest θi's channel, named in their titles).
-pub fn with_plot_input<T>(
+pub(crate) fn with_plot_input<T>(
     config: &FitConfig,
     input: &FitInput,
     (layout, values, fitted, n_free): FitToDraw,
