@@ -100,6 +100,7 @@ mod polish;
 #[cfg(feature = "progress")]
 mod progress;
 mod qr;
+mod reduced;
 mod run;
 mod step;
 pub mod stop;
@@ -121,6 +122,7 @@ use nalgebra::{DMatrix, DVector};
 pub use closure::Closure;
 pub use fd::finite_difference_jacobian;
 pub use invalid::Invalid;
+pub use reduced::Reduced;
 pub use run::{minimize, ArgminAdapter, LeastSquaresProblem, LmConfig, LmReport, StepResiduals};
 pub use stop::Stop;
 pub use termination::Termination;
@@ -304,12 +306,17 @@ impl LevenbergMarquardt {
     /// The Jacobian at the current point (unpadded), if it has been evaluated there and
     /// kept (a large one is not: ask the problem), moved out of the solver (no copy of an
     /// `m × n` matrix at the end of a big fit); the solver then needs a new Jacobian before
-    /// its next step.
+    /// its next step. For a problem that supplied a reduced Jacobian there, its matrix `A`
+    /// ([`Reduced`]).
     pub fn take_jacobian(&mut self) -> Option<DMatrix<f64>> {
-        let w = self
-            .work
-            .as_mut()
-            .filter(|w| !w.need_jac && w.jac.nrows() > 0)?;
+        let w = self.work.as_mut().filter(|w| !w.need_jac)?;
+        if let Some(a) = w.reduced.take() {
+            w.need_jac = true;
+            return Some(a);
+        }
+        if w.jac.nrows() == 0 {
+            return None;
+        }
         w.need_jac = true;
         let jac = std::mem::replace(&mut w.jac, DMatrix::zeros(0, 0));
         Some(if jac.nrows() == w.m {

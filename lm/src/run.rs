@@ -16,6 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use super::norm::enorm;
 #[cfg(feature = "progress")]
 use super::progress::ProgressObserver;
+use super::reduced::Reduced;
 use super::stop::Stop;
 use super::{LevenbergMarquardt, LmState, Termination};
 
@@ -37,6 +38,15 @@ pub trait LeastSquaresProblem {
     fn step_residuals(&self, _x: &DVector<f64>) -> Option<DVector<f64>> {
         None
     }
+    /// The Jacobian at `x` reduced to its triangular factor with the residuals at `x`
+    /// transformed alike ([`Reduced`]), evaluated in row blocks so that the `m × n`
+    /// Jacobian is never held: what a problem of many residuals supplies. The solver asks
+    /// for it first wherever it needs the Jacobian, and takes [`Self::jacobian`] when it
+    /// is None (the default). A problem with [`Self::step_residuals`] supplies none (its
+    /// step is solved with the full Jacobian).
+    fn reduced_jacobian(&self, _x: &DVector<f64>) -> Option<Reduced> {
+        None
+    }
 }
 
 impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
@@ -49,18 +59,29 @@ impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
         (**self).step_residuals(x)
     }
+    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<Reduced> {
+        (**self).reduced_jacobian(x)
+    }
 }
 
 /// What the solver asks of its operator beyond argmin's [`Operator`] and [`Jacobian`]: the
-/// step residuals of [`LeastSquaresProblem::step_residuals`].
+/// step residuals of [`LeastSquaresProblem::step_residuals`] and the reduced Jacobian of
+/// [`LeastSquaresProblem::reduced_jacobian`].
 pub trait StepResiduals {
     /// See [`LeastSquaresProblem::step_residuals`].
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>>;
+    /// See [`LeastSquaresProblem::reduced_jacobian`]; None by default.
+    fn reduced_jacobian(&self, _x: &DVector<f64>) -> Option<Reduced> {
+        None
+    }
 }
 
 impl<P: LeastSquaresProblem + ?Sized> StepResiduals for ArgminAdapter<'_, P> {
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
         self.0.step_residuals(x)
+    }
+    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<Reduced> {
+        self.0.reduced_jacobian(x)
     }
 }
 
@@ -153,7 +174,10 @@ pub struct LmReport {
     pub x: DVector<f64>,
     /// Weighted residuals at `x`.
     pub residuals: DVector<f64>,
-    /// Jacobian at `x` (evaluated once more at the end if the last step was accepted).
+    /// Jacobian at `x` (evaluated once more at the end if the last step was accepted); for
+    /// a problem that supplies [`LeastSquaresProblem::reduced_jacobian`], the reduced
+    /// matrix `A` instead (`n` columns, at most `n` rows, `AᵀA = JᵀJ`): what the
+    /// covariance needs.
     pub jacobian: DMatrix<f64>,
     /// `½ ‖residuals‖²`.
     pub cost: f64,
@@ -248,7 +272,7 @@ where
         Some(j) => j,
         None => {
             jacobian_evaluations += 1;
-            problem.jacobian(&x)
+            jacobian_or_reduced(problem, &x)
         }
     };
     LmReport {
@@ -272,7 +296,7 @@ fn report_at_start<P: LeastSquaresProblem + ?Sized>(
     start: Instant,
 ) -> LmReport {
     let residuals = problem.residuals(x0);
-    let jacobian = problem.jacobian(x0);
+    let jacobian = jacobian_or_reduced(problem, x0);
     LmReport {
         cost: 0.5 * residuals.norm_squared(),
         x: x0.clone(),
@@ -283,5 +307,17 @@ fn report_at_start<P: LeastSquaresProblem + ?Sized>(
         evaluations: 1,
         jacobian_evaluations: 1,
         seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// The reduced Jacobian's matrix `A` at `x` when the problem supplies one, else the
+/// Jacobian.
+fn jacobian_or_reduced<P: LeastSquaresProblem + ?Sized>(
+    problem: &P,
+    x: &DVector<f64>,
+) -> DMatrix<f64> {
+    match problem.reduced_jacobian(x) {
+        Some(red) => red.a,
+        None => problem.jacobian(x),
     }
 }

@@ -409,3 +409,71 @@ fn finite_differences_match_analytic() {
     assert!((&jf - &ja).amax() < 1e-6 * ja.amax());
     assert!((&jc - &ja).amax() < 1e-9 * ja.amax());
 }
+
+/// A problem that supplies its Jacobian reduced in blocks of `block` rows.
+struct Blocked<P> {
+    inner: P,
+    block: usize,
+}
+
+impl<P: LeastSquaresProblem> LeastSquaresProblem for Blocked<P> {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        self.inner.residuals(x)
+    }
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        self.inner.jacobian(x)
+    }
+    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<Reduced> {
+        let (j, f) = (self.inner.jacobian(x), self.inner.residuals(x));
+        let mut red = Reduced::empty(j.ncols());
+        for first in (0..j.nrows()).step_by(self.block) {
+            let rows = self.block.min(j.nrows() - first);
+            let part = j.rows(first, rows).into_owned();
+            red.push_rows(part.as_slice(), &f.as_slice()[first..first + rows]);
+        }
+        Some(red)
+    }
+}
+
+/// y = a·exp(−b t) + c on `m` samples with deterministic pseudo-noise.
+fn decay_offset(m: usize) -> impl LeastSquaresProblem {
+    let t: Vec<f64> = (0..m).map(|i| 5.0 * i as f64 / m as f64).collect();
+    let noise = |i: usize| 0.01 * ((i * 7919 % 101) as f64 / 50.0 - 1.0);
+    let y: Vec<f64> = (0..m)
+        .map(|i| 3.0 * (-0.7 * t[i]).exp() + 0.2 + noise(i))
+        .collect();
+    let t2 = t.clone();
+    Closure {
+        r: move |x: &DVector<f64>| {
+            DVector::from_iterator(m, (0..m).map(|i| x[0] * (-x[1] * t[i]).exp() + x[2] - y[i]))
+        },
+        j: move |x: &DVector<f64>| {
+            DMatrix::from_fn(m, 3, |i, k| {
+                let e = (-x[1] * t2[i]).exp();
+                [e, -x[0] * t2[i] * e, 1.0][k]
+            })
+        },
+    }
+}
+
+#[test]
+fn reduced_jacobian_solves_as_the_dense_one() {
+    let x0 = v(&[1.0, 0.2, 0.0]);
+    let dense = minimize(&decay_offset(5000), x0.clone(), &LmConfig::default());
+    let blocked = Blocked {
+        inner: decay_offset(5000),
+        block: 700,
+    };
+    let reduced = minimize(&blocked, x0, &LmConfig::default());
+    assert!(dense.termination.converged() && reduced.termination.converged());
+    assert_eq!(reduced.iterations, dense.iterations);
+    assert_relative_eq!(reduced.cost, dense.cost, max_relative = 1e-12);
+    for k in 0..3 {
+        assert_relative_eq!(reduced.x[k], dense.x[k], max_relative = 1e-10);
+    }
+    // The report's matrix is the reduced one: 3 × 3 with the dense Jacobian's JᵀJ.
+    assert_eq!(reduced.jacobian.shape(), (3, 3));
+    let gram = dense.jacobian.tr_mul(&dense.jacobian);
+    let diff = (reduced.jacobian.tr_mul(&reduced.jacobian) - &gram).norm();
+    assert!(diff <= 1e-10 * gram.norm(), "{diff}");
+}

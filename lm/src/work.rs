@@ -6,12 +6,16 @@ use nalgebra::{DMatrix, DVector};
 
 use super::norm::{all_finite, enorm, pad_mat, pad_vec};
 use super::qr::{qrfac, QrState};
+use super::reduced::Reduced;
 use super::run::StepResiduals;
 use super::{LmState, Termination, EPSMCH};
 
 /// Jacobians of at most this many entries (1M: 8 MB) stay in the work after they are
 /// factored; larger ones are factored in their own storage and dropped.
 const KEEP_JACOBIAN_MAX: usize = 1 << 20;
+
+/// The pivoted QR of the Jacobian, its column norms and the gradient.
+type Factored = (QrState, DVector<f64>, DVector<f64>);
 
 /// Everything the iteration carries between trial steps.
 #[derive(Debug, Clone)]
@@ -29,6 +33,9 @@ pub(super) struct Work {
     /// Step residuals at `x` (padded) when the problem supplies them (a robust loss; see
     /// [`super::LeastSquaresProblem::step_residuals`]), valid when `!need_jac`.
     pub(super) step_r: Option<DVector<f64>>,
+    /// The reduced Jacobian's `A` at `x` ([`Reduced`]) when the problem supplied one,
+    /// valid when `!need_jac` (then `jac` is empty).
+    pub(super) reduced: Option<DMatrix<f64>>,
     pub(super) qr: Option<QrState>,
     pub(super) diag: DVector<f64>,
     pub(super) delta: f64,
@@ -61,6 +68,7 @@ impl Work {
             r,
             jac: DMatrix::zeros(rows, n),
             step_r: None,
+            reduced: None,
             qr: None,
             diag: DVector::from_element(n, 1.0),
             delta: 0.0,
@@ -111,20 +119,61 @@ impl Work {
     where
         O: Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>> + StepResiduals,
     {
+        let reduced = problem.problem("reduced_jacobian", |o| Ok(o.reduced_jacobian(&self.x)))?;
+        let factored = match reduced {
+            Some(red) => self.factor_reduced(red),
+            None => self.factor_jacobian(problem)?,
+        };
+        let Some((qr, acnorm, grad)) = factored else {
+            return Ok((state, Some(Termination::NonFiniteJacobian)));
+        };
+        if self.first {
+            self.initial_scaling(&acnorm, stepbound);
+        }
+        let rs_norm = match &self.step_r {
+            Some(f) => enorm(f.as_slice()),
+            None => self.fnorm,
+        };
+        let gnorm = scaled_gradient_norm(&qr, &acnorm, rs_norm);
+        for j in 0..self.x.len() {
+            self.diag[j] = self.diag[j].max(acnorm[j]);
+        }
+        self.qr = Some(qr);
+        self.need_jac = false;
+        let state = state.gradient(grad);
+        // (While polishing, the polishing rules decide; they also end at a zero step.)
+        if self.polish.is_none() && (gnorm <= gtol || gnorm <= EPSMCH) {
+            return Ok((state, Some(Termination::Gtol)));
+        }
+        Ok((state, None))
+    }
+
+    /// Evaluate the Jacobian (and the step residuals, when the problem has them) at the
+    /// current point and factor it: the pivoted QR, the column norms of `J` and the
+    /// gradient `Jᵀr` (`Jᵀf̃`); None when `J` or the step residuals are not finite or not
+    /// `m × n`.
+    fn factor_jacobian<O>(
+        &mut self,
+        problem: &mut Problem<O>,
+    ) -> Result<Option<Factored>, ArgminError>
+    where
+        O: Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>> + StepResiduals,
+    {
         let n = self.x.len();
         let jac = problem.jacobian(&self.x)?;
         self.njev += 1;
         if jac.shape() != (self.m, n) || jac.iter().any(|v| !v.is_finite()) {
-            return Ok((state, Some(Termination::NonFiniteJacobian)));
+            return Ok(None);
         }
         let step_r = problem.problem("step_residuals_count", |o| Ok(o.step_residuals(&self.x)))?;
         if step_r
             .as_ref()
             .is_some_and(|f| f.len() != self.m || !all_finite(f))
         {
-            return Ok((state, Some(Termination::NonFiniteJacobian)));
+            return Ok(None);
         }
         self.step_r = step_r.map(|f| pad_vec(f, self.r.len()));
+        self.reduced = None;
         let jac = pad_mat(jac, self.r.len());
         let rs = self.step_r.as_ref().unwrap_or(&self.r);
         let grad = jac.tr_mul(rs);
@@ -138,25 +187,30 @@ impl Work {
             self.jac = DMatrix::zeros(0, 0);
             qrfac(jac, rs)
         };
-        if self.first {
-            self.initial_scaling(&acnorm, stepbound);
+        Ok(Some((qr, acnorm, grad)))
+    }
+
+    /// Factor a reduced Jacobian `[A; b]` ([`Reduced`]) as [`Self::factor_jacobian`] factors
+    /// `J` and `r`: the pivoted QR of `A` (padded with zero rows to `n`) with `b` is that of
+    /// `J` with `r`, and `A`'s column norms are `J`'s. `A` is kept for the report. None when
+    /// it is not finite or not `k × n` with `b` of length `k ≤ n`.
+    fn factor_reduced(&mut self, red: Reduced) -> Option<Factored> {
+        let n = self.x.len();
+        self.njev += 1;
+        let k = red.a.nrows();
+        let finite = red.a.iter().chain(red.b.iter()).all(|v| v.is_finite());
+        if red.a.ncols() != n || red.b.len() != k || k > n || !finite {
+            return None;
         }
-        let rs_norm = match &self.step_r {
-            Some(f) => enorm(f.as_slice()),
-            None => self.fnorm,
-        };
-        let gnorm = scaled_gradient_norm(&qr, &acnorm, rs_norm);
-        for j in 0..n {
-            self.diag[j] = self.diag[j].max(acnorm[j]);
-        }
-        self.qr = Some(qr);
-        self.need_jac = false;
-        let state = state.gradient(grad);
-        // (While polishing, the polishing rules decide; they also end at a zero step.)
-        if self.polish.is_none() && (gnorm <= gtol || gnorm <= EPSMCH) {
-            return Ok((state, Some(Termination::Gtol)));
-        }
-        Ok((state, None))
+        self.step_r = None;
+        self.jac = DMatrix::zeros(0, 0);
+        let grad = red.gradient();
+        let (qr, acnorm) = qrfac(
+            red.a.clone().resize_vertically(n, 0.0),
+            &red.b.clone().resize_vertically(n, 0.0),
+        );
+        self.reduced = Some(red.a);
+        Some((qr, acnorm, grad))
     }
 
     /// MINPACK `mode = 1`: `D` from the column norms of the first Jacobian (1 for a zero
