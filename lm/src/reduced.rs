@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::norm::{dot, enorm};
 
-/// A matrix `A` (`k × n`, `k ≤ n` when built by [`Reduced::push_rows`]) and a vector `b`
+/// A matrix `A` (`k × n`; `k ≤ n` when built by [`Reduced::push_rows`]) and a vector `b`
 /// (length `k`) standing for an `m × n` Jacobian `J` and residuals `f`: `J = Q₁ A` and
 /// `b = Q₁ᵀ f` for some `m × k` matrix `Q₁` with orthonormal columns whose range holds
 /// the columns of `J`. Then `AᵀA = JᵀJ`, `Aᵀb = Jᵀf`, and the least-squares problems

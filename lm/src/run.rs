@@ -176,8 +176,8 @@ pub struct LmReport {
     pub residuals: DVector<f64>,
     /// Jacobian at `x` (evaluated once more at the end if the last step was accepted); for
     /// a problem that supplies [`LeastSquaresProblem::reduced_jacobian`], the reduced
-    /// matrix `A` instead (`n` columns, at most `n` rows, `AᵀA = JᵀJ`): what the
-    /// covariance needs.
+    /// matrix `A` instead (`n` columns, a few rows, `AᵀA = JᵀJ`): what the covariance
+    /// needs.
     pub jacobian: DMatrix<f64>,
     /// `½ ‖residuals‖²`.
     pub cost: f64,

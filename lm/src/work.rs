@@ -193,21 +193,22 @@ impl Work {
     /// Factor a reduced Jacobian `[A; b]` ([`Reduced`]) as [`Self::factor_jacobian`] factors
     /// `J` and `r`: the pivoted QR of `A` (padded with zero rows to `n`) with `b` is that of
     /// `J` with `r`, and `A`'s column norms are `J`'s. `A` is kept for the report. None when
-    /// it is not finite or not `k × n` with `b` of length `k ≤ n`.
+    /// it is not finite or not `k × n` with `b` of length `k`.
     fn factor_reduced(&mut self, red: Reduced) -> Option<Factored> {
         let n = self.x.len();
         self.njev += 1;
         let k = red.a.nrows();
         let finite = red.a.iter().chain(red.b.iter()).all(|v| v.is_finite());
-        if red.a.ncols() != n || red.b.len() != k || k > n || !finite {
+        if red.a.ncols() != n || red.b.len() != k || !finite {
             return None;
         }
         self.step_r = None;
         self.jac = DMatrix::zeros(0, 0);
         let grad = red.gradient();
+        let rows = k.max(n);
         let (qr, acnorm) = qrfac(
-            red.a.clone().resize_vertically(n, 0.0),
-            &red.b.clone().resize_vertically(n, 0.0),
+            red.a.clone().resize_vertically(rows, 0.0),
+            &red.b.clone().resize_vertically(rows, 0.0),
         );
         self.reduced = Some(red.a);
         Some((qr, acnorm, grad))

@@ -356,6 +356,13 @@ impl LeastSquaresProblem for Guarded<'_, '_> {
         self.problem.jacobian_until(x, self.stop)
     }
 
+    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<lm::Reduced> {
+        // As the Jacobian: NaN after a stop request when not cached.
+        self.problem
+            .reduces()
+            .then(|| self.problem.reduced_until(x, self.stop))
+    }
+
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
         self.problem.step_residuals(x)
     }

@@ -103,6 +103,18 @@ fn release<P: LeastSquaresProblem + ?Sized>(
     best
 }
 
+/// The cost's gradient Jᵀr̃ at `report`'s point: from its Jacobian, or from the problem's
+/// reduced Jacobian there when the report holds that ([`lm::Reduced`]: `Aᵀb = Jᵀr̃`).
+fn gradient<P: LeastSquaresProblem + ?Sized>(problem: &P, report: &LmReport) -> DVector<f64> {
+    if report.jacobian.nrows() == report.residuals.len() {
+        return report.jacobian.tr_mul(&report.residuals);
+    }
+    match problem.reduced_jacobian(&report.x) {
+        Some(red) => red.gradient(),
+        None => problem.jacobian(&report.x).tr_mul(&report.residuals),
+    }
+}
+
 /// The solver variable of an amplitude at its bound at which [`release`] takes the cost's
 /// derivative in it (p = u·ε²/2 ≈ 5·10⁻¹⁷ u: the point is the bound's to rounding).
 pub(crate) const RELEASE_PROBE: f64 = 1e-8;
@@ -117,7 +129,7 @@ fn bound_candidate<P: LeastSquaresProblem + ?Sized>(
     report: &LmReport,
 ) -> Option<usize> {
     let free = layout.free();
-    let g = report.jacobian.tr_mul(&report.residuals);
+    let g = gradient(problem, report);
     let mut best: Option<(usize, f64)> = None;
     for (j, &k) in free.iter().enumerate() {
         let x = report.x[j];
@@ -178,5 +190,13 @@ impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for HeldAtZero<'_, P> 
 
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
         self.inner.step_residuals(&with_zero(x, self.j))
+    }
+
+    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<lm::Reduced> {
+        let red = self.inner.reduced_jacobian(&with_zero(x, self.j))?;
+        Some(lm::Reduced {
+            a: red.a.remove_column(self.j),
+            b: red.b,
+        })
     }
 }

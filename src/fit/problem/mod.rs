@@ -21,6 +21,7 @@ pub(crate) mod weights;
 pub(super) mod bounds;
 mod domain;
 pub(super) mod edges;
+mod reduced;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Column, Geometry, PerSample};
@@ -33,6 +34,7 @@ pub(crate) use layout::{FitParam, ParamLayout, Transform, LINEAR};
 use loss::Loss;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+pub use reduced::REDUCE_MIN_ROWS;
 
 /// Samples per evaluation block: large enough to amortise scheduling, small enough to
 /// spread a 10k-sample fit over both cores.
@@ -167,6 +169,9 @@ struct Cached {
     x: DVector<f64>,
     jac: Option<DMatrix<f64>>,
     step: Option<DVector<f64>>,
+    /// The Jacobian reduced block by block, in place of `jac` for a problem that
+    /// [`FitProblem::reduces`].
+    reduced: Option<crate::lm::Reduced>,
 }
 
 /// Weighted residuals at a point, as the solver sees them.
@@ -272,40 +277,42 @@ impl<'a> FitProblem<'a> {
     /// values (and Jacobian) are NaN, so the evaluation ends within one block's time
     /// ([`BLOCK`] samples) of the request and the solver rejects the point. Returns
     /// whether every block was evaluated (false: the stop cut the evaluation).
-    fn eval_blocks(
+    fn eval_blocks<T: Send>(
         &self,
         p: &[f64],
         want_jac: bool,
         stop: Option<&Stop>,
-        finish: impl Fn(&Block, &mut [f64], &mut [f64]) + Sync,
-        mut sink: impl FnMut(&Block, &[f64], &[f64]),
+        finish: impl Fn(&Block, &mut [f64], &mut [f64]) -> T + Sync,
+        mut sink: impl FnMut(&Block, &[f64], &[f64], T),
     ) -> bool {
         let n_spec = self.model.params().len();
         let cut = std::sync::atomic::AtomicBool::new(false);
         let run = |b: &Block| {
             let m = b.geo.len();
             let jac_len = if want_jac { m * n_spec } else { 0 };
-            if stop.is_some_and(Stop::is_requested) {
+            let (mut f, mut jac) = if stop.is_some_and(Stop::is_requested) {
                 cut.store(true, std::sync::atomic::Ordering::Relaxed);
-                return (vec![f64::NAN; m], vec![f64::NAN; jac_len]);
-            }
-            let mp = self.layout.model_params(p, b.channel);
-            let mut f = vec![0.0; m];
-            let mut jac = vec![0.0; jac_len];
-            self.model
-                .eval(&b.geo, &mp, &mut f, want_jac.then_some(&mut jac[..]));
-            finish(b, &mut f, &mut jac);
-            (f, jac)
+                (vec![f64::NAN; m], vec![f64::NAN; jac_len])
+            } else {
+                let mp = self.layout.model_params(p, b.channel);
+                let mut f = vec![0.0; m];
+                let mut jac = vec![0.0; jac_len];
+                self.model
+                    .eval(&b.geo, &mp, &mut f, want_jac.then_some(&mut jac[..]));
+                (f, jac)
+            };
+            let t = finish(b, &mut f, &mut jac);
+            (f, jac, t)
         };
         // One block (a small fit) runs on the calling thread: no task to schedule.
         if let [b] = &self.blocks[..] {
-            let (f, jac) = run(b);
-            sink(b, &f, &jac);
+            let (f, jac, t) = run(b);
+            sink(b, &f, &jac, t);
         } else {
             for group in self.blocks.chunks(PARALLEL_GROUP) {
                 let parts: Vec<_> = group.par_iter().map(run).collect();
-                for (b, (f, jac)) in group.iter().zip(parts) {
-                    sink(b, &f, &jac);
+                for (b, (f, jac, t)) in group.iter().zip(parts) {
+                    sink(b, &f, &jac, t);
                 }
             }
         }
@@ -326,7 +333,7 @@ impl<'a> FitProblem<'a> {
             want_jac,
             None,
             |_, _, _| {},
-            |b, out, bj| {
+            |b, out, bj, ()| {
                 let m = b.idx.len();
                 for (r, i) in b.idx.iter().enumerate() {
                     f[i] = out[r];
@@ -473,30 +480,15 @@ impl FitProblem<'_> {
                 DMatrix::from_element(self.n, free.len(), f64::NAN),
             );
         }
-        // Column of each layout parameter in the solver's Jacobian, with its chain factor.
-        let mut column = vec![None; self.layout.len()];
-        for (col, &k) in free.iter().enumerate() {
-            column[k] = Some((col, self.layout.params[k].transform.dp_dx(x[col])));
-        }
+        let column = self.solver_columns(x);
         let n_spec = self.model.params().len();
         if let Some(direct) = self.weighted_in_place(&p, &column, free.len(), stop) {
             return direct;
         }
-        // Residuals in place of f; the model Jacobian scaled in place by √w ∂r/∂f (the
-        // chain factor dp/dx is applied when scattering).
         let mut rw = DVector::zeros(self.n);
         let mut out = DMatrix::zeros(self.n, free.len());
-        let finish = |b: &Block, f: &mut [f64], jac: &mut [f64]| {
-            let m = f.len();
-            for (r, i) in b.idx.iter().enumerate() {
-                let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
-                for s in 0..n_spec {
-                    jac[s * m + r] *= d;
-                }
-                f[r] = self.sqrt_w[i] * self.residual(i, f[r]);
-            }
-        };
-        self.eval_blocks(&p, true, stop, finish, |b, r, bj| {
+        let finish = |b: &Block, f: &mut [f64], jac: &mut [f64]| self.weigh_block(b, f, jac);
+        self.eval_blocks(&p, true, stop, finish, |b, r, bj, ()| {
             let m = b.idx.len();
             for (row, i) in b.idx.iter().enumerate() {
                 rw[i] = r[row];
@@ -514,6 +506,31 @@ impl FitProblem<'_> {
 }
 
 impl FitProblem<'_> {
+    /// The column of each layout parameter in the solver's Jacobian at solver variables
+    /// `x`, with its chain factor dp/dx (None for a held parameter).
+    fn solver_columns(&self, x: &DVector<f64>) -> Vec<Option<(usize, f64)>> {
+        let mut column = vec![None; self.layout.len()];
+        for (col, &k) in self.layout.free().iter().enumerate() {
+            column[k] = Some((col, self.layout.params[k].transform.dp_dx(x[col])));
+        }
+        column
+    }
+
+    /// A block's model values `f` turned into weighted residuals √wᵢ rᵢ in place, and its
+    /// model Jacobian `jac` (column-major, block rows × model parameters) scaled in place
+    /// by √wᵢ ∂rᵢ/∂fᵢ (the chain factor dp/dx is the caller's).
+    fn weigh_block(&self, b: &Block, f: &mut [f64], jac: &mut [f64]) {
+        let m = f.len();
+        let n_spec = jac.len() / m.max(1);
+        for (r, i) in b.idx.iter().enumerate() {
+            let d = self.sqrt_w[i] * self.dr_df(i, f[r]);
+            for s in 0..n_spec {
+                jac[s * m + r] *= d;
+            }
+            f[r] = self.sqrt_w[i] * self.residual(i, f[r]);
+        }
+    }
+
     /// [`Self::weighted_and_jacobian`] for a problem of one block of every sample in order
     /// whose model parameters are all free, in their layout order (a single-channel fit
     /// with nothing held: every small fit, and every iteration of its start search): the
@@ -570,15 +587,23 @@ impl FitProblem<'_> {
     /// NaN and the solver rejects the point.
     pub(crate) fn residuals_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> DVector<f64> {
         self.forget_cached();
-        let e = self.evaluate(x, stop);
+        let (residuals, cached) = if self.reduces() {
+            let (r, red) = self.weighted_reduced(x, stop);
+            (r, (None, None, Some(red)))
+        } else {
+            let e = self.evaluate(x, stop);
+            (e.residuals, (Some(e.jacobian), e.step, None))
+        };
         if let Ok(mut c) = self.cache.lock() {
+            let (jac, step, reduced) = cached;
             *c = Some(Cached {
                 x: x.clone(),
-                jac: Some(e.jacobian),
-                step: e.step,
+                jac,
+                step,
+                reduced,
             });
         }
-        e.residuals
+        residuals
     }
 
     /// The Jacobian at `x` (solver variables) when the last evaluation was at `x` and left
@@ -624,6 +649,10 @@ impl LeastSquaresProblem for FitProblem<'_> {
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
         // The solver asks once per accepted point: hand the cached matrix over.
         self.jacobian_until(x, None)
+    }
+
+    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<crate::lm::Reduced> {
+        self.reduces().then(|| self.reduced_until(x, None))
     }
 
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {

@@ -31,7 +31,7 @@
 //! each refit runs to a relative cost change that keeps the error of Δχ² a tenth of that.
 
 use crate::fit::problem::{FitProblem, Transform};
-use crate::lm::{self, LeastSquaresProblem, LmConfig, Stop};
+use crate::lm::{self, LeastSquaresProblem, LmConfig, Reduced, Stop};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
 
@@ -184,7 +184,7 @@ struct Restricted<'a, 'p> {
     c_held: f64,
     t: f64,
     transforms: Vec<Transform>,
-    cache: Mutex<Option<(DVector<f64>, DMatrix<f64>)>>,
+    cache: Mutex<Option<(DVector<f64>, Held)>>,
     /// The fit's stop (signals, time limit): an evaluation it cuts short is NaN, which the
     /// refit rejects, so a stop ends the walk within one block's evaluation.
     stop: Option<Stop>,
@@ -230,29 +230,65 @@ impl Restricted<'_, '_> {
         Some((x, grad))
     }
 
-    fn eval(&self, z: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
+    /// The residuals at `z` and their Jacobian in z: whole, or reduced ([`Reduced`]) for a
+    /// base problem that [`FitProblem::reduces`].
+    fn eval(&self, z: &DVector<f64>) -> (DVector<f64>, Held) {
         let m = self.base.len();
         let n = self.n_free();
+        let reduces = self.base.reduces();
         let Some((x, grad)) = self.full_x(z) else {
-            return (
-                DVector::from_element(m, f64::NAN),
-                DMatrix::from_element(m, n - 1, f64::NAN),
-            );
+            let r = DVector::from_element(m, f64::NAN);
+            let rows = if reduces { n } else { m };
+            let a = DMatrix::from_element(rows, n - 1, f64::NAN);
+            return match reduces {
+                true => (
+                    r,
+                    Held::Reduced(Reduced {
+                        a,
+                        b: DVector::from_element(n, f64::NAN),
+                    }),
+                ),
+                false => (r, Held::Whole(a)),
+            };
         };
-        // ∂r/∂z_j = ∂r/∂x_j + ∂r/∂x_held · ∂x_held/∂z_j, formed in J_x's own storage (no
-        // second m × n matrix for a big fit), then the held column removed.
-        let e = self.base.evaluate(&x, self.stop.as_ref());
-        let (r, mut jx) = (e.residuals, e.jacobian);
+        if reduces {
+            let (r, red) = self.base.weighted_reduced(&x, self.stop.as_ref());
+            let a = self.in_z(red.a, &grad);
+            return (r, Held::Reduced(Reduced { a, b: red.b }));
+        }
+        let (r, j) = self.whole(&x, &grad);
+        (r, Held::Whole(j))
+    }
+
+    /// The residuals at the full `x` and their whole Jacobian in z (`grad`: see
+    /// [`Self::full_x`]).
+    fn whole(&self, x: &DVector<f64>, grad: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let e = self.base.evaluate(x, self.stop.as_ref());
+        (e.residuals, self.in_z(e.jacobian, grad))
+    }
+
+    /// A Jacobian in x (or its reduced `A`, whose columns transform alike) taken to z:
+    /// ∂r/∂z_j = ∂r/∂x_j + ∂r/∂x_held · ∂x_held/∂z_j (`grad`), formed in its own storage
+    /// (no second m × n matrix for a big fit), then the held column removed.
+    fn in_z(&self, mut jx: DMatrix<f64>, grad: &[f64]) -> DMatrix<f64> {
         for (i, &gi) in grad.iter().enumerate() {
             if i != self.held && gi != 0.0 {
-                for row in 0..m {
+                for row in 0..jx.nrows() {
                     let h = jx[(row, self.held)];
                     jx[(row, i)] += gi * h;
                 }
             }
         }
-        (r, jx.remove_column(self.held))
+        jx.remove_column(self.held)
     }
+}
+
+/// A restricted problem's Jacobian at its last evaluated point.
+enum Held {
+    /// The whole `m × n` Jacobian.
+    Whole(DMatrix<f64>),
+    /// Reduced ([`Reduced`]), for a base problem that [`FitProblem::reduces`].
+    Reduced(Reduced),
 }
 
 impl LeastSquaresProblem for Restricted<'_, '_> {
@@ -273,14 +309,25 @@ impl LeastSquaresProblem for Restricted<'_, '_> {
     /// first (as [`FitProblem::cached_jacobian`] does: no stale `m × n` matrix is held
     /// while the new one is evaluated).
     fn jacobian(&self, z: &DVector<f64>) -> DMatrix<f64> {
-        if let Ok(mut c) = self.cache.lock() {
-            if let Some((cz, j)) = c.take() {
-                if &cz == z {
-                    return j;
-                }
+        match (self.held_at(z), self.full_x(z)) {
+            (Held::Whole(j), _) => j,
+            (Held::Reduced(_), Some((x, grad))) => self.whole(&x, &grad).1,
+            (Held::Reduced(_), None) => {
+                DMatrix::from_element(self.base.len(), self.n_free() - 1, f64::NAN)
             }
         }
-        self.eval(z).1
+    }
+
+    /// The cached reduced Jacobian when the last evaluation was at `z`, else evaluated;
+    /// None when the base problem does not reduce.
+    fn reduced_jacobian(&self, z: &DVector<f64>) -> Option<Reduced> {
+        if !self.base.reduces() {
+            return None;
+        }
+        match self.held_at(z) {
+            Held::Reduced(red) => Some(red),
+            Held::Whole(_) => None,
+        }
     }
 
     /// Under a robust loss, the base problem's step residuals at the full x (the same at
@@ -291,6 +338,21 @@ impl LeastSquaresProblem for Restricted<'_, '_> {
         }
         let (x, _) = self.full_x(z)?;
         self.base.step_residuals(&x)
+    }
+}
+
+impl Restricted<'_, '_> {
+    /// The Jacobian at `z`: the one cached by the last evaluation there (handed over), else
+    /// evaluated.
+    fn held_at(&self, z: &DVector<f64>) -> Held {
+        if let Ok(mut c) = self.cache.lock() {
+            if let Some((cz, j)) = c.take() {
+                if &cz == z {
+                    return j;
+                }
+            }
+        }
+        self.eval(z).1
     }
 }
 
@@ -324,7 +386,7 @@ impl<'a, 'p> Profiler<'a, 'p> {
         lm: &LmConfig,
     ) -> Self {
         let x = problem.layout.to_x(p_best);
-        let (r, j) = problem.residuals_and_jacobian(&x);
+        let (r, j) = problem.residuals_and_gram_factor(&x);
         let chi2_min = r.norm_squared();
         let unc = super::covariance::uncertainty(&j, 0.5 * chi2_min, problem.len(), 1e-9);
         let dof = problem.len().saturating_sub(x.len());
