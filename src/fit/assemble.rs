@@ -20,7 +20,6 @@ use std::collections::BTreeMap;
 struct Goodness {
     fitted: Vec<f64>,
     residuals: Vec<f64>,
-    std_residuals: Vec<f64>,
     /// The fit cost ½ Σ C²ρ(wᵢrᵢ²/C²) (½χ² for the linear loss).
     cost: f64,
     /// Samples with |√wᵢ rᵢ| > C under a robust loss.
@@ -104,7 +103,8 @@ pub(super) fn assemble(
         fitted_computed,
         fitted: gof.fitted,
         residuals: gof.residuals,
-        std_residuals: gof.std_residuals,
+        // Computed after the adequacy tests (see `checked`).
+        std_residuals: Vec::new(),
         sample_modes,
         layout: layout.clone(),
         values: p.clone(),
@@ -134,7 +134,8 @@ fn factors_label(model: &dyn Model) -> String {
         .unwrap_or_default()
 }
 
-/// `result` with its validity checks and adequacy tests filled in, and a note when a
+/// `result` with its validity checks, adequacy tests and standardized residuals filled in,
+/// and a note when a
 /// reported number is not finite (the result is then not a usable optimum).
 fn checked(
     mut result: FitResult,
@@ -144,6 +145,13 @@ fn checked(
 ) -> FitResult {
     result.validity = validity_of(&result, input);
     result.adequacy = adequacy_of(&result, problem, input, config);
+    // After the tests, whose temporaries are the peak of a big fit's memory.
+    result.std_residuals = standardized_residuals(
+        problem,
+        &result.residuals,
+        result.n_free,
+        config.weights_are_uncertainties,
+    );
     if !result.is_finite() {
         result.notes.push(
             "not a usable optimum: the cost, a parameter, a standard error or a correlation is not a finite number (the values overflow double precision; rescale L or the weights)".into(),
@@ -168,10 +176,7 @@ fn fitted_at_point(
     let stop = config.lm.stop.as_ref().filter(|_| !quick(lm));
     let n_free = problem.layout.free().len();
     match problem.values_modes_until(p, stop) {
-        Some((fitted, modes)) => {
-            let unc = config.weights_are_uncertainties;
-            (goodness(problem, input, fitted, n_free, unc), modes, true)
-        }
+        Some((fitted, modes)) => (goodness(problem, input, fitted, n_free), modes, true),
         None => {
             notes.push(FITTED_NOT_COMPUTED.to_string());
             (from_cost(problem, lm.cost, n_free), Vec::new(), false)
@@ -203,7 +208,6 @@ fn from_cost(problem: &FitProblem, cost: f64, n_free: usize) -> Goodness {
     Goodness {
         fitted: Vec::new(),
         residuals: Vec::new(),
-        std_residuals: Vec::new(),
         cost,
         beyond_f_scale: None,
         chi2: if linear { 2.0 * cost } else { f64::NAN },
@@ -226,17 +230,11 @@ fn information_criteria(objective: f64, nf: f64, n_free: usize) -> (f64, f64) {
     )
 }
 
-/// Residuals, cost, χ², rms, R², AIC and BIC of the model values `fitted`. Under a robust loss the
-/// standardized residuals and AIC/BIC use the robust objective 2·cost = Σ C²ρ in place of
+/// Residuals, cost, χ², rms, R², AIC and BIC of the model values `fitted`. Under a robust loss
+/// AIC/BIC (and the standardized residuals, [`standardized_residuals`]) use the robust objective 2·cost = Σ C²ρ in place of
 /// χ² (the quantity the fit minimised, and the s² of its covariance), so that a few outliers
 /// neither inflate s nor decide a model comparison.
-fn goodness(
-    problem: &FitProblem,
-    input: &FitInput,
-    fitted: Vec<f64>,
-    n_free: usize,
-    weights_are_uncertainties: bool,
-) -> Goodness {
+fn goodness(problem: &FitProblem, input: &FitInput, fitted: Vec<f64>, n_free: usize) -> Goodness {
     let n = problem.len();
     let residuals = problem.raw_residuals(&fitted);
     let sw = problem.sqrt_weight();
@@ -261,8 +259,6 @@ fn goodness(
             .filter(|(r, s)| (*r * *s).abs() > c)
             .count()
     });
-    let std_residuals =
-        standardized_residuals(problem, &residuals, n_free, weights_are_uncertainties);
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_abs_residual = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     let r2 = r_squared(problem, input, &fitted);
@@ -270,7 +266,6 @@ fn goodness(
     Goodness {
         fitted,
         residuals,
-        std_residuals,
         cost,
         beyond_f_scale,
         chi2,

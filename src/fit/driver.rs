@@ -130,6 +130,8 @@ fn finish(
         solved.notes.push(UNCERTAINTIES_NOT_COMPUTED.to_string());
     }
     accept::accept(&mut solved, input);
+    // The report computes its residuals from the fitted values: the solver's are not held.
+    solved.run.lm.residuals = nalgebra::DVector::zeros(0);
     let seconds = t0.elapsed().as_secs_f64();
     let stages = StageSeconds {
         grid: start.start_seconds,

@@ -29,6 +29,67 @@ pub(crate) fn profile_intervals(
     if stop.is_requested() {
         return Ok(Vec::new());
     }
+    on_problem(spec, input, r, uncertainties, stop, |problem, config| {
+        intervals_on(problem, r, spec.absolute_sigma, config)
+    })
+}
+
+/// [`profile_intervals`] of `r` without its residuals and standardized residuals held
+/// while the intervals' refits run (on a big fit they and the refits' residuals are the
+/// peak of its memory): they are computed again from the fitted values afterwards, on the
+/// intervals' problem (the same residual kind, floor, weights and loss: the same
+/// numbers).
+pub fn profile_intervals_released(
+    spec: &DatasetFit,
+    input: &FitInput,
+    r: &mut FitResult,
+    uncertainties: bool,
+    stop: &Stop,
+) -> Result<Vec<Interval>> {
+    if stop.is_requested() {
+        return Ok(Vec::new());
+    }
+    let again = !r.fitted.is_empty() && !r.residuals.is_empty();
+    if again {
+        r.residuals = Vec::new();
+        r.std_residuals = Vec::new();
+    }
+    let n_free = r.n_free;
+    let result: &FitResult = r;
+    let (intervals, residuals) = on_problem(
+        spec,
+        input,
+        result,
+        uncertainties,
+        stop,
+        |problem, config| {
+            let intervals = intervals_on(problem, result, spec.absolute_sigma, config);
+            let residuals = again.then(|| {
+                let raw = problem.raw_residuals(&result.fitted);
+                let unc = config.weights_are_uncertainties;
+                let std = driver::standardized_residuals(problem, &raw, n_free, unc);
+                (raw, std)
+            });
+            (intervals, residuals)
+        },
+    )?;
+    if let Some((raw, std)) = residuals {
+        r.residuals = raw;
+        r.std_residuals = std;
+    }
+    Ok(intervals)
+}
+
+/// `f` on the full problem at `r`'s model (the parameters held by the reduced fit free
+/// again) with the fit's configuration, sharing `stop`.
+fn on_problem<T>(
+    spec: &DatasetFit,
+    input: &FitInput,
+    r: &FitResult,
+    uncertainties: bool,
+    stop: &Stop,
+    f: impl FnOnce(&FitProblem, &driver::FitConfig) -> T,
+) -> Result<T> {
     let mut config = spec.config_for(&r.full_model(), uncertainties);
     config.lm.stop = Some(stop.clone());
     let model = crate::model::by_name(&config.model, &config.model_opts)?;
@@ -42,7 +103,18 @@ pub(crate) fn profile_intervals(
     let floor = driver::residual_floor(&config, &input.y);
     let problem = FitProblem::new(model.as_ref(), layout, input, config.residual, floor)?
         .with_loss(config.loss);
-    let prof = Profiler::new(&problem, &r.values, spec.absolute_sigma, &config.lm);
+    Ok(f(&problem, &config))
+}
+
+/// The intervals of every quantity of `r` on `problem`, its full problem.
+fn intervals_on(
+    problem: &FitProblem,
+    r: &FitResult,
+    absolute_sigma: bool,
+    config: &driver::FitConfig,
+) -> Vec<Interval> {
+    let stop = config.lm.stop.as_ref().expect("the intervals' stop");
+    let prof = Profiler::new(problem, &r.values, absolute_sigma, &config.lm);
     let layout = &problem.layout;
     let mut out = Vec::new();
     for k in layout.free() {
@@ -93,5 +165,5 @@ pub(crate) fn profile_intervals(
             }
         }
     }
-    Ok(out)
+    out
 }
