@@ -105,3 +105,93 @@ fn not_evaluated(n: usize) -> Reduced {
         b: DVector::from_element(n, f64::NAN),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::problem::{Channels, FitInput, ParamLayout, ResidualKind};
+    use crate::geometry::{Geometry, Quantity, Sample};
+    use crate::lm::{minimize, LeastSquaresProblem, LmConfig};
+
+    /// A KBS hemisphere scan of `n` samples (deterministic angles) whose values are the
+    /// model's at σ = 0.25 λ, T = 2.5 λ with a deterministic ±1 % perturbation.
+    fn input(model: &dyn crate::model::Model, n: usize) -> FitInput {
+        let samples: Vec<Sample> = (0..n)
+            .map(|i| {
+                let u = |k: usize, m: usize| ((i * k) % m) as f64 / m as f64;
+                Sample::from_degrees(80.0 * u(7, 97), 85.0 * u(13, 331), 360.0 * u(1, 1009) - 180.0)
+            })
+            .collect();
+        let geo = Geometry::new(&samples, &[1.0], Quantity::Radiance).unwrap();
+        let layout = ParamLayout::new(model, &[String::new()]);
+        let p: Vec<f64> = layout
+            .params
+            .iter()
+            .map(|fp| match fp.name.as_str() {
+                "sigma" => 0.25,
+                "T" => 2.5,
+                _ => 1.0,
+            })
+            .collect();
+        let mut f = vec![0.0; n];
+        model.eval(&geo, &layout.model_params(&p, 0), &mut f, None);
+        let y: Vec<f64> = (0..n)
+            .map(|i| f[i] * (1.0 + 0.01 * ((i * 7919 % 201) as f64 / 100.0 - 1.0)))
+            .collect();
+        FitInput {
+            geo,
+            y: y.into(),
+            weight: vec![1.0; n].into(),
+            channel: Channels::single(n),
+            channel_names: vec![String::new()],
+        }
+    }
+
+    #[test]
+    fn a_big_problem_reduces_its_jacobian_to_the_dense_one_and_solves_alike() {
+        let model = crate::model::by_name("kbs", &Default::default()).unwrap();
+        let n = REDUCE_MIN_ROWS + 1000;
+        let input = input(model.as_ref(), n);
+        let layout = ParamLayout::new(model.as_ref(), &input.channel_names);
+        let problem =
+            FitProblem::new(model.as_ref(), layout, &input, ResidualKind::Absolute, 0.0).unwrap();
+        assert!(problem.reduces());
+        let start: Vec<f64> = (problem.layout.params.iter())
+            .map(|fp| match fp.name.as_str() {
+                "sigma" => 0.3,
+                "T" => 2.0,
+                _ => 0.8,
+            })
+            .collect();
+        let x = problem.layout.to_x(&start);
+        let (r_dense, j) = problem.residuals_and_jacobian(&x);
+        let (r, red) = problem.weighted_reduced(&x, None);
+        assert_eq!(r, r_dense, "the same residuals to the bit");
+        let gram = j.tr_mul(&j);
+        let diff = (red.a.tr_mul(&red.a) - &gram).norm();
+        assert!(diff <= 1e-12 * gram.norm(), "JᵀJ off by {diff}");
+        let (g, g_dense) = (red.gradient(), j.tr_mul(&r));
+        assert!((&g - &g_dense).norm() <= 1e-12 * g_dense.norm());
+        // The solve with the reduced Jacobian and the one with the dense Jacobian (the
+        // problem behind a wrapper that supplies only that) reach the same optimum.
+        struct Dense<'a, 'p>(&'a FitProblem<'p>);
+        impl LeastSquaresProblem for Dense<'_, '_> {
+            fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+                self.0.residuals_and_jacobian(x).0
+            }
+            fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+                self.0.residuals_and_jacobian(x).1
+            }
+        }
+        let config = LmConfig::default();
+        let reduced = minimize(&problem, x.clone(), &config);
+        let dense = minimize(&Dense(&problem), x, &config);
+        assert!(reduced.termination.converged() && dense.termination.converged());
+        assert_eq!(reduced.jacobian.shape(), (3, 3));
+        assert!((reduced.cost - dense.cost).abs() <= 1e-12 * dense.cost);
+        for k in 0..3 {
+            let (a, b) = (reduced.x[k], dense.x[k]);
+            assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "x[{k}]: {a} vs {b}");
+        }
+    }
+}
