@@ -93,6 +93,32 @@ fn residuals_file_has_the_fit_columns() {
     assert_eq!(text.lines().count(), 856);
 }
 
+/// The residuals and standardized residuals a fit with profile intervals reports (they
+/// are released while the intervals run and computed again from the fitted values) are
+/// those of the same fit without intervals, to the bit; so is a robust fit's.
+#[test]
+fn residuals_file_is_the_same_with_and_without_intervals() {
+    let dir = tempfile::tempdir().unwrap();
+    for loss in ["linear", "cauchy"] {
+        let written: Vec<String> = ["--no-intervals", "--quiet"]
+            .iter()
+            .map(|flag| {
+                let path = dir.path().join(format!("res-{loss}{flag}.csv"));
+                goniofit()
+                    .args(["fit", "--model", "kbs", "--wavelength", "1", "--loss", loss])
+                    .args([*flag, "--residuals"])
+                    .arg(&path)
+                    .arg("data/synthetic/kbs_inplane.csv")
+                    .assert()
+                    .code(0);
+                std::fs::read_to_string(&path).unwrap()
+            })
+            .collect();
+        assert_eq!(written[0].lines().count(), 856);
+        assert_eq!(written[0], written[1], "loss {loss}");
+    }
+}
+
 #[test]
 fn bad_inputs_exit_2_with_a_clear_message() {
     let dir = tempfile::tempdir().unwrap();

@@ -119,7 +119,11 @@ mod tests {
         let samples: Vec<Sample> = (0..n)
             .map(|i| {
                 let u = |k: usize, m: usize| ((i * k) % m) as f64 / m as f64;
-                Sample::from_degrees(80.0 * u(7, 97), 85.0 * u(13, 331), 360.0 * u(1, 1009) - 180.0)
+                Sample::from_degrees(
+                    80.0 * u(7, 97),
+                    85.0 * u(13, 331),
+                    360.0 * u(1, 1009) - 180.0,
+                )
             })
             .collect();
         let geo = Geometry::new(&samples, &[1.0], Quantity::Radiance).unwrap();
@@ -191,7 +195,10 @@ mod tests {
         assert!((reduced.cost - dense.cost).abs() <= 1e-12 * dense.cost);
         for k in 0..3 {
             let (a, b) = (reduced.x[k], dense.x[k]);
-            assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "x[{k}]: {a} vs {b}");
+            assert!(
+                (a - b).abs() <= 1e-9 * b.abs().max(1.0),
+                "x[{k}]: {a} vs {b}"
+            );
         }
     }
 }
