@@ -263,12 +263,18 @@ where
             Some(TerminationReason::Interrupt) => Termination::Interrupted,
             _ => Termination::NoProgress,
         });
-    let Some((x, residuals)) = solver.current() else {
+    let (evaluations, mut jacobian_evaluations) =
+        (solver.evaluations(), solver.jacobian_evaluations());
+    let taken = solver.take_jacobian();
+    // The point and its residuals moved out of the solver (no copy of a big fit's).
+    let Some(work) = solver.work.take() else {
         return report_at_start(problem, x0, termination, start);
     };
-    let x = x.clone();
-    let mut jacobian_evaluations = solver.jacobian_evaluations();
-    let jacobian = match solver.take_jacobian() {
+    let (x, residuals) = match work.r.len() == work.m {
+        true => (work.x, work.r),
+        false => (work.x, work.r.rows(0, work.m).into_owned()),
+    };
+    let jacobian = match taken {
         Some(j) => j,
         None => {
             jacobian_evaluations += 1;
@@ -282,7 +288,7 @@ where
         jacobian,
         termination,
         iterations: state.get_iter(),
-        evaluations: solver.evaluations(),
+        evaluations,
         jacobian_evaluations,
         seconds: start.elapsed().as_secs_f64(),
     }
