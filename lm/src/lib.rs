@@ -86,6 +86,10 @@
 //! * `step.rs`: one trial step: damped step, ratio, trust-region update, convergence tests.
 //! * `polish.rs`: Gauss–Newton polishing after convergence.
 //! * `qr.rs`: MINPACK `qrfac` and `qrsolv`; `lmpar.rs`: MINPACK `lmpar`; `norm.rs`: `enorm`.
+//! * `reduced.rs`: [`Reduced`], a Jacobian reduced block by block of rows to its triangular
+//!   factor, which a problem of many residuals supplies
+//!   ([`LeastSquaresProblem::reduced_jacobian`]) so that its `m × n` Jacobian is never held:
+//!   the pivoted QR of that factor with `Qᵀr` gives the same steps to rounding.
 //! * `run.rs`: [`LeastSquaresProblem`], [`LmConfig`], [`LmReport`] and [`minimize`], the
 //!   driver through argmin's Executor; `stop.rs`: [`Stop`], the Ctrl-C handler and deadlines;
 //!   `progress.rs`: the progress line.
