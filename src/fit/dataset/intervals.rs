@@ -19,27 +19,12 @@ pub(crate) const MAX_PROFILED: usize = 8;
 /// stated `sigma_L`). A quantity whose profile cannot be walked is left out. Every refit
 /// shares the fit's `stop` (its time limit and signals): once it fires the walks end, and
 /// the caller discards what they found (a walk cut short ends at a wrong likelihood).
+///
+/// `r`'s residuals and standardized residuals are not held while the refits run (on a big
+/// fit they and the refits' residuals are the peak of its memory): they are computed again
+/// from the fitted values afterwards, on the intervals' problem (the same residual kind,
+/// floor, weights and loss: the same numbers).
 pub(crate) fn profile_intervals(
-    spec: &DatasetFit,
-    input: &FitInput,
-    r: &FitResult,
-    uncertainties: bool,
-    stop: &Stop,
-) -> Result<Vec<Interval>> {
-    if stop.is_requested() {
-        return Ok(Vec::new());
-    }
-    on_problem(spec, input, r, uncertainties, stop, |problem, config| {
-        intervals_on(problem, r, spec.absolute_sigma, config)
-    })
-}
-
-/// [`profile_intervals`] of `r` without its residuals and standardized residuals held
-/// while the intervals' refits run (on a big fit they and the refits' residuals are the
-/// peak of its memory): they are computed again from the fitted values afterwards, on the
-/// intervals' problem (the same residual kind, floor, weights and loss: the same
-/// numbers).
-pub fn profile_intervals_released(
     spec: &DatasetFit,
     input: &FitInput,
     r: &mut FitResult,

@@ -584,8 +584,7 @@ fn intervals_of(
             .push("no profile intervals: the fit did not converge to a usable optimum".into());
         return Ok((Vec::new(), false));
     }
-    let intervals =
-        intervals::profile_intervals_released(spec, input, result, uncertainties, stop)?;
+    let intervals = profile_intervals(spec, input, result, uncertainties, stop)?;
     if !stop.is_requested() {
         return Ok((intervals, false));
     }

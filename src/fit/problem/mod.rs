@@ -34,7 +34,6 @@ pub(crate) use layout::{FitParam, ParamLayout, Transform, LINEAR};
 use loss::Loss;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-pub use reduced::REDUCE_MIN_ROWS;
 
 /// Samples per evaluation block: large enough to amortise scheduling, small enough to
 /// spread a 10k-sample fit over both cores.

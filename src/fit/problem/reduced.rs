@@ -10,12 +10,12 @@ use nalgebra::{DMatrix, DVector};
 /// Problems of at least this many samples, with a linear loss, give the solver their
 /// Jacobian reduced ([`FitProblem::reduces`]); smaller ones give the whole Jacobian, and
 /// their steps are MINPACK's to the bit. Both give the same steps to rounding.
-pub const REDUCE_MIN_ROWS: usize = 1 << 17;
+pub(crate) const REDUCE_MIN_ROWS: usize = 1 << 17;
 
 impl FitProblem<'_> {
     /// Whether the solver gets this problem's Jacobian reduced ([`REDUCE_MIN_ROWS`] samples
     /// or more, linear loss).
-    pub fn reduces(&self) -> bool {
+    pub(crate) fn reduces(&self) -> bool {
         self.n >= REDUCE_MIN_ROWS && self.loss.is_linear()
     }
 
@@ -23,7 +23,7 @@ impl FitProblem<'_> {
     /// block by block of samples (each block reduced on the thread that evaluated it, the
     /// blocks then stacked in order, so the result does not depend on the threads), cut
     /// short once `stop` is requested (then NaN). Linear loss only.
-    pub fn weighted_reduced(
+    pub(crate) fn weighted_reduced(
         &self,
         x: &DVector<f64>,
         stop: Option<&Stop>,
@@ -68,7 +68,7 @@ impl FitProblem<'_> {
     /// The reduced Jacobian at `x`: the one the last residual evaluation left at `x`
     /// (handed over once), else evaluated — unless `stop` is requested: then every entry
     /// is NaN.
-    pub fn reduced_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> Reduced {
+    pub(crate) fn reduced_until(&self, x: &DVector<f64>, stop: Option<&Stop>) -> Reduced {
         if let Ok(mut c) = self.cache.lock() {
             if let Some(red) = c
                 .as_mut()
@@ -88,7 +88,10 @@ impl FitProblem<'_> {
     /// The weighted residuals at `x` and a matrix with the Jacobian's `JᵀJ`: the
     /// Jacobian's reduced `A` ([`Reduced`]) for a problem that [`Self::reduces`], else the
     /// Jacobian itself — what the covariance needs.
-    pub fn residuals_and_gram_factor(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
+    pub(crate) fn residuals_and_gram_factor(
+        &self,
+        x: &DVector<f64>,
+    ) -> (DVector<f64>, DMatrix<f64>) {
         if self.reduces() {
             let (r, red) = self.weighted_reduced(x, None);
             (r, red.a)

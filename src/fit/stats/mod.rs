@@ -4,10 +4,10 @@
 //! and whether the model describes the data ([`adequacy`]); statistics read back from a
 //! report's JSON ([`json_number`]).
 
-pub mod adequacy;
-pub mod covariance;
-pub mod json_number;
-pub mod profile;
-pub mod quantile;
+pub(crate) mod adequacy;
+pub(crate) mod covariance;
+pub(crate) mod json_number;
+pub(crate) mod profile;
+pub(crate) mod quantile;
 mod restricted;
-pub mod validity;
+pub(crate) mod validity;
