@@ -91,9 +91,9 @@ impl From<LossArg> for LossKind {
 }
 
 /// Parse `X,Y` patch half-sizes.
-pub(crate) fn parse_patch(text: &str) -> crate::Result<(f64, f64)> {
+pub(crate) fn parse_patch(text: &str) -> crate::error::Result<(f64, f64)> {
     let bad = || {
-        crate::Error::Usage(format!(
+        crate::error::Error::Usage(format!(
             "--patch '{text}': expected two positive numbers X,Y"
         ))
     };

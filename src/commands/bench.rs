@@ -60,7 +60,7 @@ pub(crate) fn run(args: BenchArgs) -> anyhow::Result<u8> {
 
 fn work_precision(args: WorkPrecisionArgs) -> anyhow::Result<u8> {
     if args.repeats == 0 {
-        return Err(crate::Error::Usage("--repeats must be at least 1".into()).into());
+        return Err(crate::error::Error::Usage("--repeats must be at least 1".into()).into());
     }
     let bar = super::recover::progress_bar(workprec::steps() as u64, "work-precision");
     let wp = workprec::run(

@@ -99,7 +99,7 @@ pub(crate) fn run(args: EvalArgs) -> anyhow::Result<u8> {
     let wavelength: Vec<f64> = match (args.wavelength.map(|w| w.0), &ds.wavelength) {
         (Some(l), _) => {
             if !(l.is_finite() && l > 0.0) {
-                return Err(crate::Error::Usage(format!(
+                return Err(crate::error::Error::Usage(format!(
                     "--wavelength {l} must be finite and positive"
                 ))
                 .into());
@@ -108,7 +108,7 @@ pub(crate) fn run(args: EvalArgs) -> anyhow::Result<u8> {
         }
         (None, Some(w)) => w.clone(),
         (None, None) if needs_wavelength => {
-            return Err(crate::Error::Usage(format!(
+            return Err(crate::error::Error::Usage(format!(
                 "model {} needs a wavelength: give --wavelength L (the unit of sigma and T) or a wavelength column in {}",
                 args.model,
                 crate::io::shown(&args.file)

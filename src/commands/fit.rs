@@ -1,13 +1,13 @@
 //! `goniofit fit`: a measurement file in, a fit report out.
 
-use super::fit_args::{FitArgs, CLI};
+use super::fit_args::{Command, FitArgs, CLI};
+use crate::error::Error;
 use crate::fit::dataset::{batch, fit_dataset_near, DatasetFit, Outcome};
 use crate::io::{self, Dataset, ReadOptions};
-use crate::lm::Stop;
 use crate::report::{self, RunInfo};
 use crate::settings::Settings;
-use crate::Error;
 use anyhow::Context;
+use goniofit_lm::Stop;
 use std::path::{Path, PathBuf};
 
 /// The units a dataset's fit is reported in (those of its report's setting), without the
@@ -50,14 +50,6 @@ fn dataset_fit(c: &Command, ds: &Dataset, single: bool) -> DatasetFit {
     let mut spec = c.settings.dataset_fit(ds, single);
     spec.config.lm.progress = single && c.args.show_progress();
     spec
-}
-
-/// A `fit` command: its arguments (the files and outputs) and the fit's settings from them.
-pub(crate) struct Command {
-    /// The command's arguments: the files, the outputs and how progress is shown.
-    pub args: FitArgs,
-    /// What each fit is asked to do ([`FitArgs::settings`], checked).
-    pub settings: Settings,
 }
 
 /// Fit one dataset with every candidate model; keep the lowest BIC among the usable fits.
@@ -157,7 +149,7 @@ pub(crate) fn run(args: FitArgs) -> anyhow::Result<u8> {
 /// outputs were written) still says the run was interrupted: every output is complete, and
 /// the exit code is 3.
 fn exit_code(all_usable: bool, skipped: &[String], stop: &Stop) -> u8 {
-    let interrupted = stop.requested() == Some(crate::lm::Termination::Interrupted);
+    let interrupted = stop.requested() == Some(goniofit_lm::Termination::Interrupted);
     if all_usable && !interrupted && skipped.is_empty() {
         0
     } else {

@@ -243,3 +243,11 @@ impl FitArgs {
         })
     }
 }
+
+/// A `fit` command: its arguments (the files and outputs) and the fit's settings from them.
+pub(crate) struct Command {
+    /// The command's arguments: the files, the outputs and how progress is shown.
+    pub args: FitArgs,
+    /// What each fit is asked to do ([`FitArgs::settings`], checked).
+    pub settings: Settings,
+}

@@ -2,7 +2,7 @@
 //! `--plot` pictures, for one fit (one page, one folder of pictures) and for a batch (one
 //! page with every fit, one folder per fit).
 
-use super::fit::Command;
+use super::fit_args::Command;
 use crate::fit::dataset::Outcome;
 use crate::fit::driver::{FitConfig, FitResult};
 use crate::io::{self, Dataset};

@@ -20,12 +20,12 @@ pub(crate) mod stages;
 pub(crate) mod synth;
 
 /// Whether `e` is a stop request that came before anything could be reported
-/// ([`crate::Error::Stopped`] anywhere in its chain).
+/// ([`crate::error::Error::Stopped`] anywhere in its chain).
 pub(crate) fn is_stopped(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
         matches!(
-            c.downcast_ref::<crate::Error>(),
-            Some(crate::Error::Stopped(_))
+            c.downcast_ref::<crate::error::Error>(),
+            Some(crate::error::Error::Stopped(_))
         )
     })
 }
@@ -36,12 +36,12 @@ pub(crate) fn exit_code_of(e: &anyhow::Error) -> u8 {
     if is_stopped(e) {
         return 3;
     }
-    match e.downcast_ref::<crate::Error>() {
+    match e.downcast_ref::<crate::error::Error>() {
         Some(ge) if !ge.is_user_error() => 1,
         Some(_) => 2,
         None => {
             if e.chain().any(|c| {
-                c.downcast_ref::<crate::Error>()
+                c.downcast_ref::<crate::error::Error>()
                     .is_some_and(|g| g.is_user_error())
             }) {
                 2

@@ -2,12 +2,12 @@
 //! --json > fit.json`), without fitting again: the report carries the fit's settings and
 //! the fitted values.
 
+use crate::error::Error;
 use crate::fit::driver::{FitConfig, FitInput};
 use crate::fit::problem::ParamLayout;
 use crate::io::{self, FileSet};
 use crate::plot::fit::plot_fit;
 use crate::report::json::FitReport;
-use crate::Error;
 use anyhow::Context;
 use clap::Args;
 use std::path::{Path, PathBuf};

@@ -2,8 +2,8 @@
 //! uncertainties.
 
 use crate::harness::recover::{self, RecoverConfig};
-use crate::lm::Stop;
 use clap::Args;
+use goniofit_lm::Stop;
 use std::io::IsTerminal as _;
 use std::time::Duration;
 
@@ -50,7 +50,7 @@ pub(crate) struct RecoverArgs {
 pub(crate) fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     crate::settings::scenes(crate::settings::Front::Cli, args.scenes)?;
     if !(args.noise.is_finite() && args.noise > 0.0) {
-        return Err(crate::Error::Usage(format!(
+        return Err(crate::error::Error::Usage(format!(
             "--noise {} must be positive (coverage needs noise)",
             args.noise
         ))
@@ -58,7 +58,7 @@ pub(crate) fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     }
     let fit_timeout = crate::settings::timeout(crate::settings::Front::Cli, Some(args.timeout))?;
     if let Some(bad) = args.only.iter().flatten().find(|&&id| id >= args.scenes) {
-        return Err(crate::Error::Usage(format!(
+        return Err(crate::error::Error::Usage(format!(
             "--only {bad}: scene ids run from 0 to {} (--scenes {})",
             args.scenes - 1,
             args.scenes
@@ -82,7 +82,7 @@ pub(crate) fn run(args: RecoverArgs) -> anyhow::Result<u8> {
     let report = recover::run(&config, &stop, &|_r| bar.inc(1));
     bar.finish_and_clear();
     let report = match report {
-        Err(e @ crate::Error::Stopped(_)) => {
+        Err(e @ crate::error::Error::Stopped(_)) => {
             eprintln!("goniofit: stopped: {e}");
             return Ok(SIGNALLED);
         }

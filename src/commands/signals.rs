@@ -8,7 +8,7 @@
 /// installed, signals keep their previous behaviour.
 pub(crate) fn install() {
     let _ = ctrlc::set_handler(|| {
-        if !crate::lm::stop::interrupt() {
+        if !goniofit_lm::stop::interrupt() {
             crate::io::output::remove_temporaries();
             std::process::exit(130);
         }

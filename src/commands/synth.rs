@@ -122,7 +122,7 @@ pub(crate) enum NoiseKindArg {
 }
 
 fn usage(m: String) -> anyhow::Error {
-    crate::Error::Usage(m).into()
+    crate::error::Error::Usage(m).into()
 }
 
 /// Comma-separated numbers.

@@ -7,8 +7,8 @@ use super::problem::{FitInput, FitParam, ParamLayout, LINEAR};
 use super::result::{Solved, Verdict};
 use super::stats::covariance;
 use crate::geometry::{Geometry, MIN_FLANK_SAMPLES};
-use crate::lm::Termination;
 use crate::model::ParamSpec;
+use goniofit_lm::Termination;
 
 /// The note for a parameter at its lower bound.
 pub(super) fn lower_bound_note(fp: &FitParam) -> String {

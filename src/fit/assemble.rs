@@ -168,7 +168,7 @@ fn checked(
 fn fitted_at_point(
     problem: &FitProblem,
     input: &FitInput,
-    lm: &crate::lm::LmReport,
+    lm: &goniofit_lm::LmReport,
     p: &[f64],
     config: &FitConfig,
     notes: &mut Vec<String>,
@@ -195,7 +195,7 @@ pub(super) const FITTED_NOT_COMPUTED: &str = "the fit was stopped before its fit
 pub(super) const QUICK_EVALUATION_SECONDS: f64 = 0.25;
 
 /// Whether the solver's evaluations took at most [`QUICK_EVALUATION_SECONDS`] each.
-fn quick(lm: &crate::lm::LmReport) -> bool {
+fn quick(lm: &goniofit_lm::LmReport) -> bool {
     lm.seconds <= QUICK_EVALUATION_SECONDS * lm.evaluations.max(1) as f64
 }
 

@@ -3,8 +3,8 @@
 
 use super::problem::loss::Loss;
 use super::problem::ResidualKind;
-use crate::lm::{LmConfig, Stop};
 use crate::model::ModelOptions;
+use goniofit_lm::{LmConfig, Stop};
 
 /// Everything about a fit except the data.
 #[derive(Debug, Clone)]

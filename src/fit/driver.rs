@@ -24,8 +24,8 @@ pub(crate) use super::result::{base_name, StageSeconds};
 pub use super::result::{FitResult, ParamResult, Verdict};
 use super::{accept, assemble, identify, reduce, solve, start};
 use crate::error::{Error, Result};
-use crate::lm::Stop;
 use crate::model::{self, EvalMode, Model};
+use goniofit_lm::Stop;
 use std::time::Instant;
 
 /// Run a fit.
@@ -153,9 +153,9 @@ fn finish(
 /// whole data (`n` samples) had finished — while the starting values were searched for, or
 /// in that evaluation: no point of the fit has a cost on the data, so there is nothing to
 /// report (the CLI prints this message and exits 3).
-fn stopped_before_first_evaluation(why: crate::lm::Termination, n: usize) -> Error {
+fn stopped_before_first_evaluation(why: goniofit_lm::Termination, n: usize) -> Error {
     let hint = match why {
-        crate::lm::Termination::Timeout => " (a larger --timeout lets one evaluation finish)",
+        goniofit_lm::Termination::Timeout => " (a larger --timeout lets one evaluation finish)",
         _ => "",
     };
     Error::Stopped(format!(
@@ -348,7 +348,7 @@ fn leave_small_basins(
 fn was_stopped(run: &solve::Run) -> bool {
     matches!(
         run.lm.termination,
-        crate::lm::Termination::Timeout | crate::lm::Termination::Interrupted
+        goniofit_lm::Termination::Timeout | goniofit_lm::Termination::Interrupted
     )
 }
 

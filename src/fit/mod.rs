@@ -1,4 +1,4 @@
-//! Fitting a model to a dataset with the Levenberg–Marquardt solver of [`crate::lm`].
+//! Fitting a model to a dataset with the Levenberg–Marquardt solver of [`goniofit_lm`].
 //!
 //! [`driver::fit`] runs one fit as a pipeline of stages, one file each:
 //! 1. prepare (`prepare.rs`): the parameter layout from the model, the data and the user's

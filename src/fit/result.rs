@@ -6,8 +6,8 @@ use super::problem::loss::Loss;
 use super::problem::{FitProblem, ParamLayout};
 use super::solve::Run;
 use super::stats::covariance;
-use crate::lm::Termination;
 use crate::model::Mode;
+use goniofit_lm::Termination;
 use nalgebra::DMatrix;
 use std::collections::BTreeMap;
 

@@ -3,7 +3,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::problem::{FitInput, FitProblem};
-use crate::lm::{self, LeastSquaresProblem, LmConfig, Stop};
+use goniofit_lm as lm;
+use goniofit_lm::{LeastSquaresProblem, LmConfig, Stop};
 
 /// An LM run in parameter space.
 pub(super) struct Run {
@@ -299,7 +300,7 @@ impl Run {
 /// requested (and whose Jacobian, when not cached, is then not evaluated), and whose trial
 /// points outside `range` are rejected unevaluated (NaN residuals: a failed step). The first evaluation (the solver's start) is cut as well: a
 /// run whose start was cut has no point to report (a non-finite cost; the fit then ends
-/// with [`crate::Error::Stopped`]), never a number from a partial evaluation.
+/// with [`crate::error::Error::Stopped`]), never a number from a partial evaluation.
 struct Guarded<'p, 'm> {
     problem: &'p FitProblem<'m>,
     stop: Option<&'p Stop>,

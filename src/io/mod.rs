@@ -29,9 +29,9 @@
 //! # Ok::<(), goniofit::Error>(())
 //! ```
 //!
-//! Every reading error is an [`Error::Input`](crate::Error::Input) (file, 1-based line,
-//! column, offending value), an [`Error::File`](crate::Error::File) (the whole file: empty,
-//! no data rows, missing column) or an [`Error::Io`](crate::Error::Io); no input makes the
+//! Every reading error is an [`Error::Input`](crate::error::Error::Input) (file, 1-based line,
+//! column, offending value), an [`Error::File`](crate::error::Error::File) (the whole file: empty,
+//! no data rows, missing column) or an [`Error::Io`](crate::error::Error::Io); no input makes the
 //! readers panic (proptest in `tests/lib/io.rs`).
 //!
 //! Where the parts are: `read.rs` the reading of a file or of bytes, `sniff.rs` the format

@@ -529,7 +529,7 @@ pub(crate) const FIGURES: [&str; 4] = ["figure4", "figure5", "figure6", "figure7
 /// Write Figures 4–7 into `dir` as PNG and SVG (`figure4.png`, `figure4.svg`, …, named
 /// by [`FIGURES`]); the folder is created if needed. Returns the written paths.
 pub(crate) fn write_all(dir: &Path) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|source| crate::Error::Io {
+    std::fs::create_dir_all(dir).map_err(|source| crate::error::Error::Io {
         path: dir.to_path_buf(),
         source,
     })?;

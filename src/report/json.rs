@@ -260,7 +260,7 @@ pub struct ComparisonRow {
 }
 
 /// The solver's termination as the report spells it (`ftol`, `degenerate`, …).
-pub fn termination_name(t: crate::lm::Termination) -> String {
+pub fn termination_name(t: goniofit_lm::Termination) -> String {
     format!("{t:?}").to_lowercase()
 }
 

@@ -27,7 +27,7 @@ impl Candidate<'_> {
         let r = self.result;
         if r.converged() {
             "converged".into()
-        } else if r.termination == crate::lm::Termination::Degenerate {
+        } else if r.termination == goniofit_lm::Termination::Degenerate {
             "degenerate (not usable)".into()
         } else {
             format!(

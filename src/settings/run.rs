@@ -8,13 +8,13 @@ use crate::fit::driver::FitConfig;
 use crate::fit::problem::loss::Loss;
 use crate::geometry::Quantity;
 use crate::io::{Dataset, ReadOptions};
-use crate::lm::LmConfig;
 use crate::model::ModelOptions;
+use goniofit_lm::LmConfig;
 
 impl Settings {
     /// How a file is read for the fit: its angle conventions, column names, channel
     /// (every channel for `by_group`) and MERL subsampling; the measured value required.
-    pub fn read_options(&self) -> crate::Result<ReadOptions> {
+    pub fn read_options(&self) -> crate::error::Result<ReadOptions> {
         let channel = match (&self.channel, self.by_group) {
             (None, true) => Some("all".to_string()),
             (c, _) => c.clone(),

@@ -106,7 +106,7 @@ fn alta_file(param: &str, out: &str, vs: Option<u8>) -> String {
     s
 }
 
-fn read(text: &str, channel: Option<&str>) -> crate::Result<Dataset> {
+fn read(text: &str, channel: Option<&str>) -> crate::error::Result<Dataset> {
     let opts = ReadOptions {
         channel: channel.map(String::from),
         require_value: true,

@@ -276,7 +276,7 @@ fn problem_jacobian_matches_central_differences() {
     // differences of its residuals: every residual kind, two channels with per-channel
     // scales, unequal weights, and one parameter held fixed.
     use crate::fit::problem::{FitProblem, ParamLayout, ResidualKind};
-    use crate::lm::{finite_difference_jacobian, LeastSquaresProblem};
+    use goniofit_lm::{finite_difference_jacobian, LeastSquaresProblem};
     let model = by_name("kbs+lambert", &ModelOptions::default()).unwrap();
     let mut input = joint_synthetic(
         "kbs+lambert",
@@ -366,7 +366,7 @@ fn an_evaluation_stopped_before_it_starts_gives_no_number() {
         let mut config = config("kbs");
         config.lm.stop = Some(stop.clone());
         match fit(input, &config) {
-            Err(crate::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
+            Err(crate::error::Error::Stopped(m)) => assert!(m.contains("nothing fitted"), "{m}"),
             other => panic!("expected Error::Stopped, got {:?}", other.map(|r| r.cost)),
         }
     });
@@ -381,7 +381,7 @@ fn with_stoppable_kbs(
         &crate::fit::problem::FitProblem,
         &nalgebra::DVector<f64>,
         &std::sync::atomic::AtomicBool,
-        &crate::lm::Stop,
+        &goniofit_lm::Stop,
     ),
 ) {
     use crate::fit::problem::{FitProblem, ParamLayout, ResidualKind};
@@ -399,7 +399,7 @@ fn with_stoppable_kbs(
     let problem =
         FitProblem::new(model.as_ref(), layout, &input, ResidualKind::Absolute, 1e-9).unwrap();
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let stop = crate::lm::Stop::new(None, Some(flag.clone()));
+    let stop = goniofit_lm::Stop::new(None, Some(flag.clone()));
     check(&input, &problem, &x, &flag, &stop);
 }
 

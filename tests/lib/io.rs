@@ -1,8 +1,8 @@
 //! Readers and writers: CSV and ASTM E1392 parsing, conventions checked on the bundled
 //! data, every bad-input case, atomic writes, and no panics on arbitrary input.
 
+use crate::error::Error;
 use crate::io::{self, read_bytes, read_dataset, write_atomic, Dataset, ReadOptions};
-use crate::Error;
 use proptest::prelude::*;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -18,12 +18,12 @@ fn fit_opts() -> ReadOptions {
     }
 }
 
-fn csv(text: &str, opts: &ReadOptions) -> crate::Result<Dataset> {
+fn csv(text: &str, opts: &ReadOptions) -> crate::error::Result<Dataset> {
     read_bytes(Path::new("t.csv"), text.as_bytes(), opts)
 }
 
 /// The (line, column, message) of an `Error::Input`, or a panic naming what came instead.
-fn input_err(r: crate::Result<Dataset>) -> (usize, String, String) {
+fn input_err(r: crate::error::Result<Dataset>) -> (usize, String, String) {
     match r {
         Err(Error::Input {
             path,

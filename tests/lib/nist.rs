@@ -13,7 +13,7 @@
 mod problems;
 
 use crate::fit::stats::covariance::uncertainty;
-use crate::lm::{finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig};
+use goniofit_lm::{finite_difference_jacobian, minimize, LeastSquaresProblem, LmConfig};
 use nalgebra::DVector;
 use problems::{lre, Nist};
 use std::path::Path;

@@ -232,7 +232,7 @@ fn an_interrupted_recovery_has_no_summary_and_counts_no_errors() {
         }
     });
     match report {
-        Err(crate::Error::Stopped(msg)) => assert!(msg.contains("of 40 scenes"), "{msg}"),
+        Err(crate::error::Error::Stopped(msg)) => assert!(msg.contains("of 40 scenes"), "{msg}"),
         other => panic!("not a stop: {other:?}"),
     }
     let fitted = done.load(std::sync::atomic::Ordering::SeqCst);

@@ -7,8 +7,8 @@ use crate::fit::driver::{fit, FitConfig, FitInput, FitResult, Verdict};
 use crate::fit::problem::ResidualKind;
 use crate::geometry::{Geometry, Quantity};
 use crate::harness::synth::{generate, AnglesDeg, Layout, Noise, NoiseKind};
-use crate::lm::LmConfig;
 use crate::model::{by_name, ModelOptions};
+use goniofit_lm::LmConfig;
 use std::time::Duration;
 
 /// Angles: every θi with θr in `theta_r` and φr in `phi_r` (degrees).

@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::fit::driver::{self, FitInput, FitResult};
 use crate::fit::problem::FitProblem;
 use crate::fit::stats::profile::{Interval, Profiler, Target};
-use crate::lm::Stop;
+use goniofit_lm::Stop;
 
 /// Fits with more free parameters than this get no profile intervals (each needs two
 /// walks of refits per quantity).

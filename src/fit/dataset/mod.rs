@@ -16,8 +16,8 @@ use super::problem::{Channels, ResidualKind};
 use crate::error::{Error, Result};
 use crate::geometry::{Geometry, Quantity};
 use crate::io::{self, Dataset};
-use crate::lm::Stop;
 use crate::model::{self, domain::short_number, ModelOptions};
+use goniofit_lm::Stop;
 
 pub(crate) use intervals::{profile_intervals, MAX_PROFILED};
 
@@ -48,7 +48,7 @@ pub struct DatasetFit {
     pub wavelength: Option<f64>,
     /// The fit's settings; `model` and `weights_are_uncertainties` are set per candidate
     /// and dataset. `config.lm.stop` (if any) is shared by every candidate; without one the
-    /// fit makes its own from `config.lm` ([`crate::lm::LmConfig::new_stop`]).
+    /// fit makes its own from `config.lm` ([`goniofit_lm::LmConfig::new_stop`]).
     pub config: FitConfig,
     /// Standard errors from the stated uncertainties as they are (scipy's
     /// `absolute_sigma=True`), not rescaled by the residual scatter.
@@ -523,7 +523,7 @@ fn fit_seeded(input: &FitInput, config: &FitConfig, plain: &FitResult) -> Result
 /// which the data's best fit is the edge only when it is clearly better than the best
 /// usable optimum.
 fn better_fit(a: &FitResult, b: &FitResult) -> bool {
-    use crate::lm::Termination;
+    use goniofit_lm::Termination;
     let ended = |r: &FitResult| {
         r.is_finite() && (r.converged() || r.termination == Termination::Degenerate)
     };

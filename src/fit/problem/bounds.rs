@@ -14,7 +14,8 @@
 //! confirmation ends at once, and the report's Jacobian is that of every free parameter).
 
 use super::ParamLayout;
-use crate::lm::{self, LeastSquaresProblem, LmConfig, LmReport};
+use goniofit_lm as lm;
+use goniofit_lm::{LeastSquaresProblem, LmConfig, LmReport};
 use nalgebra::{DMatrix, DVector};
 
 /// Relative cost by which removing an amplitude (p = 0, the others held) may raise the

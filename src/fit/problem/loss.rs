@@ -147,9 +147,9 @@ pub struct Corrected {
 
 impl Loss {
     /// A loss with its scale; `f_scale` must be finite and > 0.
-    pub fn new(kind: LossKind, f_scale: f64) -> crate::Result<Loss> {
+    pub fn new(kind: LossKind, f_scale: f64) -> crate::error::Result<Loss> {
         if !(f_scale.is_finite() && f_scale > 0.0) {
-            return Err(crate::Error::Param {
+            return Err(crate::error::Error::Param {
                 name: "f_scale".into(),
                 message: format!(
                     "{f_scale} is not a valid loss scale; use a finite number > 0, the size of a residual beyond which a sample counts as an outlier (e.g. 0.03 for 3 % with --residual relative)"
@@ -333,7 +333,7 @@ mod tests {
         }
     }
 
-    impl crate::lm::LeastSquaresProblem for Line {
+    impl goniofit_lm::LeastSquaresProblem for Line {
         fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
             self.eval(x).0
         }
@@ -373,8 +373,8 @@ mod tests {
                 y: y.clone(),
                 loss,
             };
-            let config = crate::lm::LmConfig::default();
-            let rep = crate::lm::minimize(&p, DVector::from_vec(vec![1.2, 1.7]), &config);
+            let config = goniofit_lm::LmConfig::default();
+            let rep = goniofit_lm::minimize(&p, DVector::from_vec(vec![1.2, 1.7]), &config);
             assert!(rep.termination.converged(), "{kind}: {:?}", rep.termination);
             // Stationarity of the robust cost: Σ ψ(fᵢ) ∂fᵢ/∂x = 0 (relative to Σ|ψ|).
             let f: Vec<f64> = (0..t.len())

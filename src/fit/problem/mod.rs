@@ -25,11 +25,11 @@ mod reduced;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Column, Geometry, PerSample};
-use crate::lm::{LeastSquaresProblem, Stop};
 use crate::model::{Mode, Model};
 pub use channels::Channels;
 use domain::width_floor;
 pub(crate) use domain::G_FIT_MAX;
+use goniofit_lm::{LeastSquaresProblem, Stop};
 pub(crate) use layout::{FitParam, ParamLayout, Transform, LINEAR};
 use loss::Loss;
 use nalgebra::{DMatrix, DVector};
@@ -170,7 +170,7 @@ struct Cached {
     step: Option<DVector<f64>>,
     /// The Jacobian reduced block by block, in place of `jac` for a problem that
     /// [`FitProblem::reduces`].
-    reduced: Option<crate::lm::Reduced>,
+    reduced: Option<goniofit_lm::Reduced>,
 }
 
 /// Weighted residuals at a point, as the solver sees them.
@@ -650,7 +650,7 @@ impl LeastSquaresProblem for FitProblem<'_> {
         self.jacobian_until(x, None)
     }
 
-    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<crate::lm::Reduced> {
+    fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<goniofit_lm::Reduced> {
         self.reduces().then(|| self.reduced_until(x, None))
     }
 

@@ -4,7 +4,7 @@
 //! is never held.
 
 use super::{Block, FitProblem};
-use crate::lm::{Reduced, Stop};
+use goniofit_lm::{Reduced, Stop};
 use nalgebra::{DMatrix, DVector};
 
 /// Problems of at least this many samples, with a linear loss, give the solver their
@@ -114,7 +114,7 @@ mod tests {
     use super::*;
     use crate::fit::problem::{Channels, FitInput, ParamLayout, ResidualKind};
     use crate::geometry::{Geometry, Quantity, Sample};
-    use crate::lm::{minimize, LeastSquaresProblem, LmConfig};
+    use goniofit_lm::{minimize, LeastSquaresProblem, LmConfig};
 
     /// A KBS hemisphere scan of `n` samples (deterministic angles) whose values are the
     /// model's at σ = 0.25 λ, T = 2.5 λ with a deterministic ±1 % perturbation.

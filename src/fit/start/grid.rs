@@ -9,7 +9,7 @@ use super::amplitudes::{self, Prepared};
 use super::grid_cache;
 use crate::fit::problem::{FitInput, FitProblem, ParamLayout};
 use crate::geometry::median;
-use crate::lm::Stop;
+use goniofit_lm::Stop;
 use rayon::prelude::*;
 
 /// Largest number of samples the coarse grid is evaluated on.

@@ -17,8 +17,8 @@ use super::config::FitConfig;
 use super::problem::{FitInput, FitProblem, ParamLayout};
 use super::solve::{factors_held, run_lm, Run};
 use crate::error::Result;
-use crate::lm::{LmConfig, Stop};
 use crate::model::{self, EvalMode, Model, ModelOptions};
+use goniofit_lm::{LmConfig, Stop};
 use rayon::prelude::*;
 use std::time::Instant;
 

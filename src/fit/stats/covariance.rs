@@ -217,10 +217,10 @@ pub(crate) fn correlation(cov: &DMatrix<f64>, stderr: &DVector<f64>) -> DMatrix<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lm::{
+    use approx::assert_relative_eq;
+    use goniofit_lm::{
         finite_difference_jacobian, minimize, Closure, LeastSquaresProblem, LmConfig, Transformed,
     };
-    use approx::assert_relative_eq;
     use nalgebra::{DMatrix, DVector};
 
     fn v(xs: &[f64]) -> DVector<f64> {

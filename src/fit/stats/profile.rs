@@ -32,7 +32,8 @@
 
 use super::restricted::{dlnp_dx, Restricted};
 use crate::fit::problem::{FitProblem, Transform};
-use crate::lm::{self, LeastSquaresProblem, LmConfig};
+use goniofit_lm as lm;
+use goniofit_lm::{LeastSquaresProblem, LmConfig};
 use nalgebra::{DMatrix, DVector};
 
 pub(crate) use super::quantile::{normal_quantile, student_t_quantile};

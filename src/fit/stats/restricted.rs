@@ -2,7 +2,7 @@
 //! held at a trial value, in the solver variables z (the free x without the one ψ fixes).
 
 use crate::fit::problem::{FitProblem, Transform};
-use crate::lm::{LeastSquaresProblem, Reduced, Stop};
+use goniofit_lm::{LeastSquaresProblem, Reduced, Stop};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
 
