@@ -110,7 +110,12 @@ mod step;
 pub mod stop;
 mod termination;
 #[cfg(test)]
+mod test_problems;
+#[cfg(test)]
 mod tests;
+/// The crate by its own name, for the test problems shared with the library's tests.
+#[cfg(test)]
+extern crate self as goniofit_lm;
 mod transform;
 mod work;
 

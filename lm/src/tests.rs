@@ -1,15 +1,12 @@
 //! Unit tests of the solver: stopping rules, robustness, argmin integration.
 
+use super::test_problems::{decay, v};
 use super::*;
 use approx::assert_relative_eq;
 use argmin::core::{Executor, State};
 use std::cell::Cell;
 use std::sync::atomic::AtomicU64;
 use std::time::Duration;
-
-fn v(xs: &[f64]) -> DVector<f64> {
-    DVector::from_column_slice(xs)
-}
 
 fn rosen_r(x: &DVector<f64>) -> DVector<f64> {
     v(&[10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]])
@@ -24,41 +21,6 @@ fn rosenbrock() -> impl LeastSquaresProblem {
     Closure {
         r: rosen_r,
         j: rosen_j,
-    }
-}
-
-fn decay_data() -> (Vec<f64>, Vec<f64>) {
-    let t: Vec<f64> = (0..20).map(|i| i as f64 * 0.25).collect();
-    let y = t
-        .iter()
-        .enumerate()
-        .map(|(i, &t)| 3.0 * (-0.7 * t).exp() + 0.01 * ((i * 7 % 5) as f64 - 2.0))
-        .collect();
-    (t, y)
-}
-
-/// y = a·exp(−b t) + deterministic pseudo-noise: a non-zero-residual problem.
-fn decay() -> impl LeastSquaresProblem {
-    let (t, y) = decay_data();
-    let t2 = t.clone();
-    Closure {
-        r: move |x: &DVector<f64>| {
-            DVector::from_iterator(
-                t.len(),
-                t.iter()
-                    .zip(&y)
-                    .map(|(&t, &y)| x[0] * (-x[1] * t).exp() - y),
-            )
-        },
-        j: move |x: &DVector<f64>| {
-            let mut j = DMatrix::zeros(t2.len(), 2);
-            for (i, &t) in t2.iter().enumerate() {
-                let e = (-x[1] * t).exp();
-                j[(i, 0)] = e;
-                j[(i, 1)] = -x[0] * t * e;
-            }
-            j
-        },
     }
 }
 

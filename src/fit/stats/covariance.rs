@@ -214,53 +214,20 @@ pub(crate) fn correlation(cov: &DMatrix<f64>, stderr: &DVector<f64>) -> DMatrix<
     })
 }
 
+/// The solver's small test problems (goniofit-lm's tests use them too).
+#[cfg(test)]
+#[path = "../../../lm/src/test_problems.rs"]
+mod test_problems;
+
 #[cfg(test)]
 mod tests {
+    use super::test_problems::{decay, decay_data, v};
     use super::*;
     use approx::assert_relative_eq;
     use goniofit_lm::{
         finite_difference_jacobian, minimize, Closure, LeastSquaresProblem, LmConfig, Transformed,
     };
     use nalgebra::{DMatrix, DVector};
-
-    fn v(xs: &[f64]) -> DVector<f64> {
-        DVector::from_column_slice(xs)
-    }
-
-    fn decay_data() -> (Vec<f64>, Vec<f64>) {
-        let t: Vec<f64> = (0..20).map(|i| i as f64 * 0.25).collect();
-        let y = t
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| 3.0 * (-0.7 * t).exp() + 0.01 * ((i * 7 % 5) as f64 - 2.0))
-            .collect();
-        (t, y)
-    }
-
-    /// y = a·exp(−b t) + deterministic pseudo-noise: a non-zero-residual problem.
-    fn decay() -> impl LeastSquaresProblem {
-        let (t, y) = decay_data();
-        let t2 = t.clone();
-        Closure {
-            r: move |x: &DVector<f64>| {
-                DVector::from_iterator(
-                    t.len(),
-                    t.iter()
-                        .zip(&y)
-                        .map(|(&t, &y)| x[0] * (-x[1] * t).exp() - y),
-                )
-            },
-            j: move |x: &DVector<f64>| {
-                let mut j = DMatrix::zeros(t2.len(), 2);
-                for (i, &t) in t2.iter().enumerate() {
-                    let e = (-x[1] * t).exp();
-                    j[(i, 0)] = e;
-                    j[(i, 1)] = -x[0] * t * e;
-                }
-                j
-            },
-        }
-    }
 
     /// Straight line y = a + b t: the textbook closed forms for the covariance,
     /// Var(b) = s²/Sₜₜ, Var(a) = s²(1/n + t̄²/Sₜₜ), Cov(a, b) = −s² t̄/Sₜₜ.
