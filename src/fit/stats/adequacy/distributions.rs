@@ -132,20 +132,27 @@ impl Runs {
     }
 }
 
+/// A sample's index as the tests hold it (four bytes: a fit holds far fewer than 2³²
+/// samples).
+pub(crate) fn index_u32(i: usize) -> u32 {
+    u32::try_from(i).expect("fewer than 2^32 samples")
+}
+
 /// Ranks 1..n of `v` (ties get their mean rank).
 fn ranks(v: &[f64]) -> Vec<f64> {
-    let mut sorted: Vec<(f64, usize)> = v.iter().copied().zip(0..).collect();
-    sorted.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let at = |k: u32| v[k as usize];
+    let mut sorted: Vec<u32> = (0..v.len()).map(index_u32).collect();
+    sorted.par_sort_unstable_by(|&a, &b| at(a).total_cmp(&at(b)));
     let mut r = vec![0.0; v.len()];
     let mut i = 0;
     while i < sorted.len() {
         let mut j = i;
-        while j + 1 < sorted.len() && sorted[j + 1].0 == sorted[i].0 {
+        while j + 1 < sorted.len() && at(sorted[j + 1]) == at(sorted[i]) {
             j += 1;
         }
         let mean = 0.5 * (i + j) as f64 + 1.0;
-        for &(_, k) in &sorted[i..=j] {
-            r[k] = mean;
+        for &k in &sorted[i..=j] {
+            r[k as usize] = mean;
         }
         i = j + 1;
     }

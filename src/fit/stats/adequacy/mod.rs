@@ -260,6 +260,7 @@ pub(crate) fn assess(fr: &FitResiduals) -> Adequacy {
             outcomes.push(o);
         }
     }
+    drop(scans);
     outcomes.extend(region_tests(fr, &w, &mut out));
     out.tests = outcomes.len();
     if outcomes.is_empty() {
@@ -315,8 +316,8 @@ impl Weighted {
         let z: Vec<f64> = (0..fr.residuals.len())
             .map(|i| fr.residuals[i] * fr.sqrt_weight[i])
             .collect();
-        let finite: Vec<f64> = z.iter().copied().filter(|v| v.is_finite()).collect();
-        let rms = (finite.iter().map(|v| v * v).sum::<f64>() / finite.len().max(1) as f64).sqrt();
+        let finite = || z.iter().filter(|v| v.is_finite());
+        let rms = (finite().map(|v| v * v).sum::<f64>() / finite().count().max(1) as f64).sqrt();
         let at_rounding = |i: usize| {
             let scale = match fr.kind {
                 ResidualKind::Absolute => fr.fitted[i].abs(),
@@ -359,114 +360,140 @@ fn chi2_test(fr: &FitResiduals, w: &Weighted, out: &mut Adequacy) -> Option<Outc
 }
 
 /// The samples grouped into scans (channel, θi, φ-plane), each ordered by signed θr; the
-/// scans in the order of their keys.
-fn scans(geo: &Geometry, channel: &Channels, used: &[bool]) -> Vec<Vec<usize>> {
-    let scan_of = |i: usize| {
+/// scans in the order of their keys, those of one sample left out.
+struct Scans {
+    /// The samples' indices, scan after scan.
+    items: Vec<u32>,
+    /// Where each scan ends in `items`.
+    ends: Vec<usize>,
+}
+
+impl Scans {
+    /// The parts of `flat` (laid out as `items`) that belong to each scan.
+    fn split<'a, T>(&'a self, flat: &'a [T]) -> impl Iterator<Item = &'a [T]> + 'a {
+        let starts = std::iter::once(0).chain(self.ends.iter().copied());
+        starts.zip(&self.ends).map(move |(a, &b)| &flat[a..b])
+    }
+
+    /// Each scan's sample indices.
+    fn iter(&self) -> impl Iterator<Item = &[u32]> + '_ {
+        self.split(&self.items)
+    }
+}
+
+/// The used samples' scans (see [`Scans`]): a counting pass numbers each sample's scan,
+/// then the indices are placed into their scans' exact places in one vector.
+fn scans(geo: &Geometry, channel: &Channels, used: &[bool]) -> Scans {
+    let plane_of = |i: usize| {
         let phi = geo.phi_r[i].to_degrees();
-        let plane = phi.rem_euclid(180.0);
-        let key = (
+        (phi, phi.rem_euclid(180.0))
+    };
+    let key_of = |i: usize| {
+        let (_, plane) = plane_of(i);
+        (
             channel[i],
             (geo.theta_i[i].to_degrees() * 100.0).round() as i64,
             (plane * 100.0).round() as i64 % 18_000,
-        );
-        // The positive side of the plane is the azimuth `plane` itself.
+        )
+    };
+    // The positive side of the plane is the azimuth `plane` itself.
+    let signed_theta_r = |i: u32| {
+        let (phi, plane) = plane_of(i as usize);
         let side = if (phi - plane).abs() < 90.0 {
             1.0
         } else {
             -1.0
         };
-        (key, (side * geo.theta_r[i], i))
+        side * geo.theta_r[i as usize]
     };
-    // Contiguous parts of the samples gathered on the pool's threads, joined in order.
-    let keyed = (0..geo.len())
-        .into_par_iter()
-        .with_min_len(1 << 15)
-        .filter(|&i| used[i])
-        .fold(Keyed::default, |mut k, i| {
-            let (key, item) = scan_of(i);
-            k.push(key, item);
-            k
+    let mut keys = Keys::default();
+    let mut counts: Vec<usize> = Vec::new();
+    let group: Vec<u32> = (0..geo.len())
+        .map(|i| {
+            if !used[i] {
+                return u32::MAX;
+            }
+            let g = keys.group(key_of(i));
+            if g == counts.len() {
+                counts.push(0);
+            }
+            counts[g] += 1;
+            distributions::index_u32(g)
         })
-        .reduce(Keyed::default, Keyed::append);
-    let mut groups: Vec<Vec<(f64, usize)>> = keyed
-        .into_sorted()
-        .into_iter()
-        .filter(|g| g.len() > 1)
         .collect();
-    groups
+    let mut order: Vec<usize> = (0..counts.len()).filter(|&g| counts[g] > 1).collect();
+    order.sort_by_key(|&g| keys.keys[g]);
+    let (mut next, mut ends) = (
+        vec![usize::MAX; counts.len()],
+        Vec::with_capacity(order.len()),
+    );
+    let mut end = 0;
+    for &g in &order {
+        next[g] = end;
+        end += counts[g];
+        ends.push(end);
+    }
+    let mut items = vec![0u32; end];
+    for (i, &g) in group.iter().enumerate() {
+        if let Some(at) = next.get_mut(g as usize).filter(|at| **at != usize::MAX) {
+            items[*at] = distributions::index_u32(i);
+            *at += 1;
+        }
+    }
+    drop(group);
+    let mut parts: Vec<&mut [u32]> = Vec::with_capacity(ends.len());
+    let (mut rest, mut start) = (items.as_mut_slice(), 0);
+    for &e in &ends {
+        let (part, tail) = rest.split_at_mut(e - start);
+        parts.push(part);
+        (rest, start) = (tail, e);
+    }
+    parts
         .par_iter_mut()
-        .for_each(|g| g.sort_by(|a, b| a.0.total_cmp(&b.0)));
-    groups
-        .into_iter()
-        .map(|g| g.into_iter().map(|(_, i)| i).collect())
-        .collect()
+        .for_each(|s| s.sort_by(|&a, &b| signed_theta_r(a).total_cmp(&signed_theta_r(b))));
+    Scans { items, ends }
 }
 
-/// Items gathered into groups by a key, each group in the order its items came; a run of
-/// items of one key (the usual order of a measurement's file) finds its group without a
-/// lookup.
-struct Keyed<K, T> {
+/// Keys numbered in the order they first came; a run of one key (the usual order of a
+/// measurement's file) finds its number without a lookup.
+struct Keys<K> {
     index: FxHashMap<K, usize>,
-    groups: Vec<(K, Vec<T>)>,
+    keys: Vec<K>,
     last: Option<(K, usize)>,
 }
 
-impl<K, T> Default for Keyed<K, T> {
+impl<K> Default for Keys<K> {
     fn default() -> Self {
-        Keyed {
+        Keys {
             index: FxHashMap::default(),
-            groups: Vec::new(),
+            keys: Vec::new(),
             last: None,
         }
     }
 }
 
-impl<K: Copy + Ord + std::hash::Hash, T> Keyed<K, T> {
-    /// The index of `key`'s group, numbered in the order the keys first came.
+impl<K: Copy + Eq + std::hash::Hash> Keys<K> {
+    /// The number of `key`.
     fn group(&mut self, key: K) -> usize {
         match self.last {
             Some((k, g)) if k == key => g,
             _ => {
-                let groups = &mut self.groups;
+                let keys = &mut self.keys;
                 let g = *self.index.entry(key).or_insert_with(|| {
-                    groups.push((key, Vec::new()));
-                    groups.len() - 1
+                    keys.push(key);
+                    keys.len() - 1
                 });
                 self.last = Some((key, g));
                 g
             }
         }
     }
-
-    /// `item` added to `key`'s group.
-    fn push(&mut self, key: K, item: T) {
-        let g = self.group(key);
-        self.groups[g].1.push(item);
-    }
-
-    /// `self` followed by `other`: each of `other`'s groups after `self`'s group of its key.
-    fn append(mut self, other: Keyed<K, T>) -> Keyed<K, T> {
-        for (key, items) in other.groups {
-            let g = self.group(key);
-            self.groups[g].1.extend(items);
-        }
-        self
-    }
-
-    /// The groups in the order of their keys.
-    fn into_sorted(mut self) -> Vec<Vec<T>> {
-        self.groups.sort_by_key(|a| a.0);
-        self.groups.into_iter().map(|(_, g)| g).collect()
-    }
 }
 
 /// The runs test of the residual signs along the scans.
-fn runs_test(w: &Weighted, scans: &[Vec<usize>], out: &mut Adequacy) -> Option<Outcome> {
-    let signs: Vec<Vec<bool>> = scans
-        .iter()
-        .map(|s| s.iter().map(|&i| w.z[i] > 0.0).collect())
-        .collect();
-    let runs = Runs::of(signs.iter().map(Vec::as_slice));
+fn runs_test(w: &Weighted, scans: &Scans, out: &mut Adequacy) -> Option<Outcome> {
+    let signs: Vec<bool> = scans.items.iter().map(|&i| w.z[i as usize] > 0.0).collect();
+    let runs = Runs::of(scans.split(&signs));
     let z = runs.z();
     if runs.signs < MIN_SAMPLES || !z.is_finite() {
         return None;
@@ -477,7 +504,7 @@ fn runs_test(w: &Weighted, scans: &[Vec<usize>], out: &mut Adequacy) -> Option<O
         expected: runs.expected,
         sd: runs.variance.sqrt(),
         signs: runs.signs,
-        scans: signs.len(),
+        scans: scans.ends.len(),
         p,
     };
     let reason = wording::runs(&test);
@@ -493,15 +520,16 @@ fn runs_test(w: &Weighted, scans: &[Vec<usize>], out: &mut Adequacy) -> Option<O
 fn spread_test(
     fr: &FitResiduals,
     w: &Weighted,
-    scans: &[Vec<usize>],
+    scans: &Scans,
     out: &mut Adequacy,
 ) -> Option<Outcome> {
-    let z = |i: usize| w.z[i];
+    let z = |i: u32| w.z[i as usize];
+    let fitted = |i: u32| fr.fitted[i as usize];
     let (mut spread, mut level) = (Vec::new(), Vec::new());
-    for s in scans {
+    for s in scans.iter() {
         for t in s.chunks_exact(3) {
             let d = (z(t[1]) - 0.5 * (z(t[0]) + z(t[2]))).abs();
-            let f = (fr.fitted[t[0]] + fr.fitted[t[1]] + fr.fitted[t[2]]) / 3.0;
+            let f = (fitted(t[0]) + fitted(t[1]) + fitted(t[2])) / 3.0;
             if d.is_finite() && f.is_finite() {
                 spread.push(d);
                 level.push(f);
@@ -595,21 +623,21 @@ fn lobe_core(fr: &FitResiduals) -> Vec<bool> {
             (geo.theta_i[i].to_degrees() * 100.0).round() as i64,
         )
     };
-    let mut keyed: Keyed<(usize, i64), ()> = Keyed::default();
+    let mut keys = Keys::default();
     let mut top: Vec<f64> = Vec::new();
-    let group: Vec<usize> = (0..geo.len())
+    let group: Vec<u32> = (0..geo.len())
         .map(|i| {
-            let g = keyed.group(key(i));
+            let g = keys.group(key(i));
             if g == top.len() {
                 top.push(f64::NEG_INFINITY);
             }
             top[g] = top[g].max(fr.fitted[i]);
-            g
+            distributions::index_u32(g)
         })
         .collect();
     (0..geo.len())
         .map(|i| {
-            let top = top[group[i]];
+            let top = top[group[i] as usize];
             top > 0.0 && fr.fitted[i] >= 0.5 * top
         })
         .collect()
