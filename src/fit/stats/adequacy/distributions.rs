@@ -132,10 +132,10 @@ impl Runs {
     }
 }
 
-/// A sample's index as the tests hold it (four bytes: a fit holds far fewer than 2³²
-/// samples).
+/// A sample's index as the tests hold it, in four bytes: a fit's samples number far fewer
+/// than 2³² (that many would need hundreds of GB); an index beyond is held as `u32::MAX`.
 pub(crate) fn index_u32(i: usize) -> u32 {
-    u32::try_from(i).expect("fewer than 2^32 samples")
+    u32::try_from(i).unwrap_or(u32::MAX)
 }
 
 /// Ranks 1..n of `v` (ties get their mean rank).
