@@ -63,24 +63,12 @@ pub(super) fn qrfac(mut a: DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<
         }
         let (head, tail) = cols.split_at_mut((j + 1) * m);
         let cj = &mut head[j * m + j..(j + 1) * m];
-        let mut ajnorm = enorm(&*cj);
+        let ajnorm = reflector(cj);
         if ajnorm != 0.0 {
-            if cj[0] < 0.0 {
-                ajnorm = -ajnorm;
-            }
-            for v in cj.iter_mut() {
-                *v /= ajnorm;
-            }
-            cj[0] += 1.0;
-            let ajj = cj[0];
             // Apply the reflector to the remaining columns and to f.
             for k in j + 1..n {
                 let ck = &mut tail[(k - j - 1) * m + j..(k - j) * m];
-                let sum = dot(cj, ck);
-                let t = sum / ajj;
-                for (c, &a) in ck.iter_mut().zip(cj.iter()) {
-                    *c -= t * a;
-                }
+                reflect(cj, ck);
                 if rdiag[k] != 0.0 {
                     let t = ck[0] / rdiag[k];
                     rdiag[k] *= (1.0 - t * t).max(0.0).sqrt();
@@ -90,12 +78,7 @@ pub(super) fn qrfac(mut a: DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<
                     }
                 }
             }
-            let fj = &mut qtf[j..m];
-            let sum = dot(cj, fj);
-            let t = sum / ajj;
-            for (v, &a) in fj.iter_mut().zip(cj.iter()) {
-                *v -= t * a;
-            }
+            reflect(cj, &mut qtf[j..m]);
         }
         rdiag[j] = -ajnorm;
     }
@@ -108,6 +91,32 @@ pub(super) fn qrfac(mut a: DMatrix<f64>, f: &DVector<f64>) -> (QrState, DVector<
     }
     let qtf = DVector::from_column_slice(&qtf[..n]);
     (QrState { r, ipvt, qtf }, acnorm)
+}
+
+/// Turn column `v` (its part from the diagonal down) into the Householder vector that
+/// maps it to (−α, 0, …) and return α = ±‖v‖ (the sign of v₀); 0 leaves `v` unchanged.
+/// The vector is scaled so that its first entry is 1 + |v₀|/‖v‖ (MINPACK's qrfac).
+pub(super) fn reflector(v: &mut [f64]) -> f64 {
+    let mut norm = enorm(v);
+    if norm == 0.0 {
+        return 0.0;
+    }
+    if v[0] < 0.0 {
+        norm = -norm;
+    }
+    for x in v.iter_mut() {
+        *x /= norm;
+    }
+    v[0] += 1.0;
+    norm
+}
+
+/// Apply the reflection of Householder vector `v` ([`reflector`]) to `c`.
+pub(super) fn reflect(v: &[f64], c: &mut [f64]) {
+    let t = dot(v, c) / v[0];
+    for (x, &a) in c.iter_mut().zip(v.iter()) {
+        *x -= t * a;
+    }
 }
 
 /// MINPACK `qrsolv`: given the pivoted QR `J P = Q R` and a diagonal `d`, solve

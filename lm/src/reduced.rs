@@ -5,7 +5,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::norm::{dot, enorm};
+use super::qr::{reflect, reflector};
 
 /// A matrix `A` (`k × n`; `k ≤ n` when built by [`Reduced::push_rows`]) and a vector `b`
 /// (length `k`) standing for an `m × n` Jacobian `J` and residuals `f`: `J = Q₁ A` and
@@ -81,30 +81,14 @@ fn householder(s: &mut [f64], t: &mut [f64], m: usize, n: usize) {
     for j in 0..m.min(n) {
         let (head, tail) = s.split_at_mut((j + 1) * m);
         let v = &mut head[j * m + j..(j + 1) * m];
-        let mut norm = enorm(v);
+        let norm = reflector(v);
         if norm == 0.0 {
             continue;
         }
-        if v[0] < 0.0 {
-            norm = -norm;
-        }
-        for x in v.iter_mut() {
-            *x /= norm;
-        }
-        v[0] += 1.0;
-        let vj = v[0];
         for k in j + 1..n {
-            let c = &mut tail[(k - j - 1) * m + j..(k - j) * m];
-            let tau = dot(v, c) / vj;
-            for (c, &a) in c.iter_mut().zip(v.iter()) {
-                *c -= tau * a;
-            }
+            reflect(v, &mut tail[(k - j - 1) * m + j..(k - j) * m]);
         }
-        let tj = &mut t[j..m];
-        let tau = dot(v, tj) / vj;
-        for (c, &a) in tj.iter_mut().zip(v.iter()) {
-            *c -= tau * a;
-        }
+        reflect(v, &mut t[j..m]);
         // The column becomes (−norm, 0, …): only its diagonal is kept.
         v[0] = -norm;
     }
