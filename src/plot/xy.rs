@@ -207,17 +207,19 @@ impl XyPlot {
         }
     }
 
+    /// The y values of the measured points (point series) within the x range.
+    fn measured_in_x_range(&self) -> impl Iterator<Item = f64> + '_ {
+        self.series
+            .iter()
+            .filter(|s| s.kind.is_points())
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.0 >= self.x_range.0 && p.0 <= self.x_range.1)
+            .map(|p| p.1)
+    }
+
     /// The measured points (point series) above the y range: drawn as arrows at the top.
     pub(crate) fn above_top(&self) -> Beyond {
-        Beyond::above(
-            self.series
-                .iter()
-                .filter(|s| s.kind.is_points())
-                .flat_map(|s| s.points.iter())
-                .filter(|p| p.0 >= self.x_range.0 && p.0 <= self.x_range.1)
-                .map(|p| p.1),
-            self.y_range.1,
-        )
+        Beyond::above(self.measured_in_x_range(), self.y_range.1)
     }
 
     /// The measured points (point series, within the x range) below the y range, or at
@@ -230,15 +232,7 @@ impl XyPlot {
         } else {
             self.y_range.0
         };
-        Beyond::below(
-            self.series
-                .iter()
-                .filter(|s| s.kind.is_points())
-                .flat_map(|s| s.points.iter())
-                .filter(|p| p.0 >= self.x_range.0 && p.0 <= self.x_range.1)
-                .map(|p| p.1),
-            bottom,
-        )
+        Beyond::below(self.measured_in_x_range(), bottom)
     }
 
     /// The legend's lines: the labelled series, the extra lines, and the arrows' counts.

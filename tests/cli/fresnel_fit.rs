@@ -141,7 +141,7 @@ fn auto_chooses_the_extended_lobe_on_data_made_with_it_and_plot_redraws_it() {
         .iter()
         .map(|c| c["model"].as_str().unwrap())
         .collect();
-    assert_eq!(names, crate::fit::dataset::AUTO_CANDIDATES);
+    assert_eq!(names, goniofit::AUTO_CANDIDATES);
     assert_eq!(auto["model"], "kbs+lambert");
     assert_eq!(auto["factors"], "--fresnel dielectric --shadowing smith");
     assert_eq!(auto["replay"]["factors"], auto["factors"]);

@@ -6,11 +6,9 @@
 mod alta;
 mod binary_fuzz;
 mod fit;
-mod fresnel_fit;
 mod fresnel_shadowing;
 mod io;
 mod kbs_reference;
-mod kbs_rough;
 mod merl;
 mod model_props;
 mod nist;
@@ -19,4 +17,3 @@ mod plot_sharp;
 mod recover;
 mod rgl;
 mod stiff;
-mod validity;
