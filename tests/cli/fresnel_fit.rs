@@ -32,21 +32,21 @@ fn synth(dir: &std::path::Path, layout: &str, seed: u64) -> String {
     out
 }
 
+/// The physically based lobe on relative residuals (append the selection and the file).
+const EXTENDED_RELATIVE: [&str; 9] = [
+    "fit",
+    "--model",
+    "kbs+lambert",
+    "--fresnel",
+    "dielectric",
+    "--shadowing",
+    "smith",
+    "--residual",
+    "relative",
+];
+
 fn fit(file: &str) -> serde_json::Value {
-    fit_json(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--fresnel",
-        "dielectric",
-        "--shadowing",
-        "smith",
-        "--residual",
-        "relative",
-        "--no-intervals",
-        "--json",
-        file,
-    ])
+    fit_json(&[&EXTENDED_RELATIVE[..], &["--no-intervals", "--json", file]].concat())
 }
 
 #[test]
@@ -297,21 +297,13 @@ fn a_fit_with_factors_is_no_worse_than_from_the_plain_optimum() {
 #[test]
 fn an_index_run_to_infinity_is_the_edge_n_to_infinity() {
     let file = common::data("cornell/garnet_red.astm");
-    let (_, v) = common::run_json(&[
-        "fit",
-        "--model",
-        "kbs+lambert",
-        "--fresnel",
-        "dielectric",
-        "--shadowing",
-        "smith",
-        "--residual",
-        "relative",
+    let tail = [
         "--channel",
         "650nm",
         "--no-intervals",
         file.to_str().unwrap(),
-    ]);
+    ];
+    let (_, v) = common::run_json(&[&EXTENDED_RELATIVE[..], &tail].concat());
     assert_eq!(v["termination"], "degenerate", "{v}");
     let notes = v["notes"].to_string();
     assert!(notes.contains("ran to n → ∞"), "{notes}");
