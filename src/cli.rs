@@ -89,6 +89,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
 /// fit that ran but did not converge or was stopped (its report is printed when it has a
 /// point), 130 a signal while nothing was being computed.
 pub fn main() -> ExitCode {
+    commands::memory::return_big_buffers();
     // Ctrl-C, SIGTERM, SIGHUP: a running fit stops and reports (exit 3); anything else ends
     // with exit 130 and leaves no unfinished output file behind.
     commands::signals::install();

@@ -7,6 +7,8 @@ use nalgebra::DVector;
 use super::lmpar::lmpar;
 use super::norm::{all_finite, enorm, pad_vec};
 use super::qr::jp_norm;
+use super::run::StepResiduals;
+use super::step::recycle;
 use super::work::{Polish, PolishPoint, Work};
 use super::{Termination, EPSMCH};
 
@@ -37,7 +39,7 @@ impl Work {
         max_evals: u64,
     ) -> Result<(KV, Option<Termination>), ArgminError>
     where
-        O: Operator<Param = DVector<f64>, Output = DVector<f64>>,
+        O: Operator<Param = DVector<f64>, Output = DVector<f64>> + StepResiduals,
     {
         let (step, pnorm, prered) = self.gauss_newton_probe();
         self.record_polish_point(&mut pol, pnorm);
@@ -112,7 +114,7 @@ impl Work {
         step: DVector<f64>,
     ) -> Result<bool, ArgminError>
     where
-        O: Operator<Param = DVector<f64>, Output = DVector<f64>>,
+        O: Operator<Param = DVector<f64>, Output = DVector<f64>> + StepResiduals,
     {
         let rows = self.r.len();
         let trial = &self.x + &step;
@@ -124,12 +126,14 @@ impl Work {
             f64::INFINITY
         };
         let slack = POLISH_TOL.max((4.0 * self.cost_noise).min(POLISH_MAX_NOISE));
-        if fnorm1 * fnorm1 <= pol.fnorm0 * pol.fnorm0 * (1.0 + slack) {
-            self.move_to(trial, r1, fnorm1);
-            Ok(true)
+        let taken = fnorm1 * fnorm1 <= pol.fnorm0 * pol.fnorm0 * (1.0 + slack);
+        let spent = if taken {
+            self.move_to(trial, r1, fnorm1)
         } else {
-            Ok(false)
-        }
+            r1
+        };
+        recycle(problem, spent)?;
+        Ok(taken)
     }
 
     /// End at the best iterate (its Jacobian is re-evaluated if it is not the current point).

@@ -47,6 +47,10 @@ pub trait LeastSquaresProblem {
     fn reduced_jacobian(&self, _x: &DVector<f64>) -> Option<Reduced> {
         None
     }
+    /// Takes back residuals the solver is done with (a rejected trial point's, or those of
+    /// the point it moved away from), so that a problem of many residuals can evaluate its
+    /// next point into their storage rather than into new memory. The default drops them.
+    fn recycle(&self, _spent: DVector<f64>) {}
 }
 
 impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
@@ -62,11 +66,14 @@ impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for &P {
     fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<Reduced> {
         (**self).reduced_jacobian(x)
     }
+    fn recycle(&self, spent: DVector<f64>) {
+        (**self).recycle(spent)
+    }
 }
 
 /// What the solver asks of its operator beyond argmin's [`Operator`] and [`Jacobian`]: the
-/// step residuals of [`LeastSquaresProblem::step_residuals`] and the reduced Jacobian of
-/// [`LeastSquaresProblem::reduced_jacobian`].
+/// step residuals of [`LeastSquaresProblem::step_residuals`], the reduced Jacobian of
+/// [`LeastSquaresProblem::reduced_jacobian`] and [`LeastSquaresProblem::recycle`].
 pub trait StepResiduals {
     /// See [`LeastSquaresProblem::step_residuals`].
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>>;
@@ -74,6 +81,8 @@ pub trait StepResiduals {
     fn reduced_jacobian(&self, _x: &DVector<f64>) -> Option<Reduced> {
         None
     }
+    /// See [`LeastSquaresProblem::recycle`]; drops `spent` by default.
+    fn recycle(&self, _spent: DVector<f64>) {}
 }
 
 impl<P: LeastSquaresProblem + ?Sized> StepResiduals for ArgminAdapter<'_, P> {
@@ -82,6 +91,9 @@ impl<P: LeastSquaresProblem + ?Sized> StepResiduals for ArgminAdapter<'_, P> {
     }
     fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<Reduced> {
         self.0.reduced_jacobian(x)
+    }
+    fn recycle(&self, spent: DVector<f64>) {
+        self.0.recycle(spent)
     }
 }
 

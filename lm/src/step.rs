@@ -8,6 +8,7 @@ use nalgebra::DVector;
 use super::lmpar::lmpar;
 use super::norm::{all_finite, enorm, pad_vec};
 use super::qr::jp_norm;
+use super::run::StepResiduals;
 use super::work::Work;
 use super::{Termination, EPSMCH, RHO_ACCEPT, RHO_EXPAND, RHO_SHRINK};
 
@@ -75,7 +76,7 @@ impl Work {
         trial: Trial,
     ) -> Result<Outcome, ArgminError>
     where
-        O: Operator<Param = DVector<f64>, Output = DVector<f64>>,
+        O: Operator<Param = DVector<f64>, Output = DVector<f64>> + StepResiduals,
     {
         let rows = self.r.len();
         let point = &self.x + &trial.step;
@@ -101,11 +102,14 @@ impl Work {
             self.cost_noise = self.cost_noise.max(actred.abs());
         }
         let accepted = ratio >= RHO_ACCEPT;
-        if accepted {
-            self.move_to(point, r1, fnorm1);
+        let spent = if accepted {
             self.first = false;
             self.last_ratio = ratio;
-        }
+            self.move_to(point, r1, fnorm1)
+        } else {
+            r1
+        };
+        recycle(problem, spent)?;
         Ok(Outcome {
             actred,
             prered,
@@ -187,4 +191,16 @@ impl Work {
             t => t,
         }
     }
+}
+
+/// Hand residuals the iteration is done with back to the problem
+/// ([`super::LeastSquaresProblem::recycle`]).
+pub(super) fn recycle<O: StepResiduals>(
+    problem: &mut Problem<O>,
+    spent: DVector<f64>,
+) -> Result<(), ArgminError> {
+    problem.problem("recycle", |o| {
+        o.recycle(spent);
+        Ok(())
+    })
 }

@@ -439,3 +439,52 @@ fn reduced_jacobian_solves_as_the_dense_one() {
     let diff = (reduced.jacobian.tr_mul(&reduced.jacobian) - &gram).norm();
     assert!(diff <= 1e-10 * gram.norm(), "{diff}");
 }
+
+/// A problem that counts its residual evaluations and the vectors handed back to it.
+struct Counting<P> {
+    inner: P,
+    evaluations: Cell<u64>,
+    recycled: Cell<u64>,
+    rows: usize,
+}
+
+impl<P: LeastSquaresProblem> LeastSquaresProblem for Counting<P> {
+    fn residuals(&self, x: &DVector<f64>) -> DVector<f64> {
+        self.evaluations.set(self.evaluations.get() + 1);
+        self.inner.residuals(x)
+    }
+    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        self.inner.jacobian(x)
+    }
+    fn recycle(&self, spent: DVector<f64>) {
+        assert_eq!(
+            spent.len(),
+            self.rows,
+            "a residual vector of the problem's length"
+        );
+        self.recycled.set(self.recycled.get() + 1);
+    }
+}
+
+#[test]
+fn every_evaluation_after_the_first_hands_one_vector_back() {
+    for polish in [false, true] {
+        let p = Counting {
+            inner: decay(),
+            evaluations: Cell::new(0),
+            recycled: Cell::new(0),
+            rows: decay().residuals(&v(&[1.0, 0.1])).len(),
+        };
+        let config = LmConfig {
+            polish,
+            ..cfg(1e-15, 1e-15, 0.0)
+        };
+        let rep = minimize(&p, v(&[1.0, 0.1]), &config);
+        assert!(rep.termination.converged(), "{:?}", rep.termination);
+        assert_eq!(p.evaluations.get(), rep.evaluations);
+        assert!(rep.evaluations > 3);
+        // The solver keeps the current point's residuals (the last one it moved to); each
+        // trial's vector, or the one it replaced, comes back.
+        assert_eq!(p.recycled.get(), rep.evaluations - 1, "polish {polish}");
+    }
+}

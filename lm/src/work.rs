@@ -60,13 +60,13 @@ impl Work {
     /// evaluation spent, the Jacobian still to be evaluated.
     pub(super) fn start(m: usize, x: DVector<f64>, r: DVector<f64>) -> Work {
         let n = x.len();
-        let rows = r.len();
         Work {
             m,
             fnorm: enorm(r.as_slice()),
             x,
             r,
-            jac: DMatrix::zeros(rows, n),
+            // Evaluated before its first use (`need_jac`).
+            jac: DMatrix::zeros(0, 0),
             step_r: None,
             reduced: None,
             qr: None,
@@ -95,12 +95,14 @@ impl Work {
     }
 
     /// Move to an accepted point with residuals `r` (norm `fnorm`); its Jacobian is due.
-    pub(super) fn move_to(&mut self, x: DVector<f64>, r: DVector<f64>, fnorm: f64) {
+    /// Returns the residuals of the point left.
+    pub(super) fn move_to(&mut self, x: DVector<f64>, r: DVector<f64>, fnorm: f64) -> DVector<f64> {
         self.x = x;
-        self.r = r;
+        let left = std::mem::replace(&mut self.r, r);
         self.fnorm = fnorm;
         self.update_xnorm();
         self.need_jac = true;
+        left
     }
 
     /// Evaluate and factor the Jacobian at the current point, update the scaling `D` (and on

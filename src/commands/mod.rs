@@ -12,6 +12,7 @@ pub(crate) mod fit;
 pub(crate) mod fit_args;
 pub(crate) mod fit_outputs;
 pub(crate) mod heartbeat;
+pub(crate) mod memory;
 pub(crate) mod plot;
 pub(crate) mod recover;
 pub(crate) mod render;

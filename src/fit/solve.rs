@@ -351,6 +351,10 @@ impl LeastSquaresProblem for Guarded<'_, '_> {
         r
     }
 
+    fn recycle(&self, spent: DVector<f64>) {
+        self.problem.keep_spare(spent);
+    }
+
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
         // After a stop request a Jacobian not cached is not evaluated (NaN): the solver
         // has stopped, and the fit reports its point without uncertainties.

@@ -20,10 +20,10 @@ pub(crate) const MAX_PROFILED: usize = 8;
 /// shares the fit's `stop` (its time limit and signals): once it fires the walks end, and
 /// the caller discards what they found (a walk cut short ends at a wrong likelihood).
 ///
-/// `r`'s residuals and standardized residuals are not held while the refits run (on a big
-/// fit they and the refits' residuals are the peak of its memory): they are computed again
-/// from the fitted values afterwards, on the intervals' problem (the same residual kind,
-/// floor, weights and loss: the same numbers).
+/// `r`'s fitted values, residuals and standardized residuals are not held while the refits
+/// run (on a big fit they and the refits' residuals are the peak of its memory): they are
+/// computed again afterwards at `r`'s parameters, on the intervals' problem (the same
+/// model, residual kind, floor, weights and loss: the same numbers).
 pub(crate) fn profile_intervals(
     spec: &DatasetFit,
     input: &FitInput,
@@ -36,6 +36,7 @@ pub(crate) fn profile_intervals(
     }
     let again = !r.fitted.is_empty() && !r.residuals.is_empty();
     if again {
+        r.fitted = Vec::new();
         r.residuals = Vec::new();
         r.std_residuals = Vec::new();
     }
@@ -49,16 +50,19 @@ pub(crate) fn profile_intervals(
         stop,
         |problem, config| {
             let intervals = intervals_on(problem, result, spec.absolute_sigma, config);
+            problem.forget_spare();
             let residuals = again.then(|| {
-                let raw = problem.raw_residuals(&result.fitted);
+                let (fitted, _) = problem.values_modes_until(&result.values, None)?;
+                let raw = problem.raw_residuals(&fitted);
                 let unc = config.weights_are_uncertainties;
                 let std = driver::standardized_residuals(problem, &raw, n_free, unc);
-                (raw, std)
+                Some((fitted, raw, std))
             });
             (intervals, residuals)
         },
     )?;
-    if let Some((raw, std)) = residuals {
+    if let Some(Some((fitted, raw, std))) = residuals {
+        r.fitted = fitted;
         r.residuals = raw;
         r.std_residuals = std;
     }

@@ -14,7 +14,7 @@ use super::driver::{self, FitConfig, FitInput, FitResult};
 use super::problem::weights::residual_weights;
 use super::problem::{Channels, ResidualKind};
 use crate::error::{Error, Result};
-use crate::geometry::{Geometry, Quantity};
+use crate::geometry::{Geometry, Quantity, Sample};
 use crate::io::{self, Dataset};
 use crate::model::{self, domain::short_number, ModelOptions};
 use goniofit_lm::Stop;
@@ -94,13 +94,49 @@ impl DatasetFit {
         }
     }
 
-    /// The fit input of a dataset with this fit's quantity, wavelength, residual and floor.
+    /// The fit input of a dataset with this fit's quantity, wavelength, residual and floor
+    /// (see [`fit_input`]).
     pub fn input(&self, ds: &Dataset, needs_wavelength: bool) -> Result<FitInput> {
+        check_magnitudes(ds)?;
+        let y = ds.value.clone();
+        self.input_of(ds, &ds.samples, y, needs_wavelength)
+    }
+
+    /// [`DatasetFit::input`], taking the dataset's samples, values and source lines into
+    /// the input rather than copying them (a one-channel fit needs them no more), and a
+    /// wavelength column of one value kept as that value once: the table as read and the
+    /// prepared geometry are not held side by side in full.
+    fn input_taking(&self, ds: &mut Dataset, needs_wavelength: bool) -> Result<FitInput> {
+        check_magnitudes(ds)?;
+        ds.lines = Vec::new();
+        // A wavelength column of one value: that value once (the geometry holds it so).
+        if let Some(w) = ds.wavelength.as_mut() {
+            if w.iter().all(|l| l.to_bits() == w[0].to_bits()) {
+                w.truncate(1);
+                w.shrink_to_fit();
+            }
+        }
+        let y = ds.value.take();
+        let samples = std::mem::take(&mut ds.samples);
+        self.input_of(ds, &samples, y, needs_wavelength)
+    }
+
+    fn input_of(
+        &self,
+        ds: &Dataset,
+        samples: &[Sample],
+        y: Option<Vec<f64>>,
+        needs_wavelength: bool,
+    ) -> Result<FitInput> {
+        let y = y.ok_or_else(|| Error::File {
+            path: ds.path.clone(),
+            message: "no measured value column (L)".into(),
+        })?;
         fit_input(
             ds,
-            self.quantity,
-            self.wavelength,
-            needs_wavelength,
+            samples,
+            y,
+            (self.quantity, self.wavelength, needs_wavelength),
             self.config.residual,
             self.config.floor,
         )
@@ -190,21 +226,20 @@ pub fn check_magnitudes(ds: &Dataset) -> Result<()> {
     Ok(())
 }
 
-/// The fit's data from a dataset (checked with [`check_magnitudes`]): geometry (λ from
-/// `wavelength`, else the dataset's own, else 1 unless `needs_wavelength`), values, the
-/// weights transformed for the residual kind ([`super::problem::weights`]), and the channel index of
-/// every sample with the channel names (as printed: control and bidi characters escaped)
-/// in first-appearance order.
-pub(crate) fn fit_input(
+/// The fit's data from a dataset's `samples` and values `y` (the caller checked them with
+/// [`check_magnitudes`]): geometry (λ from `wavelength`, else the dataset's own, else 1
+/// unless `needs_wavelength`), values, the weights transformed for the residual kind
+/// ([`super::problem::weights`]), and the channel index of every sample with the channel
+/// names (as printed: control and bidi characters escaped) in first-appearance order.
+fn fit_input(
     ds: &Dataset,
-    quantity: Quantity,
-    wavelength: Option<f64>,
-    needs_wavelength: bool,
+    samples: &[Sample],
+    y: Vec<f64>,
+    (quantity, wavelength, needs_wavelength): (Quantity, Option<f64>, bool),
     residual: ResidualKind,
     floor: Option<f64>,
 ) -> Result<FitInput> {
-    check_magnitudes(ds)?;
-    let n = ds.samples.len();
+    let n = samples.len();
     let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
         (_, Some(l)) => vec![l],
         (Some(w), None) => w.clone(),
@@ -216,11 +251,7 @@ pub(crate) fn fit_input(
         }
         (None, None) => vec![1.0],
     };
-    let geo = Geometry::new(&ds.samples, &lambda, quantity)?;
-    let y = ds.value.clone().ok_or_else(|| Error::File {
-        path: ds.path.clone(),
-        message: "no measured value column (L)".into(),
-    })?;
+    let geo = Geometry::new(samples, &lambda, quantity)?;
     if let (Some(f), ResidualKind::Relative | ResidualKind::Log) = (floor, residual) {
         check_floor(f, y.iter().fold(0.0f64, |m, v| m.max(v.abs())))?;
     }
@@ -302,22 +333,18 @@ pub fn fit_dataset_near(
     let t0 = std::time::Instant::now();
     let candidates = spec.candidates()?;
     let needs_wavelength = candidates.iter().any(|m| m.starts_with("kbs"));
-    let input = spec.input(&ds, needs_wavelength)?;
-    if input.channel_names.len() <= 1 {
-        // The input now holds the angles (as geometry) and values; what is left of the
-        // dataset serves the residuals file (rows) and the report's setting (weights,
-        // wavelength). A joint fit keeps the samples for its one-channel comparison fit.
-        ds.samples = Vec::new();
-        ds.lines = Vec::new();
-        ds.value = None;
-        // A wavelength column of one value (the geometry holds it): that value once.
-        if let Some(w) = ds.wavelength.as_mut() {
-            if w.iter().all(|l| l.to_bits() == w[0].to_bits()) {
-                w.truncate(1);
-                w.shrink_to_fit();
-            }
-        }
-    }
+    let one_channel = ds
+        .channel
+        .as_ref()
+        .is_none_or(|c| c.iter().all(|l| *l == c[0]));
+    let input = if one_channel {
+        // The input holds the angles (as geometry) and values; what is left of the dataset
+        // serves the residuals file (rows) and the report's setting (weights, wavelength).
+        spec.input_taking(&mut ds, needs_wavelength)?
+    } else {
+        // A joint fit keeps the samples for its one-channel comparison fit.
+        spec.input(&ds, needs_wavelength)?
+    };
     let stop = match &spec.config.lm.stop {
         Some(stop) => stop.clone(),
         None => spec.config.lm.new_stop(),

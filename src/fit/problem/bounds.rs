@@ -193,6 +193,10 @@ impl<P: LeastSquaresProblem + ?Sized> LeastSquaresProblem for HeldAtZero<'_, P> 
         self.inner.step_residuals(&with_zero(x, self.j))
     }
 
+    fn recycle(&self, spent: DVector<f64>) {
+        self.inner.recycle(spent);
+    }
+
     fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<lm::Reduced> {
         let red = self.inner.reduced_jacobian(&with_zero(x, self.j))?;
         Some(lm::Reduced {

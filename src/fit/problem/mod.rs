@@ -161,6 +161,9 @@ pub(crate) struct FitProblem<'a> {
     /// residual evaluation: the models produce derivatives at little extra cost, and LM asks
     /// for the Jacobian at the point it just accepted, so one model pass serves both.
     cache: std::sync::Mutex<Option<Cached>>,
+    /// Residuals the solver is done with ([`FitProblem::keep_spare`]), whose storage the
+    /// next reduced evaluation fills rather than new memory.
+    spare: std::sync::Mutex<Option<DVector<f64>>>,
 }
 
 /// What one residual evaluation leaves for the solver's next requests at the same point.
@@ -237,6 +240,7 @@ impl<'a> FitProblem<'a> {
             loss: Loss::default(),
             w_floor: width_floor(model, geo),
             cache: std::sync::Mutex::new(None),
+            spare: std::sync::Mutex::new(None),
         })
     }
 
@@ -652,6 +656,10 @@ impl LeastSquaresProblem for FitProblem<'_> {
 
     fn reduced_jacobian(&self, x: &DVector<f64>) -> Option<goniofit_lm::Reduced> {
         self.reduces().then(|| self.reduced_until(x, None))
+    }
+
+    fn recycle(&self, spent: DVector<f64>) {
+        self.keep_spare(spent);
     }
 
     fn step_residuals(&self, x: &DVector<f64>) -> Option<DVector<f64>> {

@@ -54,7 +54,10 @@ impl FitProblem<'_> {
             red.push_rows(&block, f);
             red
         };
-        let mut rw = DVector::zeros(self.n);
+        // Every entry is written below (the blocks cover the samples).
+        let mut rw = self
+            .take_spare()
+            .unwrap_or_else(|| DVector::from_vec(vec![0.0; self.n]));
         let mut red = Reduced::empty(n_free);
         self.eval_blocks(&p, true, stop, finish, |b, r, _, part| {
             for (row, i) in b.idx.iter().enumerate() {
@@ -63,6 +66,27 @@ impl FitProblem<'_> {
             red.push(&part);
         });
         (rw, red)
+    }
+
+    /// Keep residuals the solver is done with for the next reduced evaluation to fill (a
+    /// big fit's evaluations then reuse one vector's memory instead of mapping 8 bytes per
+    /// sample afresh each time); other problems drop them.
+    pub(crate) fn keep_spare(&self, spent: DVector<f64>) {
+        if self.reduces() && spent.len() == self.n {
+            if let Ok(mut s) = self.spare.lock() {
+                *s = Some(spent);
+            }
+        }
+    }
+
+    /// Drop the residuals kept by [`FitProblem::keep_spare`]: once the solves on this
+    /// problem are done.
+    pub(crate) fn forget_spare(&self) {
+        drop(self.take_spare());
+    }
+
+    fn take_spare(&self) -> Option<DVector<f64>> {
+        self.spare.lock().ok()?.take()
     }
 
     /// The reduced Jacobian at `x`: the one the last residual evaluation left at `x`

@@ -164,6 +164,10 @@ impl LeastSquaresProblem for Restricted<'_, '_> {
         r
     }
 
+    fn recycle(&self, spent: DVector<f64>) {
+        self.base.keep_spare(spent);
+    }
+
     /// The cached Jacobian when the last evaluation was at `z`; else the cache is dropped
     /// first (as [`FitProblem::cached_jacobian`] does: no stale `m × n` matrix is held
     /// while the new one is evaluated).

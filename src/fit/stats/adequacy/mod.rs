@@ -297,8 +297,10 @@ pub(crate) fn assess(fr: &FitResiduals) -> Adequacy {
 /// the noise allows carries no noise to test (a value that underflowed to 0, a stated σ_L
 /// that was capped, a value computed from the model); its sign would be the model's
 /// rounding.
-struct Weighted {
-    z: Vec<f64>,
+struct Weighted<'a> {
+    /// zᵢ; the residuals themselves when every weight is 1 (no copy of a big fit's
+    /// residuals).
+    z: Cow<'a, [f64]>,
     used: Vec<bool>,
     n_used: usize,
     /// Finite residuals at rounding error.
@@ -311,11 +313,14 @@ pub(crate) const ROUNDING: f64 = 1e-12;
 /// Weighted residuals below this fraction of their rms are exactly fitted: not tested.
 pub(crate) const EXACT_FIT: f64 = 1e-6;
 
-impl Weighted {
-    fn of(fr: &FitResiduals) -> Weighted {
-        let z: Vec<f64> = (0..fr.residuals.len())
-            .map(|i| fr.residuals[i] * fr.sqrt_weight[i])
-            .collect();
+impl<'a> Weighted<'a> {
+    fn of(fr: &FitResiduals<'a>) -> Weighted<'a> {
+        let z = match fr.sqrt_weight {
+            PerSample::One { value, .. } if *value == 1.0 => Cow::Borrowed(fr.residuals),
+            w => (0..fr.residuals.len())
+                .map(|i| fr.residuals[i] * w[i])
+                .collect(),
+        };
         let finite = || z.iter().filter(|v| v.is_finite());
         let rms = (finite().map(|v| v * v).sum::<f64>() / finite().count().max(1) as f64).sqrt();
         let at_rounding = |i: usize| {
