@@ -7,7 +7,7 @@
 /// threshold to that buffer's size (up to 32 MiB), so that later buffers of a few MB come
 /// from its per-thread heaps, where freed space stays resident and is not always reused.
 /// Fixing the threshold at 256 KiB keeps the process's resident memory at what its live
-/// columns need; the trim threshold of 4 MiB (fixed with it, else 128 KiB) keeps the
+/// columns need; the trim threshold of 2 MiB (fixed with it, else 128 KiB) keeps the
 /// small buffers of an evaluation's blocks in the heaps between evaluations instead of
 /// mapping them afresh. Buffers of small fits (a texel's 66 samples, a 10,000-sample scan)
 /// stay below both.
@@ -17,6 +17,6 @@ pub(crate) fn return_big_buffers() {
     // thread is started.
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, 256 * 1024);
-        libc::mallopt(libc::M_TRIM_THRESHOLD, 4 * 1024 * 1024);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 2 * 1024 * 1024);
     }
 }

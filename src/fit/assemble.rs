@@ -281,14 +281,18 @@ fn goodness(problem: &FitProblem, input: &FitInput, fitted: Vec<f64>, n_free: us
 /// Weighted R² in the space the residuals live in: the data itself, or ln y for log
 /// residuals. NaN when the data has no spread.
 fn r_squared(problem: &FitProblem, input: &FitInput, fitted: &[f64]) -> f64 {
-    let sw = problem.sqrt_weight();
-    let space = |v: f64| match problem.kind() {
-        ResidualKind::Log => v.max(problem.floor).ln(),
-        _ => v,
-    };
-    let t: Vec<f64> = input.y.iter().map(|&v| space(v)).collect();
-    let f: Vec<f64> = fitted.iter().map(|&v| space(v)).collect();
-    adequacy::distributions::r_squared(&t, &f, |i| sw[i])
+    use adequacy::distributions::r_squared;
+    let sw = |i: usize| problem.sqrt_weight()[i];
+    let n = fitted.len();
+    match problem.kind() {
+        ResidualKind::Log => {
+            let ln = |v: &f64| v.max(problem.floor).ln();
+            let t: Vec<f64> = input.y.iter().map(ln).collect();
+            let f: Vec<f64> = fitted.iter().map(ln).collect();
+            r_squared(n, |i| t[i], |i| f[i], sw)
+        }
+        _ => r_squared(n, |i| input.y[i], |i| fitted[i], sw),
+    }
 }
 
 /// The adequacy tests on the residuals at the reported point (not computed when a stop
@@ -331,10 +335,8 @@ fn fresnel_reach(
     geo: &crate::geometry::Geometry,
     notes: &mut Vec<String>,
 ) {
-    let largest = geo
-        .h
-        .iter()
-        .map(|&h| crate::geometry::cos_local(h).acos().to_degrees())
+    let largest = (0..geo.len())
+        .map(|i| crate::geometry::cos_local(geo.h(i)).acos().to_degrees())
         .fold(0.0f64, f64::max);
     if largest >= FRESNEL_MIN_LOCAL_DEG {
         return;

@@ -132,9 +132,6 @@ pub struct Geometry {
     pub wavelength: PerSample,
     /// c = cos θi + cos θr = |v_z|/k (cos θr itself is not stored: nothing needs it).
     pub c: Column,
-    /// h = |v|²/(2k²) = 1 + cos θi cos θr − sin θi sin θr cos φr, computed without
-    /// cancellation (≥ 0).
-    pub h: Column,
     /// v_xy²/k², computed without cancellation near the mirror direction.
     pub vxy2: Column,
     /// Whether the samples' values are radiances or BRDF values (the models evaluate the
@@ -222,7 +219,6 @@ struct Columns {
     phi_r: Vec<f64>,
     cos_i: Vec<f64>,
     c: Vec<f64>,
-    h: Vec<f64>,
     vxy2: Vec<f64>,
 }
 
@@ -239,7 +235,6 @@ impl Columns {
             phi_r: v(),
             cos_i: v(),
             c: v(),
-            h: v(),
             vxy2: v(),
         };
         let parts = (
@@ -249,22 +244,18 @@ impl Columns {
             g.phi_r.par_chunks_mut(PART),
             g.cos_i.par_chunks_mut(PART),
             g.c.par_chunks_mut(PART),
-            g.h.par_chunks_mut(PART),
             g.vxy2.par_chunks_mut(PART),
         );
         parts
             .into_par_iter()
-            .for_each(|(part, ti, tr, ph, ci, c, h, v)| {
+            .for_each(|(part, ti, tr, ph, ci, c, v)| {
                 for (j, s) in part.iter().enumerate() {
                     let phi = wrap_phi(s.phi_r);
                     let (sin_i, cos_i) = s.theta_i.sin_cos();
                     let (sin_r, cos_r) = s.theta_r.sin_cos();
                     let half_sin2 = (0.5 * phi).sin().powi(2);
-                    let half_sum_cos = (0.5 * (s.theta_i + s.theta_r)).cos();
                     (ti[j], tr[j], ph[j], ci[j]) = (s.theta_i, s.theta_r, phi, cos_i);
                     c[j] = cos_i + cos_r;
-                    // 1 + cos(θi+θr) + 2 sinθi sinθr sin²(φ/2), both terms ≥ 0.
-                    h[j] = 2.0 * half_sum_cos * half_sum_cos + 2.0 * sin_i * sin_r * half_sin2;
                     // (sinθi − sinθr)² + 4 sinθi sinθr sin²(φ/2): exact zero at the mirror.
                     v[j] = (sin_i - sin_r).powi(2) + 4.0 * sin_i * sin_r * half_sin2;
                 }
@@ -329,7 +320,6 @@ impl Geometry {
                 each => PerSample::Each(each.to_vec().into()),
             },
             c: g.c.into(),
-            h: g.h.into(),
             vxy2: g.vxy2.into(),
             quantity,
             factors: OnceLock::new(),
@@ -339,6 +329,15 @@ impl Geometry {
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.theta_i.len()
+    }
+
+    /// h = |v|²/(2k²) = 1 + cos θi cos θr − sin θi sin θr cos φr of sample `i`, as
+    /// (v_xy²/k² + c²)/2: a sum of two terms ≥ 0, so within a few ulps (relative) of the
+    /// exact value down to h = 0 (grazing, retro-reflection), without the cancellation of
+    /// the cosine form.
+    #[inline]
+    pub fn h(&self, i: usize) -> f64 {
+        0.5 * (self.vxy2[i] + self.c[i] * self.c[i])
     }
 
     /// Whether the batch is empty.
@@ -387,7 +386,7 @@ impl Geometry {
                 None => theta.iter().map(|&t| cot_tan(t)).collect(),
             };
             Arc::new(FactorColumns {
-                cos_loc: self.h.iter().map(|&h| cos_local(h)).collect(),
+                cos_loc: (0..self.len()).map(|i| cos_local(self.h(i))).collect(),
                 incidence: per_sample(&self.theta_i),
                 view: per_sample(&self.theta_r),
                 polar,
@@ -405,7 +404,6 @@ impl Geometry {
             cos_i: s(&self.cos_i),
             wavelength: self.wavelength.slice(range.clone()),
             c: s(&self.c),
-            h: s(&self.h),
             vxy2: s(&self.vxy2),
             quantity: self.quantity,
             factors: OnceLock::new(),
@@ -428,7 +426,6 @@ impl Geometry {
             cos_i: pick(&self.cos_i),
             wavelength: self.wavelength.subset(idx),
             c: pick(&self.c),
-            h: pick(&self.h),
             vxy2: pick(&self.vxy2),
             quantity: self.quantity,
             factors: OnceLock::new(),
@@ -561,7 +558,7 @@ mod tests {
             let (si, ci) = s.theta_i.sin_cos();
             let (sr, cr) = s.theta_r.sin_cos();
             let h = 1.0 + ci * cr - si * sr * s.phi_r.cos();
-            assert!((g.h[i] - h).abs() < 1e-14);
+            assert!((g.h(i) - h).abs() < 1e-14);
             let (vx, vy) = g.v_xy(i);
             let vxy2 = vx.powi(2) + vy.powi(2);
             assert!((g.vxy2[i] - vxy2).abs() < 1e-14);
@@ -577,7 +574,7 @@ mod tests {
         let g = Geometry::new(&samples, &[0.5], Quantity::Brdf).unwrap();
         let part = g.slice(2..5);
         assert_eq!(part.len(), 3);
-        assert!(std::ptr::eq(&part.h[0], &g.h[2]), "no copy");
+        assert!(std::ptr::eq(&part.vxy2[0], &g.vxy2[2]), "no copy");
         let picked = g.subset(&[2, 3, 4]);
         assert!(
             std::ptr::eq(&picked.c[0], &g.c[2]),

@@ -325,7 +325,7 @@ impl Kbs {
             Some((x, y)) => 4.0 * x * y / (lambda * lambda),
             None => 1.0,
         };
-        let h = geo.h[i];
+        let h = geo.h(i);
         // pref · Q directly while both are comfortably normal; otherwise in logarithms (the
         // product can be normal when a factor is not). s enters linearly (it may be ≤ 0
         // inside a fit's linear solve), outside the logarithm.

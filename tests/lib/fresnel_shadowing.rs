@@ -319,7 +319,7 @@ fn the_lobe_with_factors_is_the_product_at_extreme_angles() {
                     .collect();
                 let (mut l, mut j) = ([0.0], vec![0.0; p.len()]);
                 m.radiance(&geo, &p, &mut l, Some(&mut j));
-                let f = fresnel.eval(cos_local(geo.h[0]), &fp);
+                let f = fresnel.eval(cos_local(geo.h(0)), &fp);
                 let g = Shadowing::Smith.eval(cot(ti), cot(tr), t_over_sigma);
                 let what = format!("θi {ti}, θr {tr}, φr {pr}, σ {sigma}, {fresnel:?} {fp:?}");
                 assert!(

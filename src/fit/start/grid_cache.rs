@@ -61,7 +61,6 @@ impl Key {
             &geo.phi_r,
             &geo.cos_i,
             &geo.c,
-            &geo.h,
             &geo.vxy2,
         ] {
             k.push(col.len() as u64);

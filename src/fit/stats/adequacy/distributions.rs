@@ -203,17 +203,19 @@ pub(crate) fn slope(x: &[f64], y: &[f64]) -> f64 {
     }
 }
 
-/// Weighted R² = 1 − Σ wᵢ(fᵢ − tᵢ)² / Σ wᵢ(tᵢ − t̄)² of values `f` against data `t` in one
-/// space (t̄ the weighted mean; `sqrt_w` gives √wᵢ); NaN when the data has no spread.
-pub(crate) fn r_squared(t: &[f64], f: &[f64], sqrt_w: impl Fn(usize) -> f64) -> f64 {
-    let wsum: f64 = (0..t.len()).map(|i| sqrt_w(i).powi(2)).sum();
-    let tbar = (0..t.len()).map(|i| t[i] * sqrt_w(i).powi(2)).sum::<f64>() / wsum;
-    let ss_tot: f64 = (0..t.len())
-        .map(|i| (sqrt_w(i) * (t[i] - tbar)).powi(2))
-        .sum();
-    let ss_res: f64 = (0..t.len())
-        .map(|i| (sqrt_w(i) * (f[i] - t[i])).powi(2))
-        .sum();
+/// Weighted R² = 1 − Σ wᵢ(fᵢ − tᵢ)² / Σ wᵢ(tᵢ − t̄)² of `n` values `f(i)` against data
+/// `t(i)` in one space (t̄ the weighted mean; `sqrt_w` gives √wᵢ); NaN when the data has no
+/// spread.
+pub(crate) fn r_squared(
+    n: usize,
+    t: impl Fn(usize) -> f64,
+    f: impl Fn(usize) -> f64,
+    sqrt_w: impl Fn(usize) -> f64,
+) -> f64 {
+    let wsum: f64 = (0..n).map(|i| sqrt_w(i).powi(2)).sum();
+    let tbar = (0..n).map(|i| t(i) * sqrt_w(i).powi(2)).sum::<f64>() / wsum;
+    let ss_tot: f64 = (0..n).map(|i| (sqrt_w(i) * (t(i) - tbar)).powi(2)).sum();
+    let ss_res: f64 = (0..n).map(|i| (sqrt_w(i) * (f(i) - t(i))).powi(2)).sum();
     if ss_tot > 0.0 {
         1.0 - ss_res / ss_tot
     } else {
@@ -315,10 +317,10 @@ mod unit {
         // ss_res = 0.01 + 0.01 + 0.04 + 0.04 = 0.1, ss_tot = 5: R² = 0.98.
         let t = [1.0, 2.0, 3.0, 4.0];
         let f = [1.1, 1.9, 3.2, 3.8];
-        assert!((r_squared(&t, &f, |_| 1.0) - 0.98).abs() < 1e-14);
+        assert!((r_squared(4, |i| t[i], |i| f[i], |_| 1.0) - 0.98).abs() < 1e-14);
         // The mean itself: R² = 0; constant data: NaN.
-        assert!(r_squared(&t, &[2.5; 4], |_| 1.0).abs() < 1e-15);
-        assert!(r_squared(&[1.0; 3], &[1.0; 3], |_| 1.0).is_nan());
+        assert!(r_squared(4, |i| t[i], |_| 2.5, |_| 1.0).abs() < 1e-15);
+        assert!(r_squared(3, |_| 1.0, |_| 1.0, |_| 1.0).is_nan());
         assert!((slope(&[0.0, 1.0, 2.0], &[1.0, 3.0, 5.0]) - 2.0).abs() < 1e-15);
     }
 }

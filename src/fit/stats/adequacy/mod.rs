@@ -530,7 +530,8 @@ fn spread_test(
 ) -> Option<Outcome> {
     let z = |i: u32| w.z[i as usize];
     let fitted = |i: u32| fr.fitted[i as usize];
-    let (mut spread, mut level) = (Vec::new(), Vec::new());
+    let triples = scans.iter().map(|s| s.len() / 3).sum();
+    let (mut spread, mut level) = (Vec::with_capacity(triples), Vec::with_capacity(triples));
     for s in scans.iter() {
         for t in s.chunks_exact(3) {
             let d = (z(t[1]) - 0.5 * (z(t[0]) + z(t[2]))).abs();
