@@ -249,10 +249,14 @@ impl Columns {
         parts
             .into_par_iter()
             .for_each(|(part, ti, tr, ph, ci, c, v)| {
+                // A gonioreflectometer's samples repeat their polar angles from one row to
+                // the next (an azimuth or view scan at fixed angles): their sines and
+                // cosines are computed when an angle changes.
+                let (mut inc, mut view) = (Trig::default(), Trig::default());
                 for (j, s) in part.iter().enumerate() {
                     let phi = wrap_phi(s.phi_r);
-                    let (sin_i, cos_i) = s.theta_i.sin_cos();
-                    let (sin_r, cos_r) = s.theta_r.sin_cos();
+                    let (sin_i, cos_i) = inc.of(s.theta_i);
+                    let (sin_r, cos_r) = view.of(s.theta_r);
                     let half_sin2 = (0.5 * phi).sin().powi(2);
                     (ti[j], tr[j], ph[j], ci[j]) = (s.theta_i, s.theta_r, phi, cos_i);
                     c[j] = cos_i + cos_r;
@@ -261,6 +265,24 @@ impl Columns {
                 }
             });
         g
+    }
+}
+
+/// The sine and cosine of the last angle asked for, computed again only when the angle
+/// changes (the same bits as `sin_cos` of every angle).
+#[derive(Default)]
+struct Trig {
+    angle: Option<f64>,
+    sin_cos: (f64, f64),
+}
+
+impl Trig {
+    fn of(&mut self, angle: f64) -> (f64, f64) {
+        if self.angle.map(f64::to_bits) != Some(angle.to_bits()) {
+            self.angle = Some(angle);
+            self.sin_cos = angle.sin_cos();
+        }
+        self.sin_cos
     }
 }
 
