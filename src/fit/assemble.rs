@@ -49,7 +49,6 @@ pub(super) fn assemble(
         mut notes,
         unusable,
     } = solved;
-    problem.forget_spare();
     let layout = &problem.layout;
     let specs = model.params();
     let n = problem.len();

@@ -130,8 +130,10 @@ fn finish(
         solved.notes.push(UNCERTAINTIES_NOT_COMPUTED.to_string());
     }
     accept::accept(&mut solved, input);
-    // The report computes its residuals from the fitted values: the solver's are not held.
+    // The report computes its residuals from the fitted values: the solver's are not held,
+    // nor the vector it handed back for a next evaluation.
     solved.run.lm.residuals = nalgebra::DVector::zeros(0);
+    solved.problem.forget_spare();
     let seconds = t0.elapsed().as_secs_f64();
     let stages = StageSeconds {
         grid: start.start_seconds,

@@ -589,6 +589,44 @@ mod tests {
     }
 
     #[test]
+    fn repeated_polar_angles_give_the_columns_of_each_sample_alone() {
+        // Runs of equal θi and θr (an azimuth scan), changes of either, a return to an
+        // earlier angle, and grazing angles where h is near 0.
+        let deg = [
+            (30.0, 10.0, 0.0),
+            (30.0, 10.0, 45.0),
+            (30.0, 10.0, 90.0),
+            (30.0, 60.0, 90.0),
+            (70.0, 60.0, 180.0),
+            (30.0, 10.0, -30.0),
+            (89.9, 89.9, 179.9),
+            (89.9, 89.9, 180.0),
+        ];
+        let samples: Vec<Sample> = deg
+            .iter()
+            .map(|&(a, b, c)| Sample::from_degrees(a, b, c))
+            .collect();
+        let g = Geometry::new(&samples, &[1.0], Quantity::Radiance).unwrap();
+        for (i, s) in samples.iter().enumerate() {
+            let one = Geometry::new(&[*s], &[1.0], Quantity::Radiance).unwrap();
+            let bits = |v: f64| v.to_bits();
+            assert_eq!(bits(g.cos_i[i]), bits(one.cos_i[0]), "sample {i}");
+            assert_eq!(bits(g.c[i]), bits(one.c[0]), "sample {i}");
+            assert_eq!(bits(g.vxy2[i]), bits(one.vxy2[0]), "sample {i}");
+            assert_eq!(bits(g.h(i)), bits(one.h(0)), "sample {i}");
+            // h = (v_xy² + c²)/2 against the cosine form, relative near grazing too.
+            let (si, ci) = s.theta_i.sin_cos();
+            let (sr, cr) = s.theta_r.sin_cos();
+            let h = 1.0 + ci * cr - si * sr * s.phi_r.cos();
+            assert!(
+                (g.h(i) - h).abs() <= 1e-12 * h.max(1e-300),
+                "sample {i}: {} {h}",
+                g.h(i)
+            );
+        }
+    }
+
+    #[test]
     fn slices_share_storage_and_equal_copied_subsets() {
         let samples: Vec<Sample> = (0..7)
             .map(|k| Sample::from_degrees(10.0 + k as f64, 20.0, 15.0 * k as f64))
