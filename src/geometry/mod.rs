@@ -295,11 +295,16 @@ pub(crate) fn cos_local(h: f64) -> f64 {
 
 /// Wrap an angle in radians to (−π, π].
 pub(crate) fn wrap_phi(phi: f64) -> f64 {
-    let two_pi = 2.0 * std::f64::consts::PI;
+    use std::f64::consts::PI;
+    if phi > -PI && phi <= PI {
+        // Already wrapped: what the remainder below would return, without its cost.
+        return phi;
+    }
+    let two_pi = 2.0 * PI;
     let mut p = phi % two_pi;
-    if p <= -std::f64::consts::PI {
+    if p <= -PI {
         p += two_pi;
-    } else if p > std::f64::consts::PI {
+    } else if p > PI {
         p -= two_pi;
     }
     p
@@ -586,6 +591,20 @@ mod tests {
             assert!((g.vxy2[i] - vxy2).abs() < 1e-14);
         }
         assert_eq!(g.vxy2[1], 0.0, "exact zero at the mirror");
+    }
+
+    #[test]
+    fn wrapped_azimuths_are_returned_as_given_and_others_wrapped() {
+        use std::f64::consts::PI;
+        for phi in [0.0, -0.0, 1.0, -3.0, PI, -PI + 1e-15, 3.0] {
+            assert_eq!(wrap_phi(phi).to_bits(), phi.to_bits());
+        }
+        // −π and values beyond ±π move by 2π into (−π, π].
+        assert_eq!(wrap_phi(-PI), PI);
+        assert!((wrap_phi(1.5 * PI) + 0.5 * PI).abs() < 1e-15);
+        assert!((wrap_phi(-1.5 * PI) - 0.5 * PI).abs() < 1e-15);
+        assert!((wrap_phi(7.0 * PI + 0.25) - (-PI + 0.25)).abs() < 1e-14);
+        assert!(wrap_phi(f64::NAN).is_nan());
     }
 
     #[test]
