@@ -161,9 +161,10 @@ pub(crate) struct FitProblem<'a> {
     /// residual evaluation: the models produce derivatives at little extra cost, and LM asks
     /// for the Jacobian at the point it just accepted, so one model pass serves both.
     cache: std::sync::Mutex<Option<Cached>>,
-    /// Residuals the solver is done with ([`FitProblem::keep_spare`]), whose storage the
-    /// next reduced evaluation fills rather than new memory.
-    spare: std::sync::Mutex<Option<DVector<f64>>>,
+    /// Residuals the solver is done with ([`FitProblem::keep_spare`], at most
+    /// [`reduced::SPARES`]), whose storage the next reduced evaluations fill rather than
+    /// new memory.
+    spare: std::sync::Mutex<Vec<DVector<f64>>>,
 }
 
 /// What one residual evaluation leaves for the solver's next requests at the same point.
@@ -240,7 +241,7 @@ impl<'a> FitProblem<'a> {
             loss: Loss::default(),
             w_floor: width_floor(model, geo),
             cache: std::sync::Mutex::new(None),
-            spare: std::sync::Mutex::new(None),
+            spare: std::sync::Mutex::new(Vec::new()),
         })
     }
 

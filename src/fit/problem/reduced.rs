@@ -12,6 +12,11 @@ use nalgebra::{DMatrix, DVector};
 /// their steps are MINPACK's to the bit. Both give the same steps to rounding.
 pub(crate) const REDUCE_MIN_ROWS: usize = 1 << 17;
 
+/// Spent residual vectors a big problem keeps ([`FitProblem::keep_spare`]): a solve holds
+/// the current point's and a trial's, and a refit that ends hands its last one back, so
+/// two serve a whole walk of profile refits.
+pub(crate) const SPARES: usize = 2;
+
 impl FitProblem<'_> {
     /// Whether the solver gets this problem's Jacobian reduced ([`REDUCE_MIN_ROWS`] samples
     /// or more, linear loss).
@@ -68,13 +73,15 @@ impl FitProblem<'_> {
         (rw, red)
     }
 
-    /// Keep residuals the solver is done with for the next reduced evaluation to fill (a
-    /// big fit's evaluations then reuse one vector's memory instead of mapping 8 bytes per
-    /// sample afresh each time); other problems drop them.
+    /// Keep residuals the solver is done with for the next reduced evaluations to fill (a
+    /// big fit's evaluations then reuse the memory of [`SPARES`] vectors instead of mapping
+    /// 8 bytes per sample afresh each time); other problems drop them.
     pub(crate) fn keep_spare(&self, spent: DVector<f64>) {
         if self.reduces() && spent.len() == self.n {
             if let Ok(mut s) = self.spare.lock() {
-                *s = Some(spent);
+                if s.len() < SPARES {
+                    s.push(spent);
+                }
             }
         }
     }
@@ -82,11 +89,13 @@ impl FitProblem<'_> {
     /// Drop the residuals kept by [`FitProblem::keep_spare`]: once the solves on this
     /// problem are done.
     pub(crate) fn forget_spare(&self) {
-        drop(self.take_spare());
+        if let Ok(mut s) = self.spare.lock() {
+            *s = Vec::new();
+        }
     }
 
     fn take_spare(&self) -> Option<DVector<f64>> {
-        self.spare.lock().ok()?.take()
+        self.spare.lock().ok()?.pop()
     }
 
     /// The reduced Jacobian at `x`: the one the last residual evaluation left at `x`

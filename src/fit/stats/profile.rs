@@ -341,7 +341,9 @@ impl<'a, 'p> Profiler<'a, 'p> {
             let c = r.norm_squared();
             return c.is_finite().then(|| (c, z0.clone()));
         }
-        let rep = lm::minimize(&prob, z0.clone(), &self.lm);
+        let mut rep = lm::minimize(&prob, z0.clone(), &self.lm);
+        // The refit's last residuals serve the next refit's evaluations.
+        prob.recycle(std::mem::replace(&mut rep.residuals, DVector::zeros(0)));
         let chi2 = 2.0 * rep.cost;
         chi2.is_finite().then_some((chi2, rep.x))
     }
