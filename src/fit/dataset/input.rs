@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::fit::driver::{self, FitConfig, FitInput};
 use crate::fit::problem::weights::residual_weights;
 use crate::fit::problem::{Channels, ResidualKind};
-use crate::geometry::{Geometry, Quantity, Sample};
+use crate::geometry::{Geometry, Sample};
 use crate::io::{self, Dataset};
 use crate::model::domain::short_number;
 
@@ -43,6 +43,12 @@ impl DatasetFit {
         self.input_of(ds, &samples, y, needs_wavelength)
     }
 
+    /// The fit's data from a dataset's `samples` and values `y` (the caller checked them
+    /// with [`check_magnitudes`]): geometry (λ from this fit's wavelength, else the
+    /// dataset's own, else 1 unless `needs_wavelength`), values, the weights transformed
+    /// for the residual kind ([`crate::fit::problem::weights`]), and the channel index of
+    /// every sample with the channel names (as printed: control and bidi characters
+    /// escaped) in first-appearance order.
     fn input_of(
         &self,
         ds: &Dataset,
@@ -50,18 +56,49 @@ impl DatasetFit {
         y: Option<Vec<f64>>,
         needs_wavelength: bool,
     ) -> Result<FitInput> {
+        let (residual, floor) = (self.config.residual, self.config.floor);
         let y = y.ok_or_else(|| Error::File {
             path: ds.path.clone(),
             message: "no measured value column (L)".into(),
         })?;
-        fit_input(
-            ds,
-            samples,
-            y,
-            (self.quantity, self.wavelength, needs_wavelength),
-            self.config.residual,
-            self.config.floor,
-        )
+        let n = samples.len();
+        let lambda: Vec<f64> = match (&ds.wavelength, self.wavelength) {
+            (_, Some(l)) => vec![l],
+            (Some(w), None) => w.clone(),
+            (None, None) if needs_wavelength => {
+                return Err(Error::Usage(format!(
+                    "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
+                    io::shown(&ds.path)
+                )))
+            }
+            (None, None) => vec![1.0],
+        };
+        let geo = Geometry::new(samples, &lambda, self.quantity)?;
+        if let (Some(f), ResidualKind::Relative | ResidualKind::Log) = (floor, residual) {
+            check_floor(f, y.iter().fold(0.0f64, |m, v| m.max(v.abs())))?;
+        }
+        let floor = floor_for(floor, &y);
+        let (weight, _) = residual_weights(
+            ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
+            ds.sigma_l.as_deref(),
+            &y,
+            residual,
+            floor,
+        );
+        let (channel, channel_names) = match &ds.channel {
+            Some(labels) => {
+                let (index, names) = channel_index(labels);
+                (index.into(), names)
+            }
+            None => (Channels::single(n), vec![String::new()]),
+        };
+        Ok(FitInput {
+            geo,
+            y: y.into(),
+            weight,
+            channel,
+            channel_names,
+        })
     }
 }
 
@@ -118,59 +155,6 @@ pub fn check_magnitudes(ds: &Dataset) -> Result<()> {
         });
     }
     Ok(())
-}
-
-/// The fit's data from a dataset's `samples` and values `y` (the caller checked them with
-/// [`check_magnitudes`]): geometry (λ from `wavelength`, else the dataset's own, else 1
-/// unless `needs_wavelength`), values, the weights transformed for the residual kind
-/// ([`super::problem::weights`]), and the channel index of every sample with the channel
-/// names (as printed: control and bidi characters escaped) in first-appearance order.
-fn fit_input(
-    ds: &Dataset,
-    samples: &[Sample],
-    y: Vec<f64>,
-    (quantity, wavelength, needs_wavelength): (Quantity, Option<f64>, bool),
-    residual: ResidualKind,
-    floor: Option<f64>,
-) -> Result<FitInput> {
-    let n = samples.len();
-    let lambda: Vec<f64> = match (&ds.wavelength, wavelength) {
-        (_, Some(l)) => vec![l],
-        (Some(w), None) => w.clone(),
-        (None, None) if needs_wavelength => {
-            return Err(Error::Usage(format!(
-                "{}: KBS models need a wavelength: give --wavelength, a wavelength column, or an ASTM channel such as 550nm",
-                io::shown(&ds.path)
-            )))
-        }
-        (None, None) => vec![1.0],
-    };
-    let geo = Geometry::new(samples, &lambda, quantity)?;
-    if let (Some(f), ResidualKind::Relative | ResidualKind::Log) = (floor, residual) {
-        check_floor(f, y.iter().fold(0.0f64, |m, v| m.max(v.abs())))?;
-    }
-    let floor = floor_for(floor, &y);
-    let (weight, _) = residual_weights(
-        ds.weight.as_deref().filter(|_| ds.sigma_l.is_none()),
-        ds.sigma_l.as_deref(),
-        &y,
-        residual,
-        floor,
-    );
-    let (channel, channel_names) = match &ds.channel {
-        Some(labels) => {
-            let (index, names) = channel_index(labels);
-            (index.into(), names)
-        }
-        None => (Channels::single(n), vec![String::new()]),
-    };
-    Ok(FitInput {
-        geo,
-        y: y.into(),
-        weight,
-        channel,
-        channel_names,
-    })
 }
 
 /// The channel index of every label and the distinct names in first-appearance order (as
