@@ -208,11 +208,12 @@ impl Work {
         self.jac = DMatrix::zeros(0, 0);
         let grad = red.gradient();
         let rows = k.max(n);
+        let Reduced { a, b } = red;
         let (qr, acnorm) = qrfac(
-            red.a.clone().resize_vertically(rows, 0.0),
-            &red.b.clone().resize_vertically(rows, 0.0),
+            a.clone().resize_vertically(rows, 0.0),
+            &b.resize_vertically(rows, 0.0),
         );
-        self.reduced = Some(red.a);
+        self.reduced = Some(a);
         Some((qr, acnorm, grad))
     }
 
