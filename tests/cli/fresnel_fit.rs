@@ -163,19 +163,13 @@ fn auto_chooses_the_extended_lobe_on_data_made_with_it_and_plot_redraws_it() {
     );
     let report = dir.path().join("auto.json");
     std::fs::write(&report, auto.to_string()).unwrap();
-    let out = common::goniofit()
-        .arg("plot")
-        .arg(&report)
-        .arg("--out")
-        .arg(dir.path().join("pics"))
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let pics = dir.path().join("pics");
+    common::success_stdout(&[
+        std::ffi::OsStr::new("plot"),
+        report.as_os_str(),
+        "--out".as_ref(),
+        pics.as_os_str(),
+    ]);
 }
 
 /// A near-mirror surface (g ≈ 1e-3) of a high index, on a hemisphere of five incidence
